@@ -1,0 +1,1 @@
+"""satchain.engine"""

@@ -1,0 +1,28 @@
+"""Exceptions raised by satchain.
+
+Every exception derives from :class:`SatchainError` *and* from the matching built-in, so callers can
+catch ``ValueError`` / ``OSError`` / ``MemoryError`` as usual (the GalSim habit). Messages name the
+parameter, the value and what is allowed, e.g. ``optics.obscuration_ratio = 1.2: must be in [0, 1)``.
+"""
+
+from __future__ import annotations
+
+
+class SatchainError(Exception):
+    """Base class of every error satchain raises on purpose."""
+
+
+class ConfigError(SatchainError, ValueError):
+    """An invalid or inconsistent parameter (system description, run configuration, option)."""
+
+
+class InputError(SatchainError, ValueError):
+    """Input data that cannot be processed (an image without an edge, NaNs, a region that is too small)."""
+
+
+class SatchainIOError(SatchainError, OSError):
+    """A file that cannot be read or written."""
+
+
+class ResourceLimitError(SatchainError, MemoryError):
+    """Work refused up front because it would not fit in the allowed memory."""

@@ -1,0 +1,479 @@
+"""ImagingSystem: a frozen, validated description of a satellite camera and its orbit.
+
+Built from a TOML file (``load_system``), a packaged preset (``load_preset``) or in Python. Every
+invalid or inconsistent value is rejected with a :class:`~satchain.errors.ConfigError` whose message
+names the key, the value and what is allowed, e.g.::
+
+    optics.obscuration_ratio = 1.2: must be less than 1
+
+Derived quantities (focal length / F#, IFOV, GSD, Nyquist, optical cutoff, Q, Airy diameter and
+whether the system is detector- or optics-limited) are properties of the frozen object.
+
+Examples
+--------
+>>> s = load_preset("ankarasat3")
+>>> round(s.gsd_alt_m, 3), round(s.nyquist_alt_cy_per_mm, 2), s.limited_by
+(0.49, 85.03, 'detector')
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from importlib import resources
+from pathlib import Path
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from satchain import units
+from satchain.errors import ConfigError, SatchainIOError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
+EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
+
+__all__ = ["Detector", "ImagingSystem", "Motion", "Optics", "Orbit", "Spiders", "load_preset", "load_system"]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", validate_default=True)
+
+
+class Orbit(_Frozen):
+    """Circular orbit; the camera looks at nadir from ``altitude_m``."""
+
+    altitude_m: float = Field(gt=0, le=1e8, description="height above the ground, m")
+
+    @property
+    def range_m(self) -> float:
+        """Camera-to-ground distance at nadir (m)."""
+        return self.altitude_m
+
+    @property
+    def orbital_speed_m_per_s(self) -> float:
+        """Circular orbital speed ``sqrt(GM / (R + h))``."""
+        return math.sqrt(EARTH_GM_M3_PER_S2 / (EARTH_RADIUS_M + self.altitude_m))
+
+    @property
+    def ground_speed_m_per_s(self) -> float:
+        """Speed of the nadir point over a non-rotating Earth: ``v_orbit * R / (R + h)``."""
+        return self.orbital_speed_m_per_s * EARTH_RADIUS_M / (EARTH_RADIUS_M + self.altitude_m)
+
+
+class Spiders(_Frozen):
+    """Secondary-mirror support vanes: ``count`` straight vanes of ``width_m`` through the pupil centre."""
+
+    count: int = Field(ge=0, le=16)
+    width_m: float = Field(gt=0)
+    angle_deg: float = Field(default=0.0, ge=-360, le=360, description="angle of the first vane from +x (ACT)")
+
+
+class Optics(_Frozen):
+    """Telescope: aperture, focal length or F#, central obscuration, spectral band, aberrations."""
+
+    aperture_diameter_m: float = Field(gt=0, le=100)
+    focal_length_m: float = Field(gt=0, le=1e3)
+    f_number: float = Field(gt=0, le=1e3)
+    obscuration_ratio: float = Field(default=0.0, ge=0, lt=1, description="central obscuration diameter ratio")
+    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="wavelengths for the polychromatic MTF")
+    wavelength_weights: tuple[float, ...] | None = None
+    transmission: float = Field(default=1.0, gt=0, le=1)
+    wfe_rms_waves: float = Field(default=0.0, ge=0, le=0.25, description="random wavefront error, rms waves")
+    zernike_rms_waves: dict[int, float] = Field(
+        default_factory=dict, description="Noll index -> rms coefficient in waves (defocus is 4)"
+    )
+    spiders: Spiders | None = None
+    diffraction_model: Literal["auto", "analytic", "pupil_fft"] = "auto"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _focal_or_f_number(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        d = dict(data)
+        D = d.get("aperture_diameter_m")
+        f, n = d.get("focal_length_m"), d.get("f_number")
+        try:
+            D = float(D) if D is not None else None
+        except (TypeError, ValueError):
+            return d  # field validation reports it
+        if D is None or D <= 0:
+            return d
+        if f is None and n is None:
+            raise ValueError("give optics.focal_length_m or optics.f_number (got neither)")
+        try:
+            if f is None:
+                d["focal_length_m"] = float(n) * D
+            elif n is None:
+                d["f_number"] = float(f) / D
+            elif abs(float(f) / D - float(n)) > 1e-3 * float(n):
+                raise ValueError(
+                    f"optics.focal_length_m = {f!r} and optics.f_number = {n!r} disagree: "
+                    f"focal_length_m / aperture_diameter_m = {float(f) / D:.6g}; give one of them"
+                )
+        except (TypeError, ValueError) as exc:
+            if "disagree" in str(exc):
+                raise
+        return d
+
+    @field_validator("wavelengths_m")
+    @classmethod
+    def _wavelengths(cls, v: tuple[float, ...]) -> tuple[float, ...]:
+        for i, w in enumerate(v):
+            if not (1e-8 <= w <= 1e-4):
+                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
+        return v
+
+    @field_validator("zernike_rms_waves")
+    @classmethod
+    def _zernikes(cls, v: dict[int, float]) -> dict[int, float]:
+        for j, c in v.items():
+            if not 1 <= j <= 66:
+                raise ValueError(f"zernike_rms_waves key {j!r}: Noll index must be in [1, 66]")
+            if not (math.isfinite(c) and abs(c) <= 1.0):
+                raise ValueError(f"zernike_rms_waves[{j}] = {c!r}: must be in [-1, 1] waves rms")
+        return v
+
+    @model_validator(mode="after")
+    def _weights(self) -> Optics:
+        w = self.wavelength_weights
+        if w is not None:
+            if len(w) != len(self.wavelengths_m):
+                raise ValueError(
+                    f"wavelength_weights has {len(w)} entries but wavelengths_m has {len(self.wavelengths_m)}"
+                )
+            if any((not math.isfinite(x)) or x < 0 for x in w) or sum(w) <= 0:
+                raise ValueError(f"wavelength_weights = {list(w)!r}: must be >= 0 with a positive sum")
+        if self.spiders is not None and self.spiders.count and self.spiders.width_m >= self.aperture_diameter_m:
+            raise ValueError(
+                f"spiders.width_m = {self.spiders.width_m!r}: must be < aperture_diameter_m "
+                f"({self.aperture_diameter_m!r})"
+            )
+        return self
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Normalised polychromatic weights (uniform when none are given)."""
+        w = np.ones(len(self.wavelengths_m)) if self.wavelength_weights is None else np.array(self.wavelength_weights)
+        return w / w.sum()
+
+    @property
+    def effective_wavelength_m(self) -> float:
+        """Weight-averaged wavelength."""
+        return float(np.dot(self.weights, self.wavelengths_m))
+
+    @property
+    def needs_pupil_fft(self) -> bool:
+        """True when the pupil has features the closed-form (O'Neill) OTF cannot describe."""
+        if self.diffraction_model != "auto":
+            return self.diffraction_model == "pupil_fft"
+        spiders = self.spiders is not None and self.spiders.count > 0
+        return spiders or any(c != 0 for c in self.zernike_rms_waves.values())
+
+
+class Detector(_Frozen):
+    """Detector line / TDI array. Give ``pitch_m`` or both ``pitch_x_m`` and ``pitch_y_m``; the active
+    area by ``fill_factor`` (area fraction, square active area centred in the pixel) or by
+    ``active_width_x_m`` / ``active_width_y_m``."""
+
+    pitch_x_m: float = Field(gt=0, le=1e-3)
+    pitch_y_m: float = Field(gt=0, le=1e-3)
+    active_width_x_m: float = Field(gt=0)
+    active_width_y_m: float = Field(gt=0)
+    charge_diffusion_length_m: float = Field(default=0.0, ge=0, le=1e-3)
+    tdi_stages: int = Field(default=1, ge=1, le=1024)
+    tdi_sync_error: float = Field(
+        default=0.0, ge=-0.5, le=0.5, description="fractional along-track line-rate mismatch of TDI clocking"
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _pitch_and_fill(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        d = dict(data)
+        p = d.pop("pitch_m", None)
+        if p is not None:
+            for k in ("pitch_x_m", "pitch_y_m"):
+                if k in d and d[k] != p:
+                    raise ValueError(f"detector.pitch_m = {p!r} conflicts with detector.{k} = {d[k]!r}; give one")
+                d[k] = p
+        elif "pitch_x_m" not in d or "pitch_y_m" not in d:
+            raise ValueError("give detector.pitch_m, or both detector.pitch_x_m and detector.pitch_y_m")
+        ff = d.pop("fill_factor", None)
+        if ff is not None:
+            if "active_width_x_m" in d or "active_width_y_m" in d:
+                raise ValueError("give detector.fill_factor or detector.active_width_x_m/_y_m, not both")
+            try:
+                ffv = float(ff)
+            except (TypeError, ValueError):
+                raise ValueError(f"detector.fill_factor = {ff!r}: must be a number in (0, 1]") from None
+            if not 0 < ffv <= 1:
+                raise ValueError(f"detector.fill_factor = {ff!r}: must be in (0, 1]")
+            try:
+                d["active_width_x_m"] = float(d["pitch_x_m"]) * math.sqrt(ffv)
+                d["active_width_y_m"] = float(d["pitch_y_m"]) * math.sqrt(ffv)
+            except (TypeError, ValueError):
+                return d
+        else:
+            d.setdefault("active_width_x_m", d.get("pitch_x_m"))
+            d.setdefault("active_width_y_m", d.get("pitch_y_m"))
+        return d
+
+    @model_validator(mode="after")
+    def _active_within_pitch(self) -> Detector:
+        for ax in ("x", "y"):
+            a, p = getattr(self, f"active_width_{ax}_m"), getattr(self, f"pitch_{ax}_m")
+            if a > p * (1 + 1e-12):
+                raise ValueError(f"active_width_{ax}_m = {a!r}: must be <= pitch_{ax}_m ({p!r})")
+        return self
+
+    @property
+    def fill_factor(self) -> float:
+        """Active area / pixel area."""
+        return self.active_width_x_m * self.active_width_y_m / (self.pitch_x_m * self.pitch_y_m)
+
+
+class Motion(_Frozen):
+    """Platform motion during one exposure: linear along-track smear and random jitter (detector pixels)."""
+
+    smear_px: float = Field(default=0.0, ge=0, le=100, description="along-track (ALT, y) linear smear length")
+    smear_act_px: float = Field(default=0.0, ge=0, le=100, description="across-track (ACT, x) smear, e.g. yaw")
+    jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
+
+
+class ImagingSystem(_Frozen):
+    """A complete satellite camera: orbit, optics, detector and motion, plus derived quantities."""
+
+    name: str = "custom"
+    description: str = ""
+    orbit: Orbit
+    optics: Optics
+    detector: Detector
+    motion: Motion = Field(default_factory=Motion)
+    provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
+
+    # ----------------------------------------------------------------- construction
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ImagingSystem:
+        """Validate a nested mapping (as read from TOML); raise ConfigError naming the key on failure."""
+        try:
+            return cls.model_validate(data)
+        except ValidationError as exc:
+            raise _config_error(exc) from None
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> ImagingSystem:
+        """Read and validate a system TOML file."""
+        return cls.from_dict(_read_toml(path))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (the TOML structure; pitches and active widths in explicit form)."""
+        return self.model_dump(mode="json", exclude_none=True)
+
+    def replace(self, values: dict[str, Any]) -> ImagingSystem:
+        """A new validated system with dotted keys replaced, e.g. ``{"optics.obscuration_ratio": 0.3}``.
+
+        For ``optics.focal_length_m`` / ``optics.f_number`` the other one follows (aperture fixed);
+        for ``detector.pitch_*`` the active width keeps its fill factor.
+        """
+        d = self.model_dump(mode="python")
+        for key, v in values.items():
+            section, _, field = key.partition(".")
+            if section not in ("orbit", "optics", "detector", "motion") or not field:
+                raise ConfigError(f"parameter {key!r}: must be '<orbit|optics|detector|motion>.<field>'")
+            sub = d[section]
+            if field not in sub and field not in ("pitch_m", "fill_factor", "wavelength_m"):
+                raise ConfigError(f"parameter {key!r}: {section} has no field {field!r}")
+            if section == "optics" and field in ("focal_length_m", "f_number"):
+                sub.pop("f_number" if field == "focal_length_m" else "focal_length_m")
+            if section == "optics" and field == "wavelength_m":
+                field, v = "wavelengths_m", (v,)
+                sub["wavelength_weights"] = None
+            if section == "detector" and field in ("pitch_m", "fill_factor"):
+                ff = sub.pop("active_width_x_m") * sub.pop("active_width_y_m") / (sub["pitch_x_m"] * sub["pitch_y_m"])
+                if field == "pitch_m":
+                    sub.pop("pitch_x_m"), sub.pop("pitch_y_m")
+                sub.setdefault("fill_factor", ff)
+            sub[field] = v
+        return type(self).from_dict(d)
+
+    # ----------------------------------------------------------------- derived quantities
+    @property
+    def focal_length_m(self) -> float:
+        return self.optics.focal_length_m
+
+    @property
+    def f_number(self) -> float:
+        return self.optics.f_number
+
+    @property
+    def ifov_act_rad(self) -> float:
+        """Instantaneous field of view of one pixel, across-track (rad)."""
+        return self.detector.pitch_x_m / self.focal_length_m
+
+    @property
+    def ifov_alt_rad(self) -> float:
+        """Instantaneous field of view of one pixel, along-track (rad)."""
+        return self.detector.pitch_y_m / self.focal_length_m
+
+    @property
+    def gsd_act_m(self) -> float:
+        """Ground sample distance across-track (x), m."""
+        return units.gsd_m(self.detector.pitch_x_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+
+    @property
+    def gsd_alt_m(self) -> float:
+        """Ground sample distance along-track (y), m."""
+        return units.gsd_m(self.detector.pitch_y_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+
+    @property
+    def gsd_m(self) -> float:
+        """Geometric-mean GSD, ``sqrt(gsd_act * gsd_alt)`` (the GIQE convention)."""
+        return math.sqrt(self.gsd_act_m * self.gsd_alt_m)
+
+    @property
+    def nyquist_act_cy_per_mm(self) -> float:
+        return units.nyquist_cy_per_mm(self.detector.pitch_x_m)
+
+    @property
+    def nyquist_alt_cy_per_mm(self) -> float:
+        return units.nyquist_cy_per_mm(self.detector.pitch_y_m)
+
+    @property
+    def nyquist_act_cy_per_m_ground(self) -> float:
+        return 0.5 / self.gsd_act_m
+
+    @property
+    def nyquist_alt_cy_per_m_ground(self) -> float:
+        return 0.5 / self.gsd_alt_m
+
+    @property
+    def optical_cutoff_cy_per_mm(self) -> np.ndarray:
+        """Incoherent diffraction cutoff ``1 / (lambda F#)`` for each wavelength (cy/mm)."""
+        return 1.0 / (np.asarray(self.optics.wavelengths_m) * self.f_number * units.MM_PER_M)
+
+    @property
+    def q(self) -> np.ndarray:
+        """Sampling ratio ``Q = lambda F# / pitch`` per wavelength (geometric-mean pitch). Q = 2 is Nyquist
+        sampling of the optical cutoff."""
+        p = math.sqrt(self.detector.pitch_x_m * self.detector.pitch_y_m)
+        return np.asarray(self.optics.wavelengths_m) * self.f_number / p
+
+    @property
+    def q_effective(self) -> float:
+        """Q at the effective (weight-averaged) wavelength."""
+        p = math.sqrt(self.detector.pitch_x_m * self.detector.pitch_y_m)
+        return self.optics.effective_wavelength_m * self.f_number / p
+
+    @property
+    def airy_diameter_m(self) -> np.ndarray:
+        """Diameter of the Airy disk to its first dark ring, ``2.44 lambda F#``, per wavelength (focal plane, m)."""
+        return 2.0 * 1.219669891266504 * np.asarray(self.optics.wavelengths_m) * self.f_number
+
+    @property
+    def airy_diameter_px(self) -> np.ndarray:
+        return self.airy_diameter_m / math.sqrt(self.detector.pitch_x_m * self.detector.pitch_y_m)
+
+    @property
+    def limited_by(self) -> Literal["detector", "optics"]:
+        """``"detector"`` when the optical cutoff lies above the detector Nyquist frequency at the
+        effective wavelength (Q < 2: the pixel grid, i.e. the GSD, limits resolution), else ``"optics"``."""
+        return "detector" if self.q_effective < 2.0 else "optics"
+
+    limited_by_criterion: ClassVar[str] = (
+        "Q = lambda_eff * F# / pitch < 2 (optical cutoff 1/(lambda F#) above detector Nyquist 1/(2 pitch)) "
+        "-> detector-limited; otherwise optics-limited"
+    )
+
+    def derived(self) -> dict[str, Any]:
+        """All derived quantities as a JSON-ready dict (names carry their units)."""
+        lam = np.asarray(self.optics.wavelengths_m)
+        return {
+            "focal_length_m": self.focal_length_m,
+            "f_number": self.f_number,
+            "ifov_act_urad": self.ifov_act_rad * 1e6,
+            "ifov_alt_urad": self.ifov_alt_rad * 1e6,
+            "gsd_act_m": self.gsd_act_m,
+            "gsd_alt_m": self.gsd_alt_m,
+            "gsd_m": self.gsd_m,
+            "nyquist_cy_per_mm": self.nyquist_alt_cy_per_mm,
+            "nyquist_act_cy_per_mm": self.nyquist_act_cy_per_mm,
+            "nyquist_alt_cy_per_mm": self.nyquist_alt_cy_per_mm,
+            "nyquist_act_cy_per_m_ground": self.nyquist_act_cy_per_m_ground,
+            "nyquist_alt_cy_per_m_ground": self.nyquist_alt_cy_per_m_ground,
+            "wavelengths_m": lam.tolist(),
+            "effective_wavelength_m": self.optics.effective_wavelength_m,
+            "optical_cutoff_cy_per_mm": self.optical_cutoff_cy_per_mm.tolist(),
+            "q": self.q.tolist(),
+            "q_effective": self.q_effective,
+            "airy_diameter_um": (self.airy_diameter_m * 1e6).tolist(),
+            "airy_diameter_px": self.airy_diameter_px.tolist(),
+            "limited_by": self.limited_by,
+            "limited_by_criterion": self.limited_by_criterion,
+            "ground_speed_m_per_s": self.orbit.ground_speed_m_per_s,
+        }
+
+
+def _config_error(exc: ValidationError) -> ConfigError:
+    """Turn pydantic's report into one ConfigError naming key, value and allowed range."""
+    lines = []
+    for e in exc.errors():
+        loc = ".".join(str(p) for p in e["loc"])
+        msg = e["msg"].removeprefix("Value error, ")
+        if e["type"] == "extra_forbidden":
+            lines.append(f"{loc}: unknown key (check the spelling; allowed keys are listed in the docs)")
+        elif e["type"] == "missing":
+            lines.append(f"{loc}: required key is missing")
+        elif loc and "input" in e and not isinstance(e["input"], dict) and not msg.startswith(loc):
+            lines.append(f"{loc} = {e['input']!r}: {msg[0].lower() + msg[1:]}")
+        else:
+            lines.append(f"{loc + ': ' if loc and not msg.startswith(loc) else ''}{msg}")
+    return ConfigError("invalid imaging system: " + "; ".join(lines))
+
+
+def _read_toml(path: str | Path) -> dict[str, Any]:
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise SatchainIOError(f"system file {str(p)!r}: not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"system file {str(p)!r}: not valid TOML ({exc})") from None
+
+
+def preset_names() -> list[str]:
+    """Names of the packaged presets."""
+    return sorted(
+        r.name.removesuffix(".toml") for r in resources.files("satchain.presets").iterdir() if r.name.endswith(".toml")
+    )
+
+
+def load_preset(name: str) -> ImagingSystem:
+    """Load a packaged preset by name (see :func:`preset_names`).
+
+    Examples
+    --------
+    >>> load_preset("ankarasat3").optics.aperture_diameter_m
+    0.7
+    """
+    names = preset_names()
+    if name not in names:
+        raise ConfigError(f"preset = {name!r}: must be one of {', '.join(map(repr, names))}")
+    with resources.as_file(resources.files("satchain.presets") / f"{name}.toml") as p:
+        return ImagingSystem.from_toml(p)
+
+
+def load_system(path_or_preset: str | Path) -> ImagingSystem:
+    """A preset name or a TOML file path."""
+    s = str(path_or_preset)
+    if s in preset_names():
+        return load_preset(s)
+    return ImagingSystem.from_toml(path_or_preset)
