@@ -1,0 +1,161 @@
+"""The ``satchain`` command line: thin wrappers that parse arguments, call the library and print."""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from satchain.errors import ConfigError, SatchainError
+
+app = typer.Typer(
+    name="satchain",
+    help="Satellite image-chain simulation and image-quality measurement.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console()
+err_console = Console(stderr=True)
+
+PresetOpt = Annotated[str | None, typer.Option("--preset", help="packaged system preset, e.g. ankarasat3")]
+SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML file")]
+
+
+def _handle_errors(fn):
+    """Turn satchain's errors into one clear line on stderr and exit status 2."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except SatchainError as exc:
+            err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
+            raise typer.Exit(2) from None
+
+    return wrapper
+
+
+def _system(preset: str | None, system: Path | None):
+    from satchain.system import load_preset, load_system
+
+    if preset and system:
+        raise ConfigError(f"--preset {preset!r} and --system {str(system)!r}: give one, not both")
+    if system is not None:
+        return load_system(system)
+    return load_preset(preset or "ankarasat3")
+
+
+def _parse_floats(name: str, text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise ConfigError(f"{name} = {text!r}: must be a comma-separated list of numbers") from None
+    if not vals or any((not math.isfinite(v)) or v < 0 for v in vals):
+        raise ConfigError(f"{name} = {text!r}: must be one or more finite numbers >= 0")
+    return vals
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, list):
+        return ", ".join(_fmt(x) for x in v)
+    return str(v)
+
+
+def _print_budget(res: dict[str, Any]) -> None:
+    t = Table(title=f"{res['system']}: derived quantities", show_header=True)
+    t.add_column("quantity")
+    t.add_column("value")
+    for k, v in res["derived"].items():
+        t.add_row(k, _fmt(v))
+    console.print(t)
+    for d in ("alt", "act"):
+        name = "ALT (along-track, f_y)" if d == "alt" else "ACT (across-track, f_x)"
+        comps = list(res["mtf"][d])
+        t = Table(title=f"MTF and CTF budget, {name}")
+        for c in ["f cy/mm", "f cy/px", "f cy/m gnd", *comps, "CTF Coltman", "CTF paper"]:
+            t.add_column(c, justify="right")
+        cols = [
+            res["frequencies_cy_per_mm"],
+            res["frequencies_cy_per_px"][d],
+            res["frequencies_cy_per_m_ground"],
+            *[res["mtf"][d][c] for c in comps],
+            res["ctf"][d]["coltman"],
+            res["ctf"][d]["fourier_synthesis"],
+        ]
+        for row in zip(*cols, strict=True):
+            t.add_row(*[f"{v:.4f}" for v in row])
+        console.print(t)
+    ny = res["mtf_at_nyquist"]
+    console.print(
+        f"MTF at Nyquist: ALT {ny['alt']:.4f}, ACT {ny['act']:.4f}   "
+        f"MTFA (0..Nyquist, cy/px): ALT {res['mtfa']['alt']:.4f}, ACT {res['mtfa']['act']:.4f}"
+    )
+    for key in ("radiometry", "quality"):
+        if key in res:
+            console.print(f"[bold]{key}[/]: " + ", ".join(f"{k}={_fmt(v)}" for k, v in res[key].items() if not isinstance(v, (list, dict))))
+
+
+def _budget(system_obj, freqs: list[float] | None) -> dict[str, Any]:
+    from satchain.report.budget import budget_results
+
+    return budget_results(system_obj, freqs)
+
+
+@app.command()
+@_handle_errors
+def budget(
+    preset: PresetOpt = None,
+    system: SystemOpt = None,
+    freqs: Annotated[str | None, typer.Option("--freqs", help="focal-plane frequencies in cy/mm, e.g. 10,42.5,85")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")] = None,
+) -> None:
+    """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
+    s = _system(preset, system)
+    res = _budget(s, _parse_floats("--freqs", freqs))
+    if out is not None:
+        from satchain.report.budget import write_budget_outputs
+
+        written = write_budget_outputs(s, res, out)
+        if not as_json:
+            console.print("wrote " + ", ".join(str(p) for p in written))
+    if as_json:
+        print(json.dumps(res, indent=2))
+    else:
+        _print_budget(res)
+
+
+@app.command()
+@_handle_errors
+def run(
+    preset: PresetOpt = None,
+    config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="output directory")] = None,
+) -> None:
+    """The main job: predict, simulate, measure and report. (For now: the budget of the system.)"""
+    s = _system(preset, config)
+    res = _budget(s, None)
+    _print_budget(res)
+    if out is not None:
+        from satchain.report.budget import write_budget_outputs
+
+        write_budget_outputs(s, res, out)
+
+
+def main() -> None:  # pragma: no cover
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,71 @@
+"""Figures of the MTF budget: the paper's Figure 3(a) (MTF components) and 3(b) (square-wave series)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from satchain.report._save import save_figure  # noqa: E402
+
+__all__ = ["plot_mtf_budget", "plot_square_wave"]
+
+_STYLE = {
+    "diffraction": dict(color="tab:orange"),
+    "detector": dict(color="tab:green"),
+    "smear": dict(color="tab:purple"),
+    "jitter": dict(color="tab:brown"),
+    "charge_diffusion": dict(color="tab:olive"),
+    "tdi_sync": dict(color="tab:cyan"),
+    "system": dict(color="black", linewidth=2.2),
+}
+
+
+def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title: str = "") -> None:
+    """MTF of each component and of the system vs focal-plane frequency, ALT and ACT panels.
+
+    ``budget`` is a :class:`satchain.tf.budget.MTFBudget`; ``ctf`` optionally maps direction ->
+    {"coltman": [...], "fourier_synthesis": [...]} on the same frequencies.
+    """
+    f = budget.f_cy_per_mm
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=True)
+    for ax, d in zip(axes, ("alt", "act"), strict=True):
+        for name, m in getattr(budget, d).items():
+            ax.plot(f, m, label=f"{name} MTF", **_STYLE.get(name, {}))
+        if ctf is not None:
+            ax.plot(f, ctf[d]["coltman"], "--", color="tab:red", label="CTF (Coltman)")
+            ax.plot(f, ctf[d]["fourier_synthesis"], ":", color="tab:blue", label="CTF (paper's synthesis)")
+        ny = budget.nyquist_cy_per_mm[d]
+        ax.axvline(ny, color="gray", lw=1)
+        ax.text(ny, 1.02, f" Nyquist {ny:.1f}", color="gray", va="bottom", fontsize=8)
+        ax.set_xlim(0, f[-1])
+        ax.set_ylim(0, 1.08)
+        ax.set_xlabel("focal-plane spatial frequency (cycles/mm)")
+        ax.set_title(f"{d.upper()} ({'along-track, f_y' if d == 'alt' else 'across-track, f_x'})")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("modulation")
+    axes[1].legend(fontsize=8, loc="upper right")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=130)
+
+
+def plot_square_wave(
+    x_m: np.ndarray, square: np.ndarray, degraded: np.ndarray, path: str | Path, *, period_m: float, note: str = ""
+) -> None:
+    """The paper's Figure 3(b): truncated Fourier series of a bar pattern and its MTF-degraded version."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.plot(x_m, square, "k-", label="input square wave (truncated Fourier series)")
+    ax.plot(x_m, degraded, "b--", label="degraded by the system MTF")
+    ax.set_xlabel("ground position (m)")
+    ax.set_ylabel("relative reflectance")
+    ax.set_title(f"Square wave of ground period {period_m:g} m{(' - ' + note) if note else ''}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=130)

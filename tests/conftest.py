@@ -1,0 +1,17 @@
+"""Shared test fixtures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED_TABLE1 = REPO.parent / "shared" / "reference" / "table1.csv"
+
+
+@pytest.fixture(scope="session")
+def ankarasat3():
+    from satchain import load_preset
+
+    return load_preset("ankarasat3")
