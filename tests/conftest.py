@@ -15,3 +15,9 @@ def ankarasat3():
     from satchain import load_preset
 
     return load_preset("ankarasat3")
+
+
+@pytest.fixture(scope="session")
+def table1_path():
+    """The shared reference Table 1 when the checkout sits beside shared/, else None (packaged copy)."""
+    return SHARED_TABLE1 if SHARED_TABLE1.exists() else None

@@ -17,8 +17,8 @@ Two definitions of the *contrast transfer function* (CTF) live here, both labell
   represented by a *truncated* Fourier series (10 odd harmonics by default), each coefficient
   multiplied by the MTF, and "the degraded square wave modulation divided by the input square wave
   modulation" (paper, Figure 3(b) and Table 1). The truncated input overshoots (Gibbs), so the
-  division rescales the result by about ``1/1.179``: it tends to ``~0.85`` at low frequency and to
-  ``~1.08 M(f)`` near the cutoff. The paper's remark that "CTF and MTF get almost the same value at
+  division rescales the result by about ``1/1.179``: ``~0.85`` at low frequency (where Coltman gives
+  ~0.98) and ``~1.08 M(f)`` near the cutoff. The paper's remark that "CTF and MTF get almost the same value at
   low transfer values" is this artefact, not a property of bar targets.
 
 Frequencies are unit-agnostic: pass ``f`` and the MTF's argument in the same unit (cy/mm, cy/px, ...).
@@ -475,8 +475,10 @@ def ctf_fourier_synthesis(f, mtf, *, n_harmonics: int = 10, samples_per_period: 
     * near the cutoff, where only the fundamental passes, Coltman gives ``CTF = (4/pi) M ~ 1.273 M``
       (the true square-wave response at the bar centres) while this method gives
       ``(4/pi) M / 1.179 ~ 1.08 M``;
-    * at low frequency Coltman tends to 1 while this method tends to ``~1/1.179 ~ 0.85`` (the
-      blurred series loses its overshoot, the input keeps it).
+    * at low frequency, once the blurred series has lost its overshoot (its upper harmonics, up to
+      ``(2 n_harmonics - 1) f``, attenuated) while the input keeps it, the method gives about
+      Coltman's CTF / 1.18: ~0.85 where Coltman gives ~0.98 on the paper's system at 2 cy/mm. Only
+      as ``f -> 0``, where every kept harmonic passes unattenuated, does it return to 1.
 
     The paper's observation that CTF ~ MTF at low transfer values is this truncation artefact.
     satchain reports both, labelled: use :func:`coltman_ctf` for a physical bar-target prediction

@@ -38,7 +38,18 @@ else:  # pragma: no cover
 EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
 EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
 
-__all__ = ["Detector", "ImagingSystem", "Motion", "Optics", "Orbit", "Spiders", "load_preset", "load_system"]
+__all__ = [
+    "Detector",
+    "Illumination",
+    "ImagingSystem",
+    "Motion",
+    "Optics",
+    "Orbit",
+    "Radiometry",
+    "Spiders",
+    "load_preset",
+    "load_system",
+]
 
 
 class _Frozen(BaseModel):
@@ -191,6 +202,22 @@ class Detector(_Frozen):
     tdi_sync_error: float = Field(
         default=0.0, ge=-0.5, le=0.5, description="fractional along-track line-rate mismatch of TDI clocking"
     )
+    # --- radiometric properties (satchain.radiometry). Defaults describe an ideal detector: QE 1, no
+    # read or dark noise, no full-well limit, no quantisation.
+    qe: float | tuple[float, ...] = Field(
+        default=1.0, description="quantum efficiency, e-/photon: a number, or a table on qe_wavelengths_m"
+    )
+    qe_wavelengths_m: tuple[float, ...] | None = Field(default=None, description="wavelengths of a tabulated qe")
+    full_well_e: float | None = Field(default=None, gt=0, le=1e9, description="charge capacity, electrons")
+    read_noise_e: float = Field(default=0.0, ge=0, le=1e4, description="read noise per read, electrons rms")
+    dark_current_e_per_s: float = Field(default=0.0, ge=0, le=1e9, description="dark current, e-/s per pixel")
+    bit_depth: int | None = Field(default=None, ge=1, le=32, description="ADC bits; range mapped to full_well_e")
+    readout: Literal["ccd", "cmos"] = Field(
+        default="ccd",
+        description="TDI accumulation: 'ccd' sums charge (one read), 'cmos' sums digitally (a read per stage)",
+    )
+    prnu: float = Field(default=0.0, ge=0, le=1, description="photo-response non-uniformity, fraction rms")
+    dsnu_e: float = Field(default=0.0, ge=0, le=1e6, description="dark-signal non-uniformity, electrons rms")
 
     @model_validator(mode="before")
     @classmethod
@@ -234,6 +261,53 @@ class Detector(_Frozen):
                 raise ValueError(f"active_width_{ax}_m = {a!r}: must be <= pitch_{ax}_m ({p!r})")
         return self
 
+    @field_validator("qe")
+    @classmethod
+    def _qe_values(cls, v: float | tuple[float, ...]) -> float | tuple[float, ...]:
+        if isinstance(v, tuple):
+            for i, q in enumerate(v):
+                if not (math.isfinite(q) and 0 <= q <= 1):
+                    raise ValueError(f"qe[{i}] = {q!r}: must be in [0, 1] (electrons per photon)")
+        elif not (math.isfinite(v) and 0 < v <= 1):
+            raise ValueError("must be in (0, 1] (electrons per photon)")
+        return v
+
+    @model_validator(mode="after")
+    def _qe_table_and_adc(self) -> Detector:
+        w, q = self.qe_wavelengths_m, self.qe
+        if isinstance(q, tuple):
+            if w is None or len(w) != len(q) or len(q) < 2:
+                raise ValueError(
+                    f"detector.qe is a table of {len(q)} values: give detector.qe_wavelengths_m with the same "
+                    f"number (>= 2) of wavelengths (got {None if w is None else len(w)})"
+                )
+            if any(not 1e-8 <= x <= 1e-4 for x in w) or any(b <= a for a, b in zip(w, w[1:])):
+                raise ValueError(
+                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, in [1e-08, 0.0001] m"
+                )
+            if max(q) <= 0:
+                raise ValueError("detector.qe: a tabulated QE must be > 0 somewhere")
+        elif w is not None:
+            raise ValueError("detector.qe_wavelengths_m is given but detector.qe is a single number; give a table")
+        if self.bit_depth is not None and self.full_well_e is None:
+            raise ValueError(
+                f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is mapped "
+                "to the full well, which sets electrons per DN)"
+            )
+        return self
+
+    def qe_at(self, wavelength_m) -> np.ndarray:
+        """Quantum efficiency at the given wavelengths (linear interpolation of the table, 0 outside it)."""
+        lam = np.asarray(wavelength_m, dtype=float)
+        if isinstance(self.qe, tuple):
+            return np.interp(lam, self.qe_wavelengths_m, self.qe, left=0.0, right=0.0)
+        return np.full_like(lam, float(self.qe))
+
+    @property
+    def active_area_m2(self) -> float:
+        """Photosensitive area of one pixel (m^2): what collects light in the radiometric budget."""
+        return self.active_width_x_m * self.active_width_y_m
+
     @property
     def fill_factor(self) -> float:
         """Active area / pixel area."""
@@ -248,6 +322,50 @@ class Motion(_Frozen):
     jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
 
 
+class Radiometry(_Frozen):
+    """Spectral band and exposure for the radiometric budget (:mod:`satchain.radiometry`).
+
+    ``band_m`` is the sensor's spectral band (the signal is integrated over it); it is distinct from
+    ``optics.wavelengths_m``, the wavelengths at which the polychromatic MTF is evaluated. The default band,
+    450-900 nm, is a typical silicon panchromatic band. ``integration_time_s`` is the exposure of one TDI
+    stage; when omitted it is the line time, ``gsd_alt_m / ground_speed_m_per_s``.
+    """
+
+    band_m: tuple[float, float] = Field(default=(4.5e-7, 9.0e-7), description="spectral band [min, max], m")
+    integration_time_s: float | None = Field(default=None, gt=0, le=10, description="exposure per TDI stage")
+
+    @field_validator("band_m")
+    @classmethod
+    def _band(cls, v: tuple[float, float]) -> tuple[float, float]:
+        lo, hi = v
+        if not (2.8e-7 <= lo < hi <= 4.0e-6):
+            raise ValueError(
+                f"must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m (the solar table's 280-4000 nm), got {list(v)}"
+            )
+        return v
+
+
+class Illumination(_Frozen):
+    """Sun, surface and atmosphere for the radiometric budget (:mod:`satchain.radiometry`).
+
+    ``atmosphere_absorption`` is the fraction absorbed on *one* pass through the atmosphere (transmission
+    ``T = 1 - absorption``); ``atmosphere_path`` says where it applies: ``"down"`` (sun to ground: lowers
+    the surface radiance), ``"up"`` (ground to sensor) or ``"both"``. The default -- 23 % on both paths --
+    is the reading of the reference paper's Figure 2: its "surface" curve is the radiance leaving an
+    albedo-0.2 surface lit through a 23 %-absorbing atmosphere, and its TOA curve (MODTRAN "ground
+    reflected") is that radiance attenuated again on the way up. ``path_radiance_w_per_m2_sr_per_um`` is a
+    spectrally flat radiance added at the top of the atmosphere (default 0, as MODTRAN's ground-reflected
+    term excludes path radiance).
+    """
+
+    sun_zenith_deg: float = Field(default=30.0, ge=0, lt=90)
+    reflectance: float = Field(default=0.2, ge=0, le=1, description="Lambertian surface reflectance (albedo)")
+    atmosphere_absorption: float = Field(default=0.23, ge=0, lt=1, description="absorbed fraction per pass")
+    atmosphere_path: Literal["both", "down", "up"] = "both"
+    path_radiance_w_per_m2_sr_per_um: float = Field(default=0.0, ge=0, le=1e4)
+    solar_spectrum: Literal["astm_g173_etr", "planck_5778k"] = "astm_g173_etr"
+
+
 class ImagingSystem(_Frozen):
     """A complete satellite camera: orbit, optics, detector and motion, plus derived quantities."""
 
@@ -257,6 +375,8 @@ class ImagingSystem(_Frozen):
     optics: Optics
     detector: Detector
     motion: Motion = Field(default_factory=Motion)
+    radiometry: Radiometry = Field(default_factory=Radiometry)
+    illumination: Illumination = Field(default_factory=Illumination)
     provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
     # ----------------------------------------------------------------- construction
@@ -286,8 +406,8 @@ class ImagingSystem(_Frozen):
         d = self.model_dump(mode="python")
         for key, v in values.items():
             section, _, field = key.partition(".")
-            if section not in ("orbit", "optics", "detector", "motion") or not field:
-                raise ConfigError(f"parameter {key!r}: must be '<orbit|optics|detector|motion>.<field>'")
+            if section not in _SECTIONS or not field:
+                raise ConfigError(f"parameter {key!r}: must be '<{'|'.join(_SECTIONS)}>.<field>'")
             sub = d[section]
             if field not in sub and field not in ("pitch_m", "fill_factor", "wavelength_m"):
                 raise ConfigError(f"parameter {key!r}: {section} has no field {field!r}")
@@ -387,6 +507,17 @@ class ImagingSystem(_Frozen):
         effective wavelength (Q < 2: the pixel grid, i.e. the GSD, limits resolution), else ``"optics"``."""
         return "detector" if self.q_effective < 2.0 else "optics"
 
+    @property
+    def line_time_s(self) -> float:
+        """Time for the nadir point to move one along-track GSD: ``gsd_alt_m / ground_speed_m_per_s``."""
+        return self.gsd_alt_m / self.orbit.ground_speed_m_per_s
+
+    @property
+    def integration_time_s(self) -> float:
+        """Exposure of one TDI stage: ``radiometry.integration_time_s`` or, by default, the line time."""
+        t = self.radiometry.integration_time_s
+        return self.line_time_s if t is None else t
+
     limited_by_criterion: ClassVar[str] = (
         "Q = lambda_eff * F# / pitch < 2 (optical cutoff 1/(lambda F#) above detector Nyquist 1/(2 pitch)) "
         "-> detector-limited; otherwise optics-limited"
@@ -419,6 +550,9 @@ class ImagingSystem(_Frozen):
             "limited_by_criterion": self.limited_by_criterion,
             "ground_speed_m_per_s": self.orbit.ground_speed_m_per_s,
         }
+
+
+_SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination")
 
 
 def _config_error(exc: ValidationError) -> ConfigError:

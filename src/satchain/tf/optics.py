@@ -28,7 +28,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.fft import irfft2, next_fast_len, rfft2
+from scipy.fft import fft2, irfft2, next_fast_len, rfft2
 
 from satchain import units
 from satchain._validate import as_float_array, check_positive, check_range
@@ -385,13 +385,13 @@ def _autocorrelation(p: np.ndarray, m: int) -> np.ndarray:
     n = p.shape[0]
     power = np.sum(np.abs(p) ** 2)
     if np.iscomplexobj(p):
-        g = np.fft.fft2(p, s=(m, m))
-        acf = np.fft.fft2(np.abs(g) ** 2) / (m * m * power)  # forward FFT of the PSF = conj(ifft)
+        g = fft2(p, s=(m, m))
+        acf = fft2(np.abs(g) ** 2) / (m * m * power)  # forward FFT of the PSF = conj(ifft)
     else:
-        g = rfft2(p, s=(m, m), workers=-1)
-        acf = irfft2(np.abs(g) ** 2, s=(m, m), workers=-1) / power
+        g = rfft2(p, s=(m, m))
+        acf = irfft2(np.abs(g) ** 2, s=(m, m)) / power
     acf = np.fft.fftshift(acf)  # lag 0 at index m // 2 = n
-    out = np.zeros((2 * n + 1, 2 * n + 1), dtype=np.complex128)
+    out = np.zeros((2 * n + 1, 2 * n + 1), dtype=acf.dtype)
     out[:-1, :-1] = acf  # lag n (= cutoff) stays 0; lag -n was ~0 already
     out[0, :] = 0.0
     out[:, 0] = 0.0
@@ -496,7 +496,7 @@ def pupil_psf(
     _check_fft_memory(m, params, "pupil_psf")
     dx = d / n
     p = _pupil_function(n, eps=eps, spiders=spiders, zernikes=z, dx_m=dx)
-    g = np.fft.fftshift(np.fft.fft2(p, s=(m, m)))
+    g = np.fft.fftshift(fft2(p, s=(m, m)))
     focal = fno * d
     spacing = lam * focal / (m * dx)
     psf = np.abs(g) ** 2 * dx**4 / ((lam * focal) ** 2 * np.sum(np.abs(p) ** 2) * dx**2)

@@ -1,0 +1,108 @@
+"""Helpers shared by the measurement modules: ROI extraction, input checks, JSON-ready results."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from satchain._validate import as_float_array
+from satchain.errors import InputError
+
+__all__ = ["crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing"]
+
+
+def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarray:
+    """Return the float64 region ``image[y0:y1, x0:x1]`` for ``roi = (x0, y0, x1, y1)`` (half-open, pixels).
+
+    Refuses non-2-D input, NaN/inf, and regions smaller than ``min_size`` in either direction.
+
+    Examples
+    --------
+    >>> crop_roi(np.zeros((20, 30)), (5, 2, 25, 12)).shape
+    (10, 20)
+    """
+    a = as_float_array(name, image, ndim=2, finite=False)
+    if roi is not None:
+        try:
+            x0, y0, x1, y1 = (int(v) for v in roi)
+        except (TypeError, ValueError):
+            raise InputError(f"roi = {roi!r}: must be four integers (x0, y0, x1, y1)") from None
+        ny, nx = a.shape
+        if not (0 <= x0 < x1 <= nx and 0 <= y0 < y1 <= ny):
+            raise InputError(
+                f"roi = {tuple(roi)!r}: must satisfy 0 <= x0 < x1 <= {nx} and 0 <= y0 < y1 <= {ny} "
+                f"for an image of shape {a.shape}"
+            )
+        a = a[y0:y1, x0:x1]
+    if not np.all(np.isfinite(a)):
+        n = int(np.count_nonzero(~np.isfinite(a)))
+        raise InputError(f"{name}: the region contains {n} NaN/inf value(s); all values must be finite")
+    if min(a.shape) < min_size:
+        raise InputError(f"{name}: region of shape {a.shape} is too small; both sides must be >= {min_size} px")
+    return np.array(a, dtype=np.float64)
+
+
+def robust_sigma(values) -> float:
+    """Standard deviation estimated from the median absolute deviation (1.4826 MAD).
+
+    Examples
+    --------
+    >>> round(robust_sigma(np.random.default_rng(0).normal(0, 2, 100000)), 1)
+    2.0
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    if v.size == 0:
+        return 0.0
+    return float(1.482602218505602 * np.median(np.abs(v - np.median(v))))
+
+
+def first_crossing(x, y, level: float):
+    """First ``x`` where ``y`` falls to ``level`` or below (linear interpolation), or None.
+
+    Examples
+    --------
+    >>> first_crossing(np.array([0.0, 1.0, 2.0]), np.array([1.0, 0.6, 0.2]), 0.5)
+    1.25
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    below = np.nonzero(y <= level)[0]
+    if below.size == 0:
+        return None
+    i = int(below[0])
+    if i == 0:
+        return float(x[0])
+    x0, x1, y0, y1 = x[i - 1], x[i], y[i - 1], y[i]
+    if y0 == y1:
+        return float(x1)
+    return float(x0 + (level - y0) * (x1 - x0) / (y1 - y0))
+
+
+def to_jsonable(value):
+    """Convert arrays, numpy scalars, tuples and non-finite floats to plain JSON types (NaN/inf -> None).
+
+    Examples
+    --------
+    >>> to_jsonable({"a": np.array([1.0, np.nan]), "b": (np.int64(2),)})
+    {'a': [1.0, None], 'b': [2]}
+    """
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return [to_jsonable(v) for v in value.tolist()]
+    if isinstance(value, list | tuple):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+class ResultMixin:
+    """``to_dict()`` for frozen result dataclasses: every field, JSON-ready."""
+
+    def to_dict(self) -> dict:
+        return {f.name: to_jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)}
