@@ -183,10 +183,10 @@ def test_coltman_is_vectorised_and_keeps_shape():
 
 @pytest.mark.parametrize(
     ("k", "b_k"),
-    [(1, 1), (3, 1), (5, -1), (7, 1), (9, 0), (11, 1), (13, -1), (15, -1), (21, 1), (25, 0), (105, 1)],
+    [(1, 1), (3, 1), (5, -1), (7, 1), (9, 0), (11, 1), (13, -1), (15, -1), (21, 1), (25, 0), (105, -1)],
 )
 def test_inverse_series_coefficients_match_coltman(k, b_k):
-    # A CTF that is 1 only near k f picks out (pi/4) B_k / k (Coltman 1954; Boreman eq. 3.10):
+    # A CTF that is 1 only near k f picks out (pi/4) B_k / k (Coltman 1954; Boreman 2001):
     # M = (pi/4)[C(f) + C(3f)/3 - C(5f)/5 + C(7f)/7 + C(11f)/11 - C(13f)/13 - C(15f)/15 + ...]
     probe = band_limited(lambda g: (np.abs(g - k) < 0.25).astype(float), 200.0)
     assert mtf_from_ctf(1.0, probe) == pytest.approx(math.pi / 4 * b_k / k, abs=1e-15)
@@ -361,11 +361,12 @@ def test_errors_name_the_parameter():
         (ConfigError, "rtol", lambda: coltman_ctf(1.0, mtf, rtol=0.0)),
         (ConfigError, "max_terms", lambda: coltman_ctf(1.0, mtf, max_terms=0)),
         (ConfigError, "max_terms", lambda: coltman_ctf(1e-3, mtf, max_terms=100)),
-        (ConfigError, "max_terms", lambda: coltman_ctf(1.0, np.sinc, max_terms=1000)),
+        (ConfigError, "max_terms", lambda: coltman_ctf(0.5, np.sinc, max_terms=1000)),
         (ConfigError, "mtf", lambda: coltman_ctf(1.0, "not callable")),
         (ConfigError, "mtf.cutoff", lambda: coltman_ctf(1.0, band_limited(mtf, 1.0).__class__(mtf, -1.0))),
         (InputError, "mtf", lambda: coltman_ctf(1.0, lambda g: np.full_like(g, np.nan))),
         (InputError, "mtf", lambda: coltman_ctf(1.0, lambda g: g + 1j)),
+        (InputError, "mtf", lambda: coltman_ctf(1.0, lambda g: np.ones((len(g), 2)))),
         (ConfigError, "n_harmonics", lambda: ctf_fourier_synthesis(1.0, mtf, n_harmonics=0)),
         (ConfigError, "n_harmonics", lambda: ctf_fourier_synthesis(1.0, mtf, n_harmonics=2.5)),
         (ConfigError, "samples_per_period", lambda: ctf_fourier_synthesis(1.0, mtf, samples_per_period=30)),

@@ -8,18 +8,18 @@ Two definitions of the *contrast transfer function* (CTF) live here, both labell
   ``CTF(f) = (4/pi) * sum_{k>=0} (-1)^k M((2k+1) f) / (2k+1)``
 
   (J. W. Coltman, "The specification of imaging properties by response to a sine wave input",
-  JOSA 44, 468 (1954); G. D. Boreman, *Modulation Transfer Function in Optical and Electro-Optical
-  Systems*, SPIE 2001, sec. 3.5). It is the physical response of a bar target: it tends to 1 at low
-  frequency and to ``(4/pi) M(f) ~ 1.273 M(f)`` above a third of the cutoff, where only the
-  fundamental passes.
+  JOSA 44, 468 (1954); G. D. Boreman, *Modulation Transfer Function in Optical and
+  Electro-Optical Systems*, SPIE 2001, bar-target section). It is the physical response of a bar
+  target: it tends to 1 at low frequency and to ``(4/pi) M(f) ~ 1.273 M(f)`` above a third of the
+  cutoff, where only the fundamental passes.
 
 * **The reference paper's Fourier-synthesis CTF** (:func:`ctf_fourier_synthesis`): a square wave
   represented by a *truncated* Fourier series (10 odd harmonics by default), each coefficient
   multiplied by the MTF, and "the degraded square wave modulation divided by the input square wave
   modulation" (paper, Figure 3(b) and Table 1). The truncated input overshoots (Gibbs), so the
-  division rescales the result by about ``1/1.179``: ``~0.85`` at low frequency (where Coltman gives
-  ~0.98) and ``~1.08 M(f)`` near the cutoff. The paper's remark that "CTF and MTF get almost the same value at
-  low transfer values" is this artefact, not a property of bar targets.
+  division rescales the result by about ``1/1.179``: ``~0.85`` at low frequency (where Coltman
+  gives ~0.98) and ``~1.08 M(f)`` near the cutoff. The paper's remark that "CTF and MTF get almost
+  the same value at low transfer values" is this artefact, not a property of bar targets.
 
 Frequencies are unit-agnostic: pass ``f`` and the MTF's argument in the same unit (cy/mm, cy/px, ...).
 An MTF is any vectorised callable ``mtf(f) -> array``; if it has an attribute ``cutoff`` it is
@@ -214,9 +214,13 @@ def _evaluate(tf, g: np.ndarray, cutoff: float | None, name: str) -> np.ndarray:
     vals = np.asarray(tf(g[inside]))
     if np.iscomplexobj(vals):
         raise InputError(f"{name}: returned complex values; pass a real transfer function (e.g. |OTF|)")
-    vals = np.broadcast_to(vals.astype(np.float64, copy=False), (int(np.count_nonzero(inside)),))
+    n = int(np.count_nonzero(inside))
+    if vals.shape not in ((), (n,)):
+        raise InputError(f"{name}: returned shape {vals.shape} for {n} frequencies; must be vectorised")
+    vals = np.broadcast_to(vals.astype(np.float64, copy=False), (n,))
     if not np.all(np.isfinite(vals)):
-        raise InputError(f"{name}: returned NaN/inf at {int(np.count_nonzero(~np.isfinite(vals)))} frequencies")
+        n_bad = int(np.count_nonzero(~np.isfinite(vals)))
+        raise InputError(f"{name}: returned NaN/inf at {n_bad} of {n} frequencies")
     out[inside] = vals
     return out
 
@@ -310,8 +314,8 @@ def _series_transform(f, tf, coefficients, scale, *, name, rtol, max_terms):
 def coltman_ctf(f, mtf, *, rtol: float = 1e-12, max_terms: int = 100_000):
     """Coltman's square-wave response (CTF) from the MTF.
 
-    ``CTF(f) = (4/pi) * sum_{k>=0} (-1)^k M((2k+1) f) / (2k+1)``  (Coltman 1954, JOSA 44, 468, eq. 7;
-    Boreman 2001, eq. 3.8): the modulation at the bar centres of the image of an ideal 0/1 square
+    ``CTF(f) = (4/pi) * sum_{k>=0} (-1)^k M((2k+1) f) / (2k+1)``  (Coltman 1954, JOSA 44, 468;
+    Boreman 2001): the modulation at the bar centres of the image of an ideal 0/1 square
     wave (50 % duty) of frequency ``f``. This is the physical bar-target response, unlike
     :func:`ctf_fourier_synthesis` (the paper's method, see there).
 
@@ -354,7 +358,7 @@ def mtf_from_ctf(f, ctf, *, rtol: float = 1e-12, max_terms: int = 100_000):
     ``M(f) = (pi/4) * sum_{k odd} B_k C(k f) / k`` with ``B_k = (-1)^m (-1)^((k-1)/2)`` when ``k`` is a
     product of ``m`` distinct primes and ``B_k = 0`` when ``k`` has a square factor:
     ``M = (pi/4)[C(f) + C(3f)/3 - C(5f)/5 + C(7f)/7 + C(11f)/11 - C(13f)/13 - C(15f)/15 + ...]``
-    (Coltman 1954; Boreman 2001, eq. 3.10). ``B_k = mu(k) chi(k)`` (Moebius function times the
+    (Coltman 1954; Boreman 2001). ``B_k = mu(k) chi(k)`` (Moebius function times the
     character mod 4), the Dirichlet inverse of the forward signs, so the round trip with
     :func:`coltman_ctf` is exact up to rounding when both series are finite.
 
@@ -469,7 +473,7 @@ def ctf_fourier_synthesis(f, mtf, *, n_harmonics: int = 10, samples_per_period: 
 
     **Why it differs from Coltman's CTF** (:func:`coltman_ctf`). The truncated input series is not a
     square wave: it overshoots at every edge (Gibbs phenomenon), so its modulation is not 1 but
-    ``~1.18`` (-> ``(2/pi) Si(pi) = 1.178979...`` as ``n_harmonics`` grows; 1.1797 for 10
+    ``~1.18`` (-> ``(2/pi) Si(pi) = 1.178979...`` as ``n_harmonics`` grows; 1.1798 for 10
     harmonics sampled at 2048 points). Dividing by it rescales everything by ``~1/1.18``:
 
     * near the cutoff, where only the fundamental passes, Coltman gives ``CTF = (4/pi) M ~ 1.273 M``
@@ -505,7 +509,7 @@ def ctf_fourier_synthesis(f, mtf, *, n_harmonics: int = 10, samples_per_period: 
     Examples
     --------
     >>> m = band_limited(lambda f: 1.0 - f, cutoff=1.0)
-    >>> round(float(ctf_fourier_synthesis(0.5, m)), 4)  # (4/pi)(0.5) / 1.1797
+    >>> round(float(ctf_fourier_synthesis(0.5, m)), 4)  # (4/pi)(0.5) / 1.1798
     0.5396
     >>> round(float(coltman_ctf(0.5, m)), 4)
     0.6366

@@ -207,14 +207,14 @@ class Detector(_Frozen):
     qe: float | tuple[float, ...] = Field(
         default=1.0, description="quantum efficiency, e-/photon: a number, or a table on qe_wavelengths_m"
     )
-    qe_wavelengths_m: tuple[float, ...] | None = Field(default=None, description="wavelengths of a tabulated qe")
+    qe_wavelengths_m: tuple[float, ...] | None = Field(default=None, description="wavelengths of a qe table")
     full_well_e: float | None = Field(default=None, gt=0, le=1e9, description="charge capacity, electrons")
     read_noise_e: float = Field(default=0.0, ge=0, le=1e4, description="read noise per read, electrons rms")
     dark_current_e_per_s: float = Field(default=0.0, ge=0, le=1e9, description="dark current, e-/s per pixel")
-    bit_depth: int | None = Field(default=None, ge=1, le=32, description="ADC bits; range mapped to full_well_e")
+    bit_depth: int | None = Field(default=None, ge=1, le=32, description="ADC bits, range = full_well_e")
     readout: Literal["ccd", "cmos"] = Field(
         default="ccd",
-        description="TDI accumulation: 'ccd' sums charge (one read), 'cmos' sums digitally (a read per stage)",
+        description="TDI accumulation: 'ccd' sums charge (one read), 'cmos' sums digitally (one per stage)",
     )
     prnu: float = Field(default=0.0, ge=0, le=1, description="photo-response non-uniformity, fraction rms")
     dsnu_e: float = Field(default=0.0, ge=0, le=1e6, description="dark-signal non-uniformity, electrons rms")
@@ -278,21 +278,25 @@ class Detector(_Frozen):
         if isinstance(q, tuple):
             if w is None or len(w) != len(q) or len(q) < 2:
                 raise ValueError(
-                    f"detector.qe is a table of {len(q)} values: give detector.qe_wavelengths_m with the same "
-                    f"number (>= 2) of wavelengths (got {None if w is None else len(w)})"
+                    f"detector.qe is a table of {len(q)} values: give detector.qe_wavelengths_m with the "
+                    f"same number (>= 2) of wavelengths (got {None if w is None else len(w)})"
                 )
-            if any(not 1e-8 <= x <= 1e-4 for x in w) or any(b <= a for a, b in zip(w, w[1:])):
+            increasing = all(b > a for a, b in zip(w[:-1], w[1:], strict=True))
+            if not increasing or any(not 1e-8 <= x <= 1e-4 for x in w):
                 raise ValueError(
-                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, in [1e-08, 0.0001] m"
+                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, "
+                    "in [1e-08, 0.0001] m"
                 )
             if max(q) <= 0:
                 raise ValueError("detector.qe: a tabulated QE must be > 0 somewhere")
         elif w is not None:
-            raise ValueError("detector.qe_wavelengths_m is given but detector.qe is a single number; give a table")
+            raise ValueError(
+                "detector.qe_wavelengths_m is given but detector.qe is a single number; give a qe table"
+            )
         if self.bit_depth is not None and self.full_well_e is None:
             raise ValueError(
-                f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is mapped "
-                "to the full well, which sets electrons per DN)"
+                f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is "
+                "mapped to the full well, which sets electrons per DN)"
             )
         return self
 
@@ -340,7 +344,8 @@ class Radiometry(_Frozen):
         lo, hi = v
         if not (2.8e-7 <= lo < hi <= 4.0e-6):
             raise ValueError(
-                f"must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m (the solar table's 280-4000 nm), got {list(v)}"
+                f"must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m (the solar table spans "
+                f"280-4000 nm), got {list(v)}"
             )
         return v
 

@@ -119,9 +119,12 @@ def write_budget_outputs(system: ImagingSystem, results: dict[str, Any], out_dir
         p = out / f"mtf_{d}.csv"
         write_text(p, _csv_text(results, d))
         written.append(p)
-    b = mtf_budget(system, results["frequencies_cy_per_mm"], otf=otf)
+    otf = SystemOTF(system) if otf is None else otf
+    f_dense = np.linspace(0.0, float(np.max(results["frequencies_cy_per_mm"])), 341)
+    dense = budget_results(system, f_dense, otf=otf)  # the plot wants smooth curves, not the table grid
+    b = mtf_budget(system, f_dense, otf=otf)
     p = out / "fig3a_mtf_budget.png"
-    figures.plot_mtf_budget(b, p, ctf=results["ctf"], title=f"MTF budget: {system.name}")
+    figures.plot_mtf_budget(b, p, ctf=dense["ctf"], title=f"MTF budget: {system.name}")
     written.append(p)
     x, sq, deg = square_wave_figure_data(system, otf=otf)
     p = out / "fig3b_square_wave.png"

@@ -35,6 +35,8 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=True)
     for ax, d in zip(axes, ("alt", "act"), strict=True):
         for name, m in getattr(budget, d).items():
+            if name != "system" and np.allclose(m, 1.0):
+                continue  # a component that does not act along this axis (e.g. ALT smear in ACT)
             ax.plot(f, m, label=f"{name} MTF", **_STYLE.get(name, {}))
         if ctf is not None:
             ax.plot(f, ctf[d]["coltman"], "--", color="tab:red", label="CTF (Coltman)")
@@ -48,6 +50,7 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
         ax.set_title(f"{d.upper()} ({'along-track, f_y' if d == 'alt' else 'across-track, f_x'})")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("modulation")
+    axes[0].legend(fontsize=8, loc="upper right")
     axes[1].legend(fontsize=8, loc="upper right")
     if title:
         fig.suptitle(title)
