@@ -105,8 +105,8 @@ def photon_radiance(wavelength_m, radiance_w):
 
     Examples
     --------
-    >>> round(float(photon_radiance(5e-7, 1.0)) / 1e18, 4)  # 1 W at 500 nm
-    2.5172
+    >>> round(float(photon_radiance(5e-7, 1.0)) / 1e18, 4)  # 1 W at 500 nm: 5e-7 / (h c) photons/s
+    2.5171
     """
     lam = as_float_array("wavelength_m", wavelength_m)
     return np.asarray(radiance_w, dtype=float) * lam / (H_J_S * C_M_PER_S)
@@ -155,7 +155,7 @@ def planck_spectral_radiance(wavelength_m, temperature_k: float):
     Examples
     --------
     >>> round(float(planck_spectral_radiance(5e-7, 5778.0)) * 1e-13, 4)  # W m^-2 sr^-1 m^-1
-    2.6356
+    2.6376
     """
     lam = as_float_array("wavelength_m", wavelength_m)
     t = check_positive("temperature_k", temperature_k)
@@ -170,12 +170,15 @@ def planck_solar_irradiance(wavelength_m, *, temperature_k: float = 5778.0, dist
     """Irradiance of a black-body Sun: ``E = pi B(lambda, T) (R_sun / d)^2`` (W m^-2 m^-1).
 
     A Lambertian sphere of radius ``R_sun`` seen from ``d``: its total is ``sigma T^4 (R_sun / d)^2``,
-    1361 W/m^2 at 5778 K and 1 AU.
+    1366.8 W/m^2 at 5778 K and 1 AU (the IAU 2015 nominal effective temperature, 5772 K, gives the
+    nominal total solar irradiance, 1361 W/m^2).
 
     Examples
     --------
     >>> lam = np.linspace(1e-8, 1e-4, 200001)
-    >>> round(float(np.trapezoid(planck_solar_irradiance(lam), lam)))
+    >>> round(float(np.trapezoid(planck_solar_irradiance(lam), lam)), 1)
+    1366.8
+    >>> round(float(np.trapezoid(planck_solar_irradiance(lam, temperature_k=5772.0), lam)))
     1361
     """
     d = check_positive("distance_m", distance_m)
@@ -254,7 +257,7 @@ def focal_plane_irradiance(radiance, *, f_number: float, transmission: float = 1
 
 
 def electrons_per_pixel(
-    wavelength_m, focal_plane_irradiance_w_per_m2_per_m, *, pixel_area_m2: float, integration_time_s: float, qe=1.0
+    wavelength_m, irradiance_w_per_m2_per_m, *, pixel_area_m2: float, integration_time_s: float, qe=1.0
 ) -> float:
     """Photo-electrons collected by one pixel in one exposure (one TDI stage).
 
@@ -263,15 +266,17 @@ def electrons_per_pixel(
 
     Examples
     --------
-    >>> lam = np.array([5e-7, 5e-7 + 1e-9])
-    >>> n = electrons_per_pixel(lam, [1e9, 1e9], pixel_area_m2=1e-10, integration_time_s=1e-3)
-    >>> round(n / 2.5172e5, 3)  # 1 W/m^2 on 1e-10 m^2 for 1 ms at ~500 nm
-    1.001
+    >>> lam = np.array([500e-9, 501e-9])  # 1 W/m^2 in 1 nm, on 1e-10 m^2 for 1 ms: 1e-13 J at ~500.5 nm
+    >>> round(electrons_per_pixel(lam, [1e9, 1e9], pixel_area_m2=1e-10, integration_time_s=1e-3))
+    251958
     """
     lam = as_float_array("wavelength_m", wavelength_m, ndim=1)
-    e = as_float_array("focal_plane_irradiance_w_per_m2_per_m", focal_plane_irradiance_w_per_m2_per_m, ndim=1)
+    e = as_float_array("irradiance_w_per_m2_per_m", irradiance_w_per_m2_per_m, ndim=1)
     if lam.shape != e.shape or lam.size < 2:
-        raise InputError(f"wavelength_m and irradiance: need equal 1-D shapes of >= 2, got {lam.shape}, {e.shape}")
+        raise InputError(
+            f"wavelength_m and irradiance_w_per_m2_per_m: need equal 1-D shapes of >= 2 values, "
+            f"got {lam.shape} and {e.shape}"
+        )
     a = check_positive("pixel_area_m2", pixel_area_m2)
     t = check_positive("integration_time_s", integration_time_s)
     q = np.broadcast_to(np.asarray(qe, dtype=float), lam.shape)
@@ -352,7 +357,7 @@ def noise_budget(
     quant = 0.0
     if bit_depth is not None:
         if full_well_e is None:
-            raise ConfigError(f"detector.bit_depth = {bit_depth!r} needs detector.full_well_e (electrons per DN)")
+            raise ConfigError(f"detector.bit_depth = {bit_depth!r} needs detector.full_well_e (e- per DN)")
         bits = int(check_range("detector.bit_depth", bit_depth, 1, 32))
         quant = check_positive("detector.full_well_e", full_well_e) / 2.0**bits / math.sqrt(12.0) * accum
     prnu_e = check_range("detector.prnu", prnu, 0.0, 1.0) * s / math.sqrt(n)
@@ -446,7 +451,8 @@ class RadiometryResult:
 
 def _band_grid(lam: np.ndarray, band_m: tuple[float, float]) -> np.ndarray:
     lo, hi = band_m
-    return np.concatenate([[lo], lam[(lam > lo) & (lam < hi)], [hi]])
+    inside = (lam > lo * (1 + 1e-12)) & (lam < hi * (1 - 1e-12))  # table points on an edge count once
+    return np.concatenate([[lo], lam[inside], [hi]])
 
 
 def _spectra(system, reflectance: float) -> dict[str, Any]:
@@ -602,6 +608,9 @@ def radiometric_budget(system, *, reflectance: float | None = None) -> Radiometr
     s7, s15 = np.atleast_1d(signal_electrons(system, list(GIQE_REFLECTANCES)))
     l_toa_band = band_radiance(lam, sp["l_toa"], band)
     o = system.optics
+    e_fp = focal_plane_irradiance(
+        l_toa_band, f_number=o.f_number, transmission=o.transmission, obscuration_ratio=o.obscuration_ratio
+    )
     return RadiometryResult(
         wavelength_m=lam,
         solar_irradiance_w_per_m2_per_m=sp["e0"],
@@ -616,11 +625,7 @@ def radiometric_budget(system, *, reflectance: float | None = None) -> Radiometr
         solar_irradiance_band_w_per_m2=band_radiance(lam, sp["e0"], band),
         radiance_surface_band_w_per_m2_sr=band_radiance(lam, sp["l_surface"], band),
         radiance_toa_band_w_per_m2_sr=l_toa_band,
-        focal_plane_irradiance_band_w_per_m2=float(
-            focal_plane_irradiance(
-                l_toa_band, f_number=o.f_number, transmission=o.transmission, obscuration_ratio=o.obscuration_ratio
-            )
-        ),
+        focal_plane_irradiance_band_w_per_m2=float(e_fp),
         integration_time_s=system.integration_time_s,
         line_time_s=system.line_time_s,
         tdi_stages=det.tdi_stages,

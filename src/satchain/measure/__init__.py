@@ -1,1 +1,22 @@
-"""satchain.measure"""
+"""Image-quality measurement from images: slanted edge, Siemens star, bar targets, hyperbolic wedge.
+
+Independent of the prediction path (``satchain.tf``, ``satchain.ctf``): agreement between the two is the
+project's check of correctness.
+"""
+
+from satchain.measure.bars import BarsResult, measure_bars, mtf_from_ctf_samples
+from satchain.measure.edge import EdgeResult, measure_edge
+from satchain.measure.star import StarResult, measure_star
+from satchain.measure.wedge import WedgeResult, measure_wedge
+
+__all__ = [
+    "BarsResult",
+    "EdgeResult",
+    "StarResult",
+    "WedgeResult",
+    "measure_bars",
+    "measure_edge",
+    "measure_star",
+    "measure_wedge",
+    "mtf_from_ctf_samples",
+]

@@ -1,1 +1,42 @@
-"""satchain.scene"""
+"""satchain.scene: synthetic ground truth rendered exactly at any pixel size, and real images as ground truth.
+
+Axes: origin at the top-left corner of pixel [0, 0]; x (ACT) right along columns, y (ALT) down along rows;
+pixel [i, j] covers x in [j p, (j+1) p), y in [i p, (i+1) p). Windows are (row0, col0, height, width).
+See :mod:`satchain.scene.shapes` (exact coverage), :mod:`satchain.scene.layout` (scenes, files, truth).
+"""
+
+from satchain.scene.image import ImageScene
+from satchain.scene.layout import (
+    ITEM_KINDS,
+    Scene,
+    layout_from_dict,
+    layout_to_dict,
+    load_layout,
+    paper_layout,
+)
+from satchain.scene.objects import Car, House, Railway, Road, Wagon
+from satchain.scene.render import parse_cli_window, render_scene_to_file
+from satchain.scene.shapes import polygon_coverage
+from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
+
+__all__ = [
+    "ITEM_KINDS",
+    "BarTarget",
+    "Car",
+    "House",
+    "HyperbolicWedge",
+    "ImageScene",
+    "Railway",
+    "Road",
+    "Scene",
+    "SiemensStar",
+    "SlantedEdge",
+    "Wagon",
+    "layout_from_dict",
+    "layout_to_dict",
+    "load_layout",
+    "paper_layout",
+    "parse_cli_window",
+    "polygon_coverage",
+    "render_scene_to_file",
+]

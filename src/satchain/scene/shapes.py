@@ -51,6 +51,7 @@ __all__ = [
     "polygon_area",
     "polygon_coverage",
     "rectangle",
+    "rings_coverage",
     "sub_window",
 ]
 
@@ -143,11 +144,22 @@ def _expand(starts, counts):
     return owner, starts[owner] + (np.arange(owner.size) - first[owner])
 
 
-def _coverage_px(u, v, h: int, w: int) -> np.ndarray:
-    """Coverage of a polygon given in window pixel units (u = column, v = row) on an h x w grid."""
-    if -np.sum((np.roll(u, -1) - u) * (np.roll(v, -1) + v)) < 0:  # orientation: -(loop y dx) > 0
-        u, v = u[::-1], v[::-1]
-    ua, va, ub, vb = u, v, np.roll(u, -1), np.roll(v, -1)
+def _ring_edges(rings, p: float, r0: int, c0: int):
+    """Directed edges (ua, va, ub, vb) in window pixel units, each ring oriented so -(loop y dx) > 0."""
+    parts = []
+    for ring in rings:
+        u, v = ring[:, 0] / p - c0, ring[:, 1] / p - r0
+        if -np.sum((np.roll(u, -1) - u) * (np.roll(v, -1) + v)) < 0:
+            u, v = u[::-1], v[::-1]
+        parts.append((u, v, np.roll(u, -1), np.roll(v, -1)))
+    return (np.concatenate(a) for a in zip(*parts, strict=True))
+
+
+def rings_coverage(rings, window: Window, pixel_m: float) -> np.ndarray:
+    """Summed exact coverage of disjoint polygon rings (metres) on every pixel of ``window`` (no checks)."""
+    p = pixel_m
+    r0, c0, h, w = window
+    ua, va, ub, vb = _ring_edges(rings, p, r0, c0)
     du = ub - ua
     sgn = -np.sign(du)
     swap = du < 0
@@ -214,23 +226,36 @@ def polygon_coverage(vertices_m, window, *, pixel_m: float) -> np.ndarray:
     sub = sub_window(bbox_of(v), window, p)
     if sub is not None:
         r, c, sh, sw = sub
-        cov = _coverage_px(v[:, 0] / p - c, v[:, 1] / p - r, sh, sw)
-        out[r - row0 : r - row0 + sh, c - col0 : c - col0 + sw] = cov
+        out[r - row0 : r - row0 + sh, c - col0 : c - col0 + sw] = rings_coverage([v], sub, p)
     return np.clip(out, 0.0, 1.0)
 
 
-def paint_polygon(image: np.ndarray, vertices_m, reflectance: float, window: Window, pixel_m: float) -> None:
-    """Compose a uniform polygon over ``image`` (the rendered ``window``) in place.
+def paint_polygon(image: np.ndarray, rings, reflectance: float, window: Window, pixel_m: float) -> None:
+    """Compose uniform polygons over ``image`` (the rendered ``window``) in place, painter's order.
 
-    ``image = image * (1 - cov) + reflectance * cov`` (painter's order), touching only the pixels of
-    the polygon's bounding box.
+    ``image = image * (1 - cov) + reflectance * cov`` where ``cov`` is the exact coverage of ``rings``
+    (one ``(N, 2)`` vertex array in metres, or a list of disjoint ones sharing a reflectance). Only the
+    pixels of the rings' bounding box are touched.
+
+    Examples
+    --------
+    >>> img = np.zeros((2, 2))
+    >>> paint_polygon(img, rectangle(0.0, 0.0, 1.0, 2.0), 0.8, (0, 0, 2, 2), 1.0)
+    >>> img.tolist()
+    [[0.8, 0.0], [0.8, 0.0]]
     """
-    v = np.asarray(vertices_m, dtype=float)
-    sub = sub_window(bbox_of(v), window, pixel_m)
+    if isinstance(rings, np.ndarray) and rings.ndim == 2:
+        rings = [rings]
+    rings = [np.asarray(r, dtype=float) for r in rings]
+    if not rings:
+        return
+    lo = np.min([r.min(axis=0) for r in rings], axis=0)
+    hi = np.max([r.max(axis=0) for r in rings], axis=0)
+    sub = sub_window((lo[0], lo[1], hi[0], hi[1]), window, pixel_m)
     if sub is None:
         return
     r, c, sh, sw = sub
-    cov = np.clip(_coverage_px(v[:, 0] / pixel_m - c, v[:, 1] / pixel_m - r, sh, sw), 0.0, 1.0)
+    cov = np.clip(rings_coverage(rings, sub, pixel_m), 0.0, 1.0)
     view = image[r - window[0] : r - window[0] + sh, c - window[1] : c - window[1] + sw]
     view += (reflectance - view) * cov
 

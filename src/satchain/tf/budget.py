@@ -118,12 +118,25 @@ class SystemOTF:
         )
         return {name: np.asarray(fn(fx, fy)) for name, fn in self._components.items()}
 
-    def __call__(self, fx_cy_per_mm, fy_cy_per_mm) -> np.ndarray:
-        """The product of all components: the system OTF (complex when the pupil is aberrated)."""
+    def __call__(self, fx_cy_per_mm, fy_cy_per_mm, *, exclude: tuple[str, ...] = ()) -> np.ndarray:
+        """The product of the components (all but ``exclude``): the system OTF, complex when the pupil is
+        aberrated. The simulation engine excludes ``"detector"``, whose aperture it integrates exactly in
+        space."""
+        unknown = set(exclude) - set(self._components)
+        if unknown:
+            raise ConfigError(f"exclude = {sorted(unknown)!r}: not components of this system ({self.component_names})")
         out = None
-        for v in self.components(fx_cy_per_mm, fy_cy_per_mm).values():
-            out = v if out is None else out * v
+        for name, v in self.components(fx_cy_per_mm, fy_cy_per_mm).items():
+            if name not in exclude:
+                out = v if out is None else out * v
+        if out is None:
+            out = np.ones(np.broadcast_shapes(np.shape(fx_cy_per_mm), np.shape(fy_cy_per_mm)))
         return out
+
+    @property
+    def cutoff_cy_per_mm(self) -> float:
+        """Frequency beyond which the system OTF is exactly zero (the largest diffraction cutoff)."""
+        return float(np.max(self.system.optical_cutoff_cy_per_mm))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,96 @@
+"""Ground-truth sources the engine reads window by window, and the border rule.
+
+A *source* is any object with ``pixel_m`` (ground size of one input pixel, m), ``shape_px`` ((rows, cols))
+and ``read(window) -> 2-D float array`` for windows inside ``[0, rows) x [0, cols)``. Scenes render such
+windows on the fly (so a scene never has to exist in full); :class:`ArraySource` wraps an in-memory or
+memory-mapped array.
+
+Outside the source the engine needs context for the PSF; :func:`read_with_border` supplies it by the
+border rule: ``"symmetric"`` (mirror about the edge, the default: no artificial edge at the border),
+``"periodic"`` (wrap around, as a full-frame FFT assumes) or ``"constant"`` (a fixed reflectance).
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from satchain._validate import check_choice, check_positive
+from satchain.engine.tiling import Window
+from satchain.errors import InputError
+
+__all__ = ["BORDER_RULES", "ArraySource", "GroundTruth", "read_with_border"]
+
+BORDER_RULES = ("symmetric", "periodic", "constant")
+
+
+@runtime_checkable
+class GroundTruth(Protocol):
+    """What the engine reads: a rectangular raster of reflectance (or radiance) at ``pixel_m``."""
+
+    pixel_m: float
+    shape_px: tuple[int, int]
+
+    def read(self, window: Window) -> np.ndarray: ...
+
+
+class ArraySource:
+    """A 2-D array (in memory or a memmap) as ground truth with a stated ground pixel size.
+
+    Examples
+    --------
+    >>> src = ArraySource(np.arange(12.0).reshape(3, 4), pixel_m=0.05)
+    >>> src.read(Window(1, 1, 2, 2)).tolist()
+    [[5.0, 6.0], [9.0, 10.0]]
+    """
+
+    def __init__(self, array, *, pixel_m: float):
+        a = np.asarray(array) if not isinstance(array, np.ndarray) else array
+        if a.ndim != 2:
+            raise InputError(f"image: must be 2-D (rows, cols), got shape {a.shape}")
+        if a.shape[0] < 1 or a.shape[1] < 1:
+            raise InputError(f"image: must not be empty, got shape {a.shape}")
+        if not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+            raise InputError(f"image: must be real numeric, got dtype {a.dtype}")
+        self.array = a
+        self.pixel_m = check_positive("pixel_m", pixel_m)
+        self.shape_px = (int(a.shape[0]), int(a.shape[1]))
+
+    def read(self, window: Window) -> np.ndarray:
+        block = np.asarray(self.array[window.rows, window.cols], dtype=np.float64)
+        if not np.all(np.isfinite(block)):
+            raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
+        return block
+
+
+def _map_indices(start: int, length: int, n: int, rule: str) -> np.ndarray:
+    i = np.arange(start, start + length)
+    if rule == "periodic":
+        return np.mod(i, n)
+    # symmetric: ... 2 1 0 | 0 1 2 ... n-1 | n-1 n-2 ... ; period 2n
+    j = np.mod(i, 2 * n)
+    return np.where(j < n, j, 2 * n - 1 - j)
+
+
+def read_with_border(source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0) -> np.ndarray:
+    """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``."""
+    check_choice("border", rule, BORDER_RULES)
+    ny, nx = source.shape_px
+    inside = window.row0 >= 0 and window.col0 >= 0 and window.row0 + window.height <= ny and window.col0 + window.width <= nx
+    if inside:
+        return source.read(window)
+    if rule == "constant":
+        out = np.full((window.height, window.width), float(value))
+        r0, c0 = max(window.row0, 0), max(window.col0, 0)
+        r1, c1 = min(window.row0 + window.height, ny), min(window.col0 + window.width, nx)
+        if r1 > r0 and c1 > c0:
+            out[r0 - window.row0 : r1 - window.row0, c0 - window.col0 : c1 - window.col0] = source.read(
+                Window(r0, c0, r1 - r0, c1 - c0)
+            )
+        return out
+    ry = _map_indices(window.row0, window.height, ny, rule)
+    rx = _map_indices(window.col0, window.width, nx, rule)
+    y0, y1, x0, x1 = int(ry.min()), int(ry.max()) + 1, int(rx.min()), int(rx.max()) + 1
+    block = source.read(Window(y0, x0, y1 - y0, x1 - x0))
+    return block[np.ix_(ry - y0, rx - x0)]

@@ -1,0 +1,129 @@
+"""Band-limited spectral image formation.
+
+The optical OTF is exactly zero beyond the diffraction cutoff ``f_c``, so of the ground truth's spectrum only
+the band ``|f| <= f_c`` reaches the detector. The engine exploits that twice:
+
+1. **Decimation** (per fine tile): a smooth low-pass ``G`` that is exactly 1 on the optical band and exactly 0
+   beyond ``f_stop < 1/(2D)`` is applied, and the tile is decimated by ``D`` -- without aliasing, because
+   nothing above ``1/(2D)`` is left. ``G`` is C-infinity, so its kernel is short (``~18 / (f_stop - f_c)``
+   input pixels to 1e-6) and tiles need only that margin; since ``G = 1`` where ``OTF != 0``,
+   ``OTF * G = OTF`` and nothing is lost.
+2. **Image formation** (on the coarse frame): the OTF multiplies the band of the coarse frame's DFT and the
+   detector's footprint averaging is applied in frequency; the result is evaluated *at the output pixels*
+   either by folding the band onto the output grid's DFT (integer GSD / input-pixel ratio: an inverse FFT of
+   output size) or by a matrix DFT (any ratio). No inverse transform on the fine grid is ever done.
+
+Transforms are real FFTs along x (columns) and complex FFTs along y (rows) of the kept columns only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.fft as sfft
+
+from satchain.engine.tiling import footprint_weights
+
+__all__ = [
+    "BandSpectrum",
+    "band_index",
+    "decimate_tile",
+    "fold_onto_grid",
+    "footprint_transfer",
+    "lowpass",
+    "sampling_matrix",
+    "tile_band_spectrum",
+]
+
+#: Kernel length of :func:`lowpass` in units of 1 / (f_stop - f_pass): tail beyond it < 1e-6 of its L1 norm.
+LOWPASS_SUPPORT = 18.0
+
+
+def band_index(n: int, f_cut_cy_per_px: float) -> int:
+    """Largest DFT index ``m`` with ``m / n <= f_cut`` (capped at the Nyquist index ``n // 2``)."""
+    return int(min(np.floor(f_cut_cy_per_px * n + 1e-9), n // 2))
+
+
+def lowpass(f_abs: np.ndarray, f_pass: float, f_stop: float) -> np.ndarray:
+    """1 for ``|f| <= f_pass``, 0 for ``|f| >= f_stop``, and a C-infinity step between
+    (``psi(t) = e^(-1/t) / (e^(-1/t) + e^(-1/(1-t)))``), so the kernel decays faster than any power."""
+    t = np.clip((np.abs(f_abs) - f_pass) / (f_stop - f_pass), 0.0, 1.0)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        a = np.where(t > 0, np.exp(-1.0 / np.where(t > 0, t, 1.0)), 0.0)
+        b = np.where(t < 1, np.exp(-1.0 / np.where(t < 1, 1.0 - t, 1.0)), 0.0)
+    return 1.0 - a / (a + b)
+
+
+class BandSpectrum:
+    """The low-frequency block of a 2-D DFT.
+
+    ``values[a, b]`` is ``DFT[my[a], mx[b]]``: ``my`` signed row frequencies (0..By, -By..-1), ``mx`` the
+    non-negative column frequencies 0..Bx of the real FFT; ``cx`` the Hermitian weights of those columns
+    (1 for 0 and the Nyquist column, else 2), so a real signal is ``Re(sum cx * values * e^(...)) / (ny nx)``.
+    """
+
+    def __init__(self, values: np.ndarray, my: np.ndarray, mx: np.ndarray, shape: tuple[int, int]):
+        self.values, self.my, self.mx, self.shape = values, my, mx, shape
+        nx = shape[1]
+        self.cx = np.where((mx == 0) | ((nx % 2 == 0) & (mx == nx // 2)), 1.0, 2.0)
+
+
+def tile_band_spectrum(tile: np.ndarray, *, by: int, bx: int, workers: int = 1) -> BandSpectrum:
+    """DFT of ``tile`` restricted to ``|my| <= by``, ``0 <= mx <= bx``."""
+    ny, nx = tile.shape
+    x = sfft.rfft(tile, axis=1, workers=workers)[:, : bx + 1]
+    y = sfft.fft(x, axis=0, workers=workers, overwrite_x=True)
+    if 2 * by + 1 >= ny:
+        return BandSpectrum(y, np.fft.fftfreq(ny, 1.0 / ny).round().astype(np.int64), np.arange(bx + 1), (ny, nx))
+    my = np.concatenate([np.arange(by + 1), np.arange(-by, 0)])
+    vals = np.concatenate([y[: by + 1], y[ny - by :]], axis=0)
+    return BandSpectrum(vals, my, np.arange(bx + 1), (ny, nx))
+
+
+def decimate_tile(tile: np.ndarray, *, D: int, f_pass: float, f_stop: float, workers: int = 1) -> np.ndarray:
+    """Low-pass ``tile`` with :func:`lowpass` and keep every ``D``-th sample (rows and columns 0, D, 2D...).
+
+    ``tile``'s sides must be multiples of ``D`` and ``f_stop < 1 / (2 D)``; the result is exact (no aliasing)
+    for the periodic tile."""
+    ny, nx = tile.shape
+    if D == 1:
+        return np.asarray(tile, dtype=np.float32)
+    cy, cx = ny // D, nx // D
+    spec = tile_band_spectrum(tile, by=band_index(ny, f_stop), bx=band_index(nx, f_stop), workers=workers)
+    g = lowpass(spec.my / ny, f_pass, f_stop)[:, None] * lowpass(spec.mx / nx, f_pass, f_stop)[None, :]
+    coarse = np.zeros((cy, cx // 2 + 1), dtype=np.complex64)
+    coarse[np.mod(spec.my, cy)[:, None], spec.mx[None, :]] = spec.values * g
+    out = sfft.irfft(sfft.ifft(coarse, axis=0, workers=workers), n=cx, axis=1, workers=workers)
+    return (out / (D * D)).astype(np.float32)
+
+
+def footprint_transfer(m: np.ndarray, *, centre: float, width_px: float, n_total: int) -> np.ndarray:
+    """``A(m) = sum_n w(n) exp(2 pi i m n / n_total)`` for the footprint of one output pixel centred at
+    ``centre`` (input pixels, frame coordinates): footprint averaging and the position of that pixel, in
+    frequency."""
+    idx, w = footprint_weights(np.array([centre]), width_px, 0)
+    ph = np.exp(2j * np.pi * np.outer(m, idx[0]) / n_total)
+    return ph @ w[0]
+
+
+def fold_onto_grid(values: np.ndarray, my: np.ndarray, mx: np.ndarray, cx: np.ndarray, n_out: tuple[int, int]) -> np.ndarray:
+    """Sample a band-limited real signal on an output grid that divides the frame: fold the (Hermitian-half)
+    spectrum onto the output DFT grid and inverse-transform. ``values`` must already contain the phase of
+    the output grid's first sample; returns ``Re(sum values e^{2 pi i (my i / Ny + mx j / Nx)})``."""
+    noy, nox = n_out
+    vy = np.zeros((noy, values.shape[1]), dtype=np.complex128)
+    np.add.at(vy, np.mod(my, noy), values * cx[None, :])
+    v = np.zeros((noy, nox), dtype=np.complex128)
+    np.add.at(v.T, np.mod(mx, nox), vy.T)
+    return np.real(sfft.ifft2(v)) * (noy * nox)
+
+
+def sampling_matrix(centres: np.ndarray, width_px: float, n0: int, n: int, m: np.ndarray) -> np.ndarray:
+    """``M[i, a] = sum_n w_i(n) exp(2 pi i m_a (n - n0) / n)``: footprint averaging of a band-limited frame
+    signal, evaluated from its DFT coefficients ``m`` (frame origin at input pixel ``n0``, ``n`` input
+    pixels long). Any footprint width and position."""
+    idx, w = footprint_weights(centres, width_px, n0)
+    out = np.zeros((centres.size, m.size), dtype=np.complex128)
+    ph = 2j * np.pi * m[None, :] / n
+    for k in range(idx.shape[1]):
+        out += w[:, k, None] * np.exp(ph * idx[:, k, None])
+    return out
