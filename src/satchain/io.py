@@ -238,6 +238,23 @@ def write_png(
         raise SatchainIOError(f"cannot write PNG {str(path)!r}: {exc}") from exc
 
 
+def preview_uint8(image: np.ndarray, *, low_pct: float = 0.5, high_pct: float = 99.5) -> np.ndarray:
+    """An 8-bit display version of any image: a linear stretch between two percentiles.
+
+    Examples
+    --------
+    >>> preview_uint8(np.array([[0.0, 1.0], [2.0, 3.0]]), low_pct=0, high_pct=100).tolist()
+    [[0, 85], [170, 255]]
+    """
+    a = np.asarray(image, dtype=np.float64)
+    finite = a[np.isfinite(a)]
+    if finite.size == 0:
+        return np.zeros(a.shape, dtype=np.uint8)
+    lo, hi = np.percentile(finite, [low_pct, high_pct])
+    scale = 255.0 / (hi - lo) if hi > lo else 0.0
+    return np.round(np.clip((np.nan_to_num(a, nan=lo) - lo) * scale, 0, 255)).astype(np.uint8)
+
+
 def write_npy(path: str | os.PathLike, image: np.ndarray) -> None:
     """Write an array as ``.npy`` atomically (no metadata: NPY has nowhere to keep a pixel size)."""
     try:

@@ -15,7 +15,7 @@ Geometry is the nadir pinhole mapping: a length ``x_fp`` in the focal plane imag
 
 Examples
 --------
->>> round(ground_to_focal_cy_per_mm(1.0, focal_length_m=6.804, range_m=567e3), 3)
+>>> round(float(ground_to_focal_cy_per_mm(1.0, focal_length_m=6.804, range_m=567e3)), 3)
 83.333
 >>> round(nyquist_cy_per_mm(5.88e-6), 2)
 85.03
@@ -55,7 +55,7 @@ def focal_to_ground_cy_per_m(f_cy_per_mm, *, focal_length_m: float, range_m: flo
 
     Examples
     --------
-    >>> round(focal_to_ground_cy_per_m(83.3333, focal_length_m=6.804, range_m=567e3), 4)
+    >>> round(float(focal_to_ground_cy_per_m(83.3333, focal_length_m=6.804, range_m=567e3)), 4)
     1.0
     """
     check_positive("focal_length_m", focal_length_m)
@@ -68,7 +68,7 @@ def ground_to_focal_cy_per_mm(f_cy_per_m_ground, *, focal_length_m: float, range
 
     Examples
     --------
-    >>> round(ground_to_focal_cy_per_mm(0.5, focal_length_m=6.804, range_m=567e3), 3)
+    >>> round(float(ground_to_focal_cy_per_mm(0.5, focal_length_m=6.804, range_m=567e3)), 3)
     41.667
     """
     check_positive("focal_length_m", focal_length_m)

@@ -20,7 +20,7 @@ import numpy as np
 from satchain._validate import check_choice, check_range
 from satchain.errors import ConfigError
 
-__all__ = ["OUTPUT_UNITS", "SensorModel", "block_generator"]
+__all__ = ["OUTPUT_UNITS", "SensorModel", "block_generator", "sensor_from_system"]
 
 OUTPUT_UNITS = ("dn", "electrons", "radiance", "reflectance")
 _TEMPORAL, _FIXED_PATTERN = 0, 1
@@ -50,7 +50,8 @@ class SensorModel:
     full_well_e : float
         Saturation level; electrons are clipped to it.
     bit_depth : int
-        ADC bits; the gain is ``full_well_e / (2**bit_depth - 1)`` electrons per DN.
+        ADC bits; the ADC range spans the full well: ``full_well_e / 2**bit_depth`` electrons per DN (as
+        :func:`satchain.radiometry.noise_budget` assumes for the quantisation noise).
     prnu : float
         Photo-response non-uniformity, rms fraction of the signal (fixed pattern).
     dsnu_e : float
@@ -81,7 +82,7 @@ class SensorModel:
     def gain_e_per_dn(self) -> float:
         if math.isinf(self.full_well_e):
             raise ConfigError("full_well_e = inf: DN output needs a finite full well")
-        return self.full_well_e / (2 ** int(self.bit_depth) - 1)
+        return self.full_well_e / 2 ** int(self.bit_depth)
 
     def convert(
         self,
@@ -133,3 +134,40 @@ class SensorModel:
                 read = self.read_noise_e * g.standard_normal((block_px, block_px))[:bh, :bw]
                 out[r : r + bh, c : c + bw] = pois + read
         return out
+
+
+def sensor_from_system(system) -> SensorModel:
+    """The SensorModel of an ImagingSystem, from its radiometric budget (:mod:`satchain.radiometry`).
+
+    The signal is linear in surface reflectance, ``N(rho) = rho N_1 + N_path`` electrons (all TDI stages);
+    dark electrons are ``dark_current x integration time x stages``; read noise accumulates once for CCD-style
+    (charge-domain) TDI and ``sqrt(stages)`` times for CMOS-style (digital) TDI.
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> from satchain.radiometry import signal_electrons
+    >>> s = load_preset("ankarasat3")
+    >>> m = sensor_from_system(s)
+    >>> bool(np.isclose(m.offset_e + 0.2 * m.electrons_per_unit, signal_electrons(s, 0.2)))
+    True
+    """
+    from satchain import radiometry
+
+    det = system.detector
+    n0, n1 = (float(v) for v in radiometry.signal_electrons(system, [0.0, 1.0]))
+    l0, l1 = (radiometry.radiometric_budget(system, reflectance=r).radiance_toa_band_w_per_m2_sr for r in (0.0, 1.0))
+    stages = det.tdi_stages
+    read = det.read_noise_e * (math.sqrt(stages) if det.readout == "cmos" else 1.0)
+    return SensorModel(
+        electrons_per_unit=n1 - n0,
+        offset_e=n0,
+        radiance_per_unit=l1 - l0,
+        radiance_offset=l0,
+        dark_e=det.dark_current_e_per_s * system.integration_time_s * stages,
+        read_noise_e=read,
+        full_well_e=math.inf if det.full_well_e is None else det.full_well_e,
+        bit_depth=det.bit_depth or 12,
+        prnu=det.prnu,
+        dsnu_e=det.dsnu_e,
+    )

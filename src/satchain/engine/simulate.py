@@ -29,7 +29,7 @@ from satchain import units
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, ArraySource, GroundTruth, read_with_border
+from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
@@ -264,14 +264,16 @@ class Simulator:
         noise: bool = False,
         seed: int = 0,
         progress: Progress | None = None,
+        coarse: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Both stages and the sensor: the simulated image in ``units``."""
+        """Both stages and the sensor: the simulated image in ``units``. ``coarse``: a stage-1 result
+        already computed by :meth:`decimate` (e.g. to also form :meth:`focal_plane` from it)."""
         check_choice("units", units, OUTPUT_UNITS)
         if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
             raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
         if tuple(source.shape_px) != self.input_shape:
             raise ConfigError(f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}")
-        img = self.form_image(self.decimate(source, progress=progress))
+        img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
         if sensor is not None:
             img = sensor.convert(img, origin=(0, 0), units=units, noise=noise, seed=seed, block_px=self.params.noise_block_px)
         return img
@@ -297,20 +299,6 @@ def _reflect_pad(a: np.ndarray, pad) -> np.ndarray:
     return out
 
 
-def _as_source(ground_truth, pixel_m: float | None) -> GroundTruth:
-    if isinstance(ground_truth, np.ndarray):
-        if pixel_m is None:
-            raise ConfigError("pixel_m = None: an array ground truth needs its ground pixel size in metres")
-        return ArraySource(ground_truth, pixel_m=pixel_m)
-    if not isinstance(ground_truth, GroundTruth):
-        raise ConfigError(
-            f"ground_truth = {type(ground_truth).__name__}: must be an array or a source with pixel_m, shape_px, read()"
-        )
-    if pixel_m is not None and not math.isclose(pixel_m, ground_truth.pixel_m, rel_tol=1e-12):
-        raise ConfigError(f"pixel_m = {pixel_m!r}: the source's pixel size is {ground_truth.pixel_m!r}")
-    return ground_truth
-
-
 def simulate(
     ground_truth,
     system: ImagingSystem,
@@ -323,7 +311,7 @@ def simulate(
     seed: int = 0,
     progress: Progress | None = None,
 ) -> np.ndarray:
-    """Simulate the satellite image of ``ground_truth`` (an array with ``pixel_m``, or a source).
+    """Simulate the satellite image of ``ground_truth`` (an array with ``pixel_m``, a scene, or a source).
 
     Examples
     --------
@@ -332,6 +320,6 @@ def simulate(
     >>> img.shape, bool(np.allclose(img, 0.2, atol=1e-6))
     ((50, 50), True)
     """
-    src = _as_source(ground_truth, pixel_m)
+    src = as_ground_truth(ground_truth, pixel_m=pixel_m)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
     return sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, progress=progress)

@@ -20,7 +20,7 @@ from satchain._validate import check_choice, check_positive
 from satchain.engine.tiling import Window
 from satchain.errors import InputError
 
-__all__ = ["BORDER_RULES", "ArraySource", "GroundTruth", "read_with_border"]
+__all__ = ["BORDER_RULES", "ArraySource", "GroundTruth", "SceneSource", "as_ground_truth", "read_with_border"]
 
 BORDER_RULES = ("symmetric", "periodic", "constant")
 
@@ -62,6 +62,39 @@ class ArraySource:
         if not np.all(np.isfinite(block)):
             raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
         return block
+
+
+class SceneSource:
+    """A scene (:class:`satchain.scene.Scene` or :class:`satchain.scene.ImageScene`: anything with
+    ``render(window, *, pixel_m)`` and ``shape_px(pixel_m)``) rendered window by window at ``pixel_m``.
+    Nothing is rendered until the engine reads a window; the scene never exists in full."""
+
+    def __init__(self, scene, *, pixel_m: float | None = None):
+        self.scene = scene
+        self.pixel_m = check_positive("pixel_m", scene.pixel_m if pixel_m is None else pixel_m)
+        self.shape_px = tuple(int(v) for v in scene.shape_px(self.pixel_m))
+
+    def read(self, window: Window) -> np.ndarray:
+        return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m), dtype=np.float64)
+
+
+def as_ground_truth(obj, *, pixel_m: float | None = None) -> GroundTruth:
+    """An array (with ``pixel_m``), a scene, or a source -> a :class:`GroundTruth` for the engine."""
+    from satchain.errors import ConfigError
+
+    if isinstance(obj, np.ndarray):
+        if pixel_m is None:
+            raise ConfigError("pixel_m = None: an array ground truth needs its ground pixel size in metres")
+        return ArraySource(obj, pixel_m=pixel_m)
+    if hasattr(obj, "render") and callable(getattr(obj, "shape_px", None)):
+        return SceneSource(obj, pixel_m=pixel_m)
+    if isinstance(obj, GroundTruth):
+        if pixel_m is not None and abs(pixel_m - obj.pixel_m) > 1e-12 * obj.pixel_m:
+            raise ConfigError(f"pixel_m = {pixel_m!r}: the source's pixel size is {obj.pixel_m!r}")
+        return obj
+    raise ConfigError(
+        f"ground_truth = {type(obj).__name__}: must be an array, a scene, or a source with pixel_m, shape_px, read()"
+    )
 
 
 def _map_indices(start: int, length: int, n: int, rule: str) -> np.ndarray:

@@ -1,43 +1,26 @@
-"""Atomic saving of report artefacts: write to a temporary file beside the target, then rename."""
+"""Atomic saving of report artefacts (text, figures), on top of :func:`satchain.io.atomic_path`."""
 
 from __future__ import annotations
 
-import contextlib
-import os
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
+from satchain.io import atomic_path
 
-@contextlib.contextmanager
-def atomic_path(path: str | Path, *, suffix: str | None = None) -> Iterator[Path]:
-    """Yield a temporary path in the target's directory; on success rename it onto ``path``.
-
-    On an exception the temporary file is removed and ``path`` is left as it was.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
-        yield tmp_path
-        os.replace(tmp_path, path)
-    finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
+__all__ = ["atomic_path", "save_figure", "write_text"]
 
 
 def write_text(path: str | Path, text: str) -> None:
-    """Atomically write a text file."""
+    """Atomically write a text file (its directory is created)."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         tmp.write_text(text)
 
 
 def save_figure(fig, path: str | Path, **kwargs) -> None:
-    """Atomically save a matplotlib figure and close it."""
+    """Atomically save a matplotlib figure (format from the suffix) and close it."""
     import matplotlib.pyplot as plt
 
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     try:
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format=Path(path).suffix.lstrip(".") or "png", **kwargs)

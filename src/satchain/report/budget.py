@@ -2,7 +2,7 @@
 
 This is where prediction is packaged for people: ``satchain budget`` prints :func:`budget_results`
 and, with ``-o DIR``, :func:`write_budget_outputs` writes ``budget.json``, ``mtf_alt.csv``,
-``mtf_act.csv``, ``fig3a_mtf_budget.png`` and ``fig3b_square_wave.png``.
+``mtf_act.csv``, ``fig2_spectral_radiance.png``, ``fig3a_mtf_budget.png`` and ``fig3b_square_wave.png``.
 """
 
 from __future__ import annotations
@@ -65,6 +65,11 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
         fmm = units.cy_per_px_to_cy_per_mm(fpx, pitch_m=_pitch(system, d))
         out["mtfa"][d] = mtfa(fpx, m(fmm), f_max_cy_per_px=0.5)
     out["mtf_at_nyquist"] = mtf_at_nyquist(system, otf=otf)
+    from satchain.quality import predict_quality
+    from satchain.radiometry import radiometric_budget
+
+    out["radiometry"] = radiometric_budget(system).to_dict()
+    out["quality"] = predict_quality(system, otf=otf).to_dict()
     out["ctf_notes"] = (
         "coltman: the square-wave (bar) response by Coltman's series (physical, -> 1 at low frequency, "
         "4/pi*MTF near cutoff); fourier_synthesis: the reference paper's method (10 odd harmonics, modulation of "
@@ -129,5 +134,11 @@ def write_budget_outputs(system: ImagingSystem, results: dict[str, Any], out_dir
     x, sq, deg = square_wave_figure_data(system, otf=otf)
     p = out / "fig3b_square_wave.png"
     figures.plot_square_wave(x, sq, deg, p, period_m=FIG3B_PERIOD_M, note="ALT, 10 odd harmonics")
+    written.append(p)
+    from satchain.radiometry import radiometric_budget
+    from satchain.report.radiometry_plot import plot_spectral_radiance
+
+    p = out / "fig2_spectral_radiance.png"
+    plot_spectral_radiance(radiometric_budget(system), p)
     written.append(p)
     return written
