@@ -67,3 +67,55 @@ def test_budget_errors_are_clear(args, msg):
     assert r.exit_code == 2
     assert msg in " ".join(r.stderr.split())
     assert "Traceback" not in r.output
+
+
+def test_budget_includes_radiometry_and_quality():
+    r = runner.invoke(app, ["budget", "--json", "--freqs", "85.034"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    q = d["quality"]
+    assert {"rer_act", "rer_alt", "overshoot", "giqe4", "giqe5", "snr"} <= set(q)
+    assert 0 < q["rer_alt"] < q["rer_act"] < 1  # ALT has the smear
+    assert d["radiometry"]["snr"] > 0 and d["radiometry"]["signal_e"] > 0
+    assert d["mtfa"]["alt"] < d["mtfa"]["act"]
+
+
+def test_scene_then_simulate_through_cli(tmp_path):
+    import tifffile
+
+    from satchain import load_preset
+    from satchain.io import read_image
+
+    r = runner.invoke(app, ["scene", "--pixel-m", "0.245", "--window", "0,0,400,300", "-o", str(tmp_path / "s" / "sc.tif")])
+    assert r.exit_code == 0, r.output
+    for name in ("sc.tif", "sc.png", "sc.truth.json"):
+        assert (tmp_path / "s" / name).exists()
+    img, meta = read_image(tmp_path / "s" / "sc.tif")
+    assert img.shape == (300, 400) and meta["pixel_m"] == pytest.approx(0.245)
+    out = tmp_path / "sim.tif"
+    r = runner.invoke(app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--units", "reflectance", "--no-noise",
+                            "--focal-plane", str(tmp_path / "fp.tif"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    sim, meta = read_image(out)
+    s = load_preset("ankarasat3")
+    assert sim.shape == (int(300 * 0.245 / s.gsd_alt_m + 1e-9), int(400 * 0.245 / s.gsd_act_m + 1e-9))  # k = 2
+    assert meta["pixel_m"] == pytest.approx(s.gsd_act_m)
+    # reflectance units, no noise: the filtered values stay within the scene's reflectance range
+    assert img.min() - 0.02 <= sim.min() and sim.max() <= img.max() + 0.1
+    assert sim.mean() == pytest.approx(img[: sim.shape[0] * 2, : sim.shape[1] * 2].mean(), abs=0.01)
+    assert tifffile.imread(tmp_path / "fp.tif").ndim == 2
+    # DN with noise: integer, within the ADC range, reproducible from the seed
+    a, b = tmp_path / "a.tif", tmp_path / "b.tif"
+    for p in (a, b):
+        assert runner.invoke(app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--seed", "7", "-o", str(p)]).exit_code == 0
+    da, db = tifffile.imread(a), tifffile.imread(b)
+    assert da.dtype == np.uint16 and da.max() < 2**12
+    np.testing.assert_array_equal(da, db)
+
+
+def test_simulate_errors(tmp_path):
+    r = runner.invoke(app, ["simulate", "paper", "--units", "kelvin", "-o", str(tmp_path / "x.tif")])
+    assert r.exit_code == 2 and "--units = 'kelvin'" in r.stderr
+    r = runner.invoke(app, ["simulate", str(tmp_path / "missing.tif"), "-o", str(tmp_path / "x.tif")])
+    assert r.exit_code == 2 and "missing.tif" in r.stderr
+    assert not (tmp_path / "x.tif").exists()
