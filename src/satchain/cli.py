@@ -243,17 +243,41 @@ def simulate(
 @_handle_errors
 def run(
     preset: PresetOpt = None,
-    config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML")] = None,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="output directory")] = None,
+    config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")] = None,
+    out: Annotated[Path, typer.Option("-o", "--out", help="output directory (replaced atomically)")] = Path("satchain-run"),
+    print_config: Annotated[bool, typer.Option("--print-config", help="print the default configuration and exit")] = False,
 ) -> None:
-    """The main job: predict, simulate, measure and report. (For now: the budget of the system.)"""
-    s = _system(preset, config)
-    res = _budget(s, None)
-    _print_budget(res)
-    if out is not None:
-        from satchain.report.budget import write_budget_outputs
+    """The main job: predict, simulate, measure, compare and report (report.html, results.json)."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-        write_budget_outputs(s, res, out)
+    from satchain.pipeline import STAGES, run_pipeline
+    from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
+
+    if print_config:
+        print(DEFAULT_CONFIG_TOML, end="")
+        return
+    cfg = load_run_config(config)
+    if preset is not None:
+        cfg = RunConfig.from_dict({**cfg.to_dict(), "system": {"preset": preset}}, base_dir=cfg.base_dir)
+    bar = Progress(TextColumn("[bold]{task.description:<9}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+                   TimeElapsedColumn(), console=err_console)
+    tasks = {name: bar.add_task(name, total=None, start=False) for name in STAGES}
+
+    def update(stage: str, done: int, total: int) -> None:
+        bar.start_task(tasks[stage])
+        bar.update(tasks[stage], completed=done, total=total)
+
+    with bar:
+        res = run_pipeline(cfg, out, progress=update)
+    n_pass = sum(r["pass"] for r in res["summary"])
+    t = Table(title=f"{res['system']}: measured vs predicted ({n_pass}/{len(res['summary'])} pass)")
+    for c in ("figure of merit", "measured", "predicted", "tolerance", "result"):
+        t.add_column(c, justify="left" if c == "figure of merit" else "right")
+    for r in res["summary"]:
+        t.add_row(r["figure"], _fmt(r["measured"]), _fmt(r["predicted"]), r["tolerance"],
+                  "[green]pass[/]" if r["pass"] else "[red]FAIL[/]")
+    console.print(t)
+    console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
 
 
 def main() -> None:  # pragma: no cover

@@ -1,0 +1,122 @@
+"""Figures of image-quality measurements: edge ESF/LSF/MTF, star MTF per direction, bars CTF/MTF, wedge scan.
+
+Each function takes the result object of :mod:`satchain.measure` and writes one PNG atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from satchain.report._save import save_figure  # noqa: E402
+
+__all__ = ["plot_bars", "plot_edge", "plot_star", "plot_wedge"]
+
+_DIRECTION_STYLE = {
+    "ACT": dict(color="tab:blue"),
+    "ALT": dict(color="tab:red"),
+    "D45": dict(color="tab:green", linestyle="--"),
+    "D135": dict(color="tab:purple", linestyle="--"),
+}
+
+
+def _nyquist(ax, top: float = 1.05) -> None:
+    ax.axvline(0.5, color="gray", lw=1)
+    ax.text(0.5, top, " Nyquist", color="gray", va="top", fontsize=8)
+
+
+def plot_edge(result, path: str | Path, *, title: str = "") -> None:
+    """ESF, LSF and MTF (along the edge normal) of an :class:`~satchain.measure.edge.EdgeResult`."""
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    x = np.asarray(result.esf_x_px)
+    near = np.abs(x) <= 12
+    axes[0].plot(x[near], np.asarray(result.esf)[near], color="black")
+    axes[0].set_xlabel("distance from the edge along its normal (px)")
+    axes[0].set_ylabel("ESF (normalised)")
+    axes[1].plot(x[near], np.asarray(result.lsf)[near], color="tab:blue")
+    axes[1].set_xlabel("distance from the edge along its normal (px)")
+    axes[1].set_ylabel("LSF (1/px)")
+    f, m = np.asarray(result.f_cy_per_px), np.asarray(result.mtf)
+    axes[2].plot(f, m, color="black", label=f"MTF ({result.direction})")
+    axes[2].plot([0.5], [result.mtf_at_nyquist], "o", color="tab:red", label=f"at Nyquist {result.mtf_at_nyquist:.3f}")
+    if result.mtf50_cy_per_px is not None:
+        axes[2].plot([result.mtf50_cy_per_px], [0.5], "s", color="tab:green", label=f"MTF50 {result.mtf50_cy_per_px:.3f}")
+    _nyquist(axes[2], top=max(1.05, float(np.max(m)) + 0.05))
+    axes[2].set_xlim(0, f[-1])
+    axes[2].set_ylim(0, max(1.1, float(np.max(m)) + 0.1))
+    axes[2].set_xlabel("spatial frequency along the edge normal (cy/px)")
+    axes[2].set_ylabel("MTF")
+    axes[2].legend(fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(title or f"slanted edge {result.angle_deg:.2f} deg ({result.direction}), RER {result.rer:.3f}")
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+
+
+def plot_star(result, path: str | Path, *, title: str = "") -> None:
+    """MTF per direction (ACT, ALT, diagonals) of a :class:`~satchain.measure.star.StarResult`."""
+    fig, ax = plt.subplots(figsize=(7, 4.6))
+    f = np.asarray(result.f_cy_per_px)
+    for k, m in result.mtf.items():
+        ax.plot(f, np.asarray(m, dtype=float), label=k, **_DIRECTION_STYLE.get(k, {}))
+    _nyquist(ax)
+    ax.set_xlim(0, f.max())
+    ax.set_ylim(0, 1.1)
+    ax.set_xlabel("spatial frequency along the tangent (cy/px)")
+    ax.set_ylabel("MTF")
+    ax.set_title(title or f"Siemens star, {result.cycles} cycles: MTF per direction")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+
+
+def plot_bars(result, path: str | Path, *, title: str = "") -> None:
+    """CTF per bar group and the MTF from the inverse Coltman series (:class:`~satchain.measure.bars.BarsResult`)."""
+    fig, ax = plt.subplots(figsize=(7, 4.6))
+    f = np.asarray(result.f_cy_per_px)
+    order = np.argsort(f)
+    ax.plot(f[order], np.asarray(result.ctf)[order], "o-", color="tab:red", label="CTF (measured)")
+    ax.plot(f[order], np.asarray(result.mtf)[order], "s--", color="black", label="MTF (inverse Coltman series)")
+    _nyquist(ax)
+    ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
+    ax.set_ylim(0, 1.15)
+    ax.set_xlabel("spatial frequency = 1 / period (cy/px)")
+    ax.set_ylabel("CTF, MTF")
+    ax.set_title(title or f"bar target ({result.direction})")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+
+
+def plot_wedge(result, path: str | Path, *, title: str = "", pixel_m: float | None = None) -> None:
+    """The paper's contrast scan: contrast vs line width along the wedge, the threshold and the point found.
+
+    The x axis is the line width (half a period) in metres when ``pixel_m`` is given, else in pixels, running
+    from the wide end (left) to the narrow end, as the scan does.
+    """
+    scale, unit = (pixel_m, "m") if pixel_m else (1.0, "px")
+    lw = np.asarray(result.line_width_px) * scale
+    fig, ax = plt.subplots(figsize=(8, 4.6))
+    ax.plot(lw, np.asarray(result.contrast), color="black", label="contrast across the stripes")
+    ax.axhline(result.threshold, color="tab:red", lw=1, ls="--", label=f"threshold {result.threshold:.0%}")
+    if result.resolved_line_width_px is not None:
+        w = result.resolved_line_width_px * scale
+        ax.axvline(w, color="tab:green", lw=1)
+        ax.plot([w], [result.threshold], "o", color="tab:green", label=f"resolved line width {w:.3g} {unit}")
+    ax.set_xlim(lw.max(), lw.min())
+    ax.set_ylim(0, 1.05)
+    ax.set_xlabel(f"line width along the wedge ({unit}); scan from the wide end")
+    ax.set_ylabel("contrast (max - min) / (max + min)")
+    ax.set_title(title or f"hyperbolic wedge contrast scan ({result.direction} resolution)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)

@@ -1,0 +1,186 @@
+"""The configuration of one ``satchain run``: system, scene, simulation, measurement and tolerances.
+
+One TOML file holds everything; ``satchain run --print-config`` prints the default to start from. Every
+key is validated (unknown keys are refused, values name their allowed range).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from satchain.errors import ConfigError, SatchainIOError
+from satchain.system import ImagingSystem, _config_error, load_preset
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["DEFAULT_CONFIG_TOML", "RunConfig", "load_run_config"]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class SystemRef(_Frozen):
+    """``preset`` (a packaged name), or ``file`` (a system TOML, relative to the config), or ``inline``."""
+
+    preset: str | None = "ankarasat3"
+    file: str | None = None
+    inline: dict[str, Any] | None = None
+
+
+class SceneConfig(_Frozen):
+    layout: str = Field(default="paper", description="'paper' or a scene file (.toml/.json)")
+    pixel_m: float = Field(default=0.035, gt=0, le=100, description="ground-truth pixel size, m (the paper's 3.5 cm)")
+    overview_pixel_m: float = Field(default=0.25, gt=0, le=100, description="pixel size of the Figure 1 overview")
+
+
+class SimulationConfig(_Frozen):
+    units: Literal["dn", "electrons", "radiance", "reflectance"] = "dn"
+    noise: bool = True
+    seed: int = Field(default=20260101, ge=0)
+    far_margin_px: int = Field(default=128, ge=0, le=100_000)
+    border: Literal["symmetric", "periodic", "constant"] = "symmetric"
+
+
+class MeasurementConfig(_Frozen):
+    wedge_threshold: float = Field(default=0.15, gt=0, lt=1, description="contrast at which a wedge stops resolving")
+
+
+class Tolerances(_Frozen):
+    """Pass/fail limits of measured vs predicted figures of merit (absolute unless said otherwise)."""
+
+    edge_mtf_at_nyquist: float = Field(default=0.03, gt=0)
+    edge_angle_deg: float = Field(default=0.2, gt=0)
+    star_mtf: float = Field(default=0.08, gt=0)
+    bar_ctf: float = Field(default=0.08, gt=0)
+    wedge_resolution_rel: float = Field(default=0.25, gt=0)
+    niirs: float = Field(default=0.3, gt=0)
+
+
+class RunConfig(_Frozen):
+    """Everything one run needs; a frozen, validated object."""
+
+    system: SystemRef = Field(default_factory=SystemRef)
+    scene: SceneConfig = Field(default_factory=SceneConfig)
+    simulation: SimulationConfig = Field(default_factory=SimulationConfig)
+    measurement: MeasurementConfig = Field(default_factory=MeasurementConfig)
+    tolerances: Tolerances = Field(default_factory=Tolerances)
+    base_dir: str = Field(default=".", description="directory that relative paths are resolved against")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, base_dir: str | Path = ".") -> RunConfig:
+        try:
+            return cls.model_validate({**data, "base_dir": str(base_dir)})
+        except ValidationError as exc:
+            err = _config_error(exc)
+            raise ConfigError(str(err).replace("invalid imaging system", "invalid run configuration")) from None
+
+    def load_system(self) -> ImagingSystem:
+        ref = self.system
+        given = [k for k in ("file", "inline") if getattr(ref, k) is not None]
+        if len(given) > 1:
+            raise ConfigError("system: give one of preset, file or inline")
+        if ref.inline is not None:
+            return ImagingSystem.from_dict(ref.inline)
+        if ref.file is not None:
+            return ImagingSystem.from_toml(Path(self.base_dir) / ref.file)
+        return load_preset(ref.preset or "ankarasat3")
+
+    def layout_source(self) -> str:
+        if self.scene.layout == "paper":
+            return "paper"
+        return str(Path(self.base_dir) / self.scene.layout)
+
+    def to_dict(self) -> dict[str, Any]:
+        return self.model_dump(mode="json", exclude={"base_dir"}, exclude_none=True)
+
+
+DEFAULT_CONFIG_TOML = """\
+# satchain run configuration. Every key is optional; these are the defaults.
+[system]
+preset = "ankarasat3"          # a packaged preset, or: file = "mycamera.toml"
+
+[scene]
+layout = "paper"               # the reference paper's Figure 1 layout, or a scene file (.toml / .json)
+pixel_m = 0.035                # ground-truth pixel size (m)
+overview_pixel_m = 0.25        # pixel size of the Figure 1 overview image (m)
+
+[simulation]
+units = "dn"                   # dn | electrons | radiance | reflectance
+noise = true
+seed = 20260101
+far_margin_px = 128            # output pixels of border context (PSF tails)
+border = "symmetric"           # symmetric | periodic | constant
+
+[measurement]
+wedge_threshold = 0.15         # the paper's contrast threshold (Rayleigh)
+
+[tolerances]                   # |measured - predicted| for pass/fail
+edge_mtf_at_nyquist = 0.03
+edge_angle_deg = 0.2
+star_mtf = 0.08
+bar_ctf = 0.08
+wedge_resolution_rel = 0.25    # relative
+niirs = 0.3
+"""
+
+
+def load_run_config(path: str | Path | None) -> RunConfig:
+    """The default configuration, or a TOML file (relative paths inside it are relative to the file)."""
+    if path is None:
+        return RunConfig()
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise SatchainIOError(f"--config {str(p)!r}: not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--config {str(p)!r}: not valid TOML ({exc})") from None
+    return RunConfig.from_dict(data, base_dir=p.parent)
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f'"{k}" = {_toml_value(x)}' for k, x in v.items()) + " }"
+    raise ConfigError(f"cannot write {v!r} to TOML")
+
+
+def _toml_table(name: str, d: dict[str, Any], lines: list[str]) -> None:
+    scalars = {k: v for k, v in d.items() if not isinstance(v, dict) or not v or name.endswith("zernike_rms_waves")}
+    tables = {k: v for k, v in d.items() if k not in scalars}
+    lines.append(f"[{name}]")
+    lines.extend(f"{k} = {_toml_value(v)}" for k, v in scalars.items())
+    lines.append("")
+    for k, v in tables.items():
+        _toml_table(f"{name}.{k}", v, lines)
+
+
+def config_to_toml(config: RunConfig) -> str:
+    """The configuration as TOML that :func:`load_run_config` reads back to an equal object.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> RunConfig.from_dict(tomllib.loads(config_to_toml(RunConfig()))) == RunConfig()
+    True
+    """
+    lines = ["# satchain run configuration (written by satchain; reproduces this run)"]
+    for section, values in config.to_dict().items():
+        _toml_table(section, values, lines)
+    return "\n".join(lines)
