@@ -1,7 +1,7 @@
 """``satchain measure``: image-quality measurements from image files (a typer sub-app, mounted by cli.py).
 
-Commands: ``edge``, ``star``, ``bars``, ``wedge`` (one target in a region) and ``auto`` (every target of a scene,
-from its truth file).  Images: TIFF (float or integer), PNG (8/16-bit) and NPY, read by
+Commands: ``edge``, ``star``, ``bars``, ``wedge`` (one target in a region) and ``auto`` (every target of a
+scene, from its truth file).  Images: TIFF (float or integer), PNG (8/16-bit) and NPY, read by
 :func:`satchain.io.read_image`; the ground pixel size comes from ``--pixel-m`` or the file's metadata.
 Regions are ``X0,Y0,X1,Y1`` in pixels (x = column, y = row), half-open.  ``--json`` prints the result as JSON;
 ``-o DIR`` writes ``<command>.json`` and a figure there.  Bad input: one line on stderr, exit status 2.
@@ -32,7 +32,9 @@ measure_app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-ImageArg = Annotated[Path, typer.Argument(help="image: .tif/.tiff (float or integer), .png (8/16-bit) or .npy")]
+ImageArg = Annotated[
+    Path, typer.Argument(help="image: .tif/.tiff (float or integer), .png (8/16-bit) or .npy")
+]
 RoiOpt = Annotated[
     str | None, typer.Option("--roi", help="region X0,Y0,X1,Y1 in pixels (x = column, y = row; half-open)")
 ]
@@ -208,7 +210,8 @@ def star(
     center: Annotated[str | None, typer.Option("--center", help="star centre X,Y in image pixels")] = None,
     radius: Annotated[float | None, typer.Option("--radius", help="outer radius used (px)")] = None,
     input_modulation: Annotated[
-        float | None, typer.Option("--input-modulation", help="the star's own modulation; default: outer radii")
+        float | None,
+        typer.Option("--input-modulation", help="the star's own modulation; default: outer radii"),
     ] = None,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
@@ -225,7 +228,13 @@ def star(
     if c is not None and region is not None:
         c = [c[0] - region[0], c[1] - region[1]]
     r = measure_star(
-        data, cycles=cycles, center=c, radius_px=radius, roi=region, input_modulation=input_modulation, pixel_m=p
+        data,
+        cycles=cycles,
+        center=c,
+        radius_px=radius,
+        roi=region,
+        input_modulation=input_modulation,
+        pixel_m=p,
     )
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
 
@@ -249,9 +258,12 @@ def bars(
     image: ImageArg,
     periods_px: Annotated[str, typer.Option("--periods-px", help="period of each group (px), P1,P2,...")],
     group_roi: Annotated[
-        list[str] | None, typer.Option("--group-roi", help="X0,Y0,X1,Y1 of one group (repeat, one per period)")
+        list[str] | None,
+        typer.Option("--group-roi", help="X0,Y0,X1,Y1 of one group (repeat, one per period)"),
     ] = None,
-    direction: Annotated[str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")] = "ACT",
+    direction: Annotated[
+        str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")
+    ] = "ACT",
     levels: Annotated[
         str | None, typer.Option("--levels", help="large-area DARK,BRIGHT levels; default: the widest group")
     ] = None,
@@ -275,7 +287,9 @@ def bars(
     else:
         raise ConfigError(f"--periods-px = {periods_px!r}: {len(periods)} groups need one --group-roi each")
     lv = None if levels is None else tuple(_numbers("--levels", levels, 2))
-    r = measure_bars(data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p)
+    r = measure_bars(
+        data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p
+    )
     payload = {"image": str(image), "group_rois": rois, "pixel_m": p, **r.to_dict()}
 
     def plot(d: Path):
@@ -284,11 +298,250 @@ def bars(
 
     def table():
         t = Table(title=f"bar target ({r.direction}): {image.name}")
-        for col in ("period px", "f cy/px", *(["f cy/m ground"] if p else []), "CTF", "MTF (Coltman inverse)"):
+        for col in (
+            "period px",
+            "f cy/px",
+            *(["f cy/m ground"] if p else []),
+            "CTF",
+            "MTF (Coltman inverse)",
+        ):
             t.add_column(col, justify="right")
         for k in range(r.f_cy_per_px.size):
             ground = [f"{r.f_cy_per_px[k] / p:.3f}"] if p else []
-            t.add_row(f"{r.periods_px[k]:.3g}", f"{r.f_cy_per_px[k]:.4f}", *ground, f"{r.ctf[k]:.4f}", f"{r.mtf[k]:.4f}")
+            t.add_row(
+                f"{r.periods_px[k]:.3g}",
+                f"{r.f_cy_per_px[k]:.4f}",
+                *ground,
+                f"{r.ctf[k]:.4f}",
+                f"{r.mtf[k]:.4f}",
+            )
         _console().print(t)
 
     _emit(payload, as_json, out, "bars", plot, table)
+
+
+def _line_widths(start_px: float, end_px: float, n: int, profile: str):
+    """Line width at positions 0..n-1 along the wedge: ``linear`` in position, or ``hyperbolic`` (1/w linear,
+    the ``y = A / x`` wedge of the paper: w = start at position 0 and end at position n - 1)."""
+    import numpy as np
+
+    from satchain._validate import check_choice, check_positive
+
+    check_choice("--profile", profile, ("hyperbolic", "linear"))
+    a, b = check_positive("--line-width-start-px", start_px), check_positive("--line-width-end-px", end_px)
+    if n < 2:
+        raise ConfigError(f"--roi: {n} position(s) along the wedge; need at least 2")
+    u = np.arange(n) / (n - 1)
+    return a + (b - a) * u if profile == "linear" else 1.0 / (1.0 / a + (1.0 / b - 1.0 / a) * u)
+
+
+def _read_truth(path: Path) -> dict:
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SatchainIOError(f"--truth = {str(path)!r}: no such file") from None
+    except OSError as exc:
+        raise SatchainIOError(f"--truth = {str(path)!r}: cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"--truth = {str(path)!r}: not JSON: {exc}") from None
+
+
+def _origin(text: str | None, meta: dict):
+    if text is not None:
+        return tuple(_numbers("--origin-m", text, 2))
+    o = meta.get("origin_m")
+    return None if o is None else tuple(float(v) for v in o)
+
+
+def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, threshold: float):
+    """The wedge of a truth file, measured as ``measure auto`` does; returns (WedgeResult, summary)."""
+    from satchain.measure.auto import measure_auto
+
+    truth = _read_truth(truth_path)
+    wedges = [str(it.get("id")) for it in truth.get("items", []) if it.get("kind") == "hyperbolic_wedge"]
+    if item_id is None:
+        if len(wedges) != 1:
+            raise ConfigError(f"--id: the truth file has {len(wedges)} hyperbolic wedges {wedges}; name one")
+        item_id = wedges[0]
+    elif item_id not in wedges:
+        raise ConfigError(
+            f"--id = {item_id!r}: not a hyperbolic wedge of the truth file; choose from {wedges}"
+        )
+    res = measure_auto(data, truth, pixel_m=p, origin_m=origin, ids=[item_id], wedge_threshold=threshold)
+    found = res.by_kind("hyperbolic_wedge")
+    if not found:
+        raise ConfigError(f"wedge {item_id!r} not measured: {res.skipped[0]['reason']}")
+    return found[0].result, found[0].summary, res.pixel_m
+
+
+@measure_app.command()
+@_handle_errors
+def wedge(
+    image: ImageArg,
+    line_width_start_px: Annotated[
+        float | None,
+        typer.Option("--line-width-start-px", help="line width at the ROI's first position (px)"),
+    ] = None,
+    line_width_end_px: Annotated[
+        float | None, typer.Option("--line-width-end-px", help="line width at the ROI's last position (px)")
+    ] = None,
+    profile: Annotated[
+        str, typer.Option("--profile", help="hyperbolic (1/width linear in position) or linear")
+    ] = "hyperbolic",
+    direction: Annotated[
+        str, typer.Option("--direction", help="ALT: stripes along x, scan along x; ACT: the transpose")
+    ] = "ALT",
+    threshold: Annotated[
+        float, typer.Option("--threshold", help="contrast where lines stop resolving")
+    ] = 0.15,
+    truth: Annotated[
+        Path | None, typer.Option("--truth", help="scene truth JSON: geometry from there")
+    ] = None,
+    item_id: Annotated[str | None, typer.Option("--id", help="wedge id in the truth file")] = None,
+    origin_m: Annotated[
+        str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image corner")
+    ] = None,
+    roi: RoiOpt = None,
+    pixel_m: PixelOpt = None,
+    as_json: JsonOpt = False,
+    out: OutOpt = None,
+) -> None:
+    """Hyperbolic-wedge contrast scan (the paper's): resolvable line width where the contrast falls to 15 %.
+
+    Geometry either from ``--truth`` (exact: only the rows inside the fanning stripes count), or from
+    ``--line-width-start-px/--line-width-end-px`` over the ROI (which must hold the stripes only), position 0
+    being the ROI's first column (ALT) or row (ACT).
+    """
+    from satchain.measure.wedge import measure_wedge
+    from satchain.report.measure_plots import plot_wedge
+
+    data, p, meta = _load(image, pixel_m)
+    if truth is not None:
+        if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
+            raise ConfigError(
+                "--truth: the geometry comes from the truth file; drop --roi and --line-width-*"
+            )
+        r, summary, p = _wedge_from_truth(data, truth, item_id, p, _origin(origin_m, meta), threshold)
+        payload = {"image": str(image), "truth": str(truth), "pixel_m": p, **summary}
+    else:
+        if line_width_start_px is None or line_width_end_px is None:
+            raise ConfigError(
+                "wedge: give --line-width-start-px and --line-width-end-px, or --truth TRUTH.json"
+            )
+        region = _roi("--roi", roi) or (0, 0, data.shape[-1], data.shape[0])
+        axis = region[2] - region[0] if direction.upper() == "ALT" else region[3] - region[1]
+        lw = _line_widths(line_width_start_px, line_width_end_px, axis, profile)
+        r = measure_wedge(
+            data, line_width_px=lw, direction=direction.upper(), roi=region, threshold=threshold, pixel_m=p
+        )
+        payload = {"image": str(image), "roi": region, "pixel_m": p, "profile": profile, **r.to_dict()}
+
+    def plot(d: Path):
+        plot_wedge(r, d / "wedge.png", pixel_m=p)
+        return [d / "wedge.png"]
+
+    def table():
+        rows = [
+            ("direction (resolution)", r.direction),
+            ("threshold", r.threshold),
+            ("resolved line width (px)", r.resolved_line_width_px),
+            ("resolved line width (m)", r.resolved_line_width_m),
+            ("resolved frequency (cy/px)", r.resolved_f_cy_per_px),
+            ("resolved frequency (cy/m ground)", r.resolved_f_cy_per_m_ground),
+        ]
+        _console().print(_kv_table(f"hyperbolic wedge: {image.name}", rows))
+        if r.resolved_line_width_px is None:
+            _console().print("[yellow]the contrast never falls to the threshold in this region[/]")
+
+    _emit(payload, as_json, out, "wedge", plot, table)
+
+
+def _auto_plots(res, d: Path) -> list[Path]:
+    from satchain.report.measure_plots import plot_bars, plot_edge, plot_star, plot_wedge
+
+    plotters = {"slanted_edge": plot_edge, "siemens_star": plot_star, "bar_target": plot_bars}
+    written = []
+    for it in res.items:
+        path = d / f"{it.kind}_{_safe(it.id)}.png"
+        if it.kind == "hyperbolic_wedge":
+            plot_wedge(it.result, path, pixel_m=res.pixel_m, title=it.id)
+        else:
+            plotters[it.kind](it.result, path, title=it.id)
+        written.append(path)
+    return written
+
+
+def _safe(name: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
+
+
+def _auto_tables(d: dict) -> None:
+    c = _console()
+    t = Table(title=f"slanted edges (pixel {d['pixel_m']:g} m)")
+    for col in ("id", "dir", "angle", "truth", "MTF@Nyq", "MTF50 cy/px", "RER", "H"):
+        t.add_column(col, justify="right")
+    for e in d["slanted_edges"]:
+        t.add_row(
+            e["id"],
+            e["direction"],
+            f"{e['angle_deg']:.3f}",
+            f"{e['angle_deg_truth']:.3f}",
+            _fmt(e["mtf_at_nyquist"]),
+            _fmt(e["mtf50_cy_per_px"]),
+            _fmt(e["rer"]),
+            _fmt(e["overshoot"]),
+        )
+    c.print(t)
+    for s in d["siemens_star"]:
+        rows = [(f"MTF at Nyquist, {k}", v) for k, v in s["mtf_at_nyquist"].items()]
+        c.print(_kv_table(f"Siemens star {s['id']} ({s['cycles']} cycles)", rows))
+    for b in d["bar_targets"]:
+        rows = [
+            (
+                f"period {g['period_m']:g} m ({g['period_px']:.3g} px): CTF, MTF",
+                f"{g['ctf']:.4f}, {g['mtf']:.4f}",
+            )
+            for g in b["groups"]
+        ]
+        c.print(_kv_table(f"bar target {b['id']} ({b['direction']})", rows))
+    for w in d["hyperbolic_wedge"]:
+        rows = [
+            ("resolution (line width, m)", w["resolution_m"]),
+            ("frequency (cy/px)", w["resolved_f_cy_per_px"]),
+        ]
+        c.print(
+            _kv_table(f"hyperbolic wedge {w['id']} ({w['direction']}, threshold {w['threshold']:.0%})", rows)
+        )
+    if d["skipped"]:
+        t = Table(title="not measured")
+        for col in ("id", "kind", "reason"):
+            t.add_column(col)
+        for s in d["skipped"]:
+            t.add_row(s["id"], s["kind"], s["reason"])
+        c.print(t)
+    for w in d.get("warnings", []):
+        c.print(f"[yellow]warning:[/] {w}", highlight=False)
+
+
+@measure_app.command()
+@_handle_errors
+def auto(
+    image: ImageArg,
+    truth: Annotated[Path, typer.Option("--truth", help="the scene's truth JSON (written with the render)")],
+    origin_m: Annotated[
+        str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image's top-left corner")
+    ] = None,
+    threshold: Annotated[float, typer.Option("--threshold", help="wedge contrast threshold")] = 0.15,
+    pixel_m: PixelOpt = None,
+    as_json: JsonOpt = False,
+    out: OutOpt = None,
+) -> None:
+    """Every applicable measurement of a (simulated) image, guided by its scene's truth file."""
+    from satchain.measure.auto import measure_auto
+
+    data, p, meta = _load(image, pixel_m)
+    res = measure_auto(
+        data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold
+    )
+    payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
+    _emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))

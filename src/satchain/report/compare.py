@@ -159,8 +159,8 @@ def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str,
         if it["kind"] != "slanted_edge":
             continue
         x0, y0, x1, y1 = it["bbox_m"]
-        r0, r1 = int(np.ceil(y0 / pixel_m)) + 2, int(y1 / pixel_m) - 2
-        c0, c1 = int(np.ceil(x0 / pixel_m)) + 2, int(x1 / pixel_m) - 2
+        r0, r1 = max(int(np.ceil(y0 / pixel_m)) + 2, 0), min(int(y1 / pixel_m) - 2, image.shape[0])
+        c0, c1 = max(int(np.ceil(x0 / pixel_m)) + 2, 0), min(int(x1 / pixel_m) - 2, image.shape[1])
         if r1 - r0 < 8 or c1 - c0 < 8:
             continue
         yy, xx = np.mgrid[r0:r1, c0:c1]

@@ -25,6 +25,10 @@ _DIRECTION_STYLE = {
 }
 
 
+def _title(prefix: str, default: str) -> str:
+    return f"{prefix}: {default}" if prefix else default
+
+
 def _nyquist(ax, top: float = 1.05) -> None:
     ax.axvline(0.5, color="gray", lw=1)
     ax.text(0.5, top, " Nyquist", color="gray", va="top", fontsize=8)
@@ -43,9 +47,17 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     axes[1].set_ylabel("LSF (1/px)")
     f, m = np.asarray(result.f_cy_per_px), np.asarray(result.mtf)
     axes[2].plot(f, m, color="black", label=f"MTF ({result.direction})")
-    axes[2].plot([0.5], [result.mtf_at_nyquist], "o", color="tab:red", label=f"at Nyquist {result.mtf_at_nyquist:.3f}")
+    axes[2].plot(
+        [0.5], [result.mtf_at_nyquist], "o", color="tab:red", label=f"at Nyquist {result.mtf_at_nyquist:.3f}"
+    )
     if result.mtf50_cy_per_px is not None:
-        axes[2].plot([result.mtf50_cy_per_px], [0.5], "s", color="tab:green", label=f"MTF50 {result.mtf50_cy_per_px:.3f}")
+        axes[2].plot(
+            [result.mtf50_cy_per_px],
+            [0.5],
+            "s",
+            color="tab:green",
+            label=f"MTF50 {result.mtf50_cy_per_px:.3f}",
+        )
     _nyquist(axes[2], top=max(1.05, float(np.max(m)) + 0.05))
     axes[2].set_xlim(0, f[-1])
     axes[2].set_ylim(0, max(1.1, float(np.max(m)) + 0.1))
@@ -54,7 +66,9 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     axes[2].legend(fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
-    fig.suptitle(title or f"slanted edge {result.angle_deg:.2f} deg ({result.direction}), RER {result.rer:.3f}")
+    fig.suptitle(
+        _title(title, f"slanted edge {result.angle_deg:.2f} deg ({result.direction}), RER {result.rer:.3f}")
+    )
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
 
@@ -70,7 +84,7 @@ def plot_star(result, path: str | Path, *, title: str = "") -> None:
     ax.set_ylim(0, 1.1)
     ax.set_xlabel("spatial frequency along the tangent (cy/px)")
     ax.set_ylabel("MTF")
-    ax.set_title(title or f"Siemens star, {result.cycles} cycles: MTF per direction")
+    ax.set_title(_title(title, f"Siemens star, {result.cycles} cycles: MTF per direction"))
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -78,18 +92,20 @@ def plot_star(result, path: str | Path, *, title: str = "") -> None:
 
 
 def plot_bars(result, path: str | Path, *, title: str = "") -> None:
-    """CTF per bar group and the MTF from the inverse Coltman series (:class:`~satchain.measure.bars.BarsResult`)."""
+    """CTF per bar group and the MTF from the inverse Coltman series (a ``BarsResult``)."""
     fig, ax = plt.subplots(figsize=(7, 4.6))
     f = np.asarray(result.f_cy_per_px)
     order = np.argsort(f)
     ax.plot(f[order], np.asarray(result.ctf)[order], "o-", color="tab:red", label="CTF (measured)")
-    ax.plot(f[order], np.asarray(result.mtf)[order], "s--", color="black", label="MTF (inverse Coltman series)")
+    ax.plot(
+        f[order], np.asarray(result.mtf)[order], "s--", color="black", label="MTF (inverse Coltman series)"
+    )
     _nyquist(ax)
     ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
     ax.set_ylim(0, 1.15)
     ax.set_xlabel("spatial frequency = 1 / period (cy/px)")
     ax.set_ylabel("CTF, MTF")
-    ax.set_title(title or f"bar target ({result.direction})")
+    ax.set_title(_title(title, f"bar target ({result.direction}): CTF and MTF"))
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -115,7 +131,7 @@ def plot_wedge(result, path: str | Path, *, title: str = "", pixel_m: float | No
     ax.set_ylim(0, 1.05)
     ax.set_xlabel(f"line width along the wedge ({unit}); scan from the wide end")
     ax.set_ylabel("contrast (max - min) / (max + min)")
-    ax.set_title(title or f"hyperbolic wedge contrast scan ({result.direction} resolution)")
+    ax.set_title(_title(title, f"hyperbolic wedge contrast scan ({result.direction} resolution)"))
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()

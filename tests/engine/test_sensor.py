@@ -1,0 +1,154 @@
+"""Detector signal chain: noise statistics, reproducibility, clipping, quantisation and errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satchain import load_preset
+from satchain.engine.sensor import SensorModel
+from satchain.engine.simulate import SimParams, Simulator, simulate
+from satchain.engine.sources import ArraySource
+from satchain.errors import ConfigError
+
+BASE = load_preset("ankarasat3")
+SENSOR = SensorModel(
+    electrons_per_unit=20000.0, offset_e=100.0, dark_e=50.0, read_noise_e=10.0, full_well_e=60000.0
+)
+
+
+def _flat(value=0.5, shape=(512, 512)):
+    return np.full(shape, value)
+
+
+def test_poisson_gaussian_statistics_on_a_flat_field():
+    """Mean = offset + gain * value + dark; variance = mean (Poisson) + read^2 (Gaussian)."""
+    e = SENSOR.convert(_flat(), origin=(0, 0), units="electrons", noise=True, seed=1)
+    mean = 100.0 + 20000.0 * 0.5 + 50.0
+    n = e.size
+    assert abs(e.mean() - mean) < 5 * np.sqrt((mean + 100.0) / n)
+    assert abs(e.var() / (mean + 100.0) - 1.0) < 5 * np.sqrt(2.0 / n)
+
+
+def test_read_noise_alone_on_zero_signal():
+    sensor = SensorModel(electrons_per_unit=1.0, read_noise_e=7.0)
+    e = sensor.convert(_flat(0.0), origin=(0, 0), units="electrons", noise=True, seed=2)
+    assert abs(e.mean()) < 5 * 7.0 / np.sqrt(e.size)
+    assert abs(e.std() / 7.0 - 1.0) < 5 * np.sqrt(0.5 / e.size)
+
+
+def test_noise_off_is_the_expectation():
+    e = SENSOR.convert(_flat(0.25, (8, 8)), origin=(0, 0), units="electrons", noise=False)
+    np.testing.assert_allclose(e, 100.0 + 5000.0 + 50.0)
+
+
+def test_noise_reproducible_from_seed_and_changes_with_it():
+    a = SENSOR.convert(_flat(shape=(100, 100)), origin=(0, 0), units="electrons", noise=True, seed=7)
+    b = SENSOR.convert(_flat(shape=(100, 100)), origin=(0, 0), units="electrons", noise=True, seed=7)
+    c = SENSOR.convert(_flat(shape=(100, 100)), origin=(0, 0), units="electrons", noise=True, seed=8)
+    np.testing.assert_array_equal(a, b)
+    assert np.count_nonzero(a != c) > 0.9 * a.size
+
+
+def test_noise_independent_of_block_partition():
+    """Converting 64-px-aligned pieces at their origins reproduces the whole image exactly."""
+    x = np.random.default_rng(0).uniform(0.1, 0.9, (150, 130))
+    whole = SENSOR.convert(x, origin=(0, 0), units="electrons", noise=True, seed=3)
+    pieces = np.empty_like(whole)
+    for r in (0, 64, 128):
+        for c in (0, 64, 128):
+            blk = (slice(r, r + 64), slice(c, c + 64))
+            pieces[blk] = SENSOR.convert(x[blk], origin=(r, c), units="electrons", noise=True, seed=3)
+    np.testing.assert_array_equal(pieces, whole)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="sensor bug: in SensorModel._noisy the read noise is drawn from the same generator after the "
+    "Poisson draws, whose consumption depends on the signal (and on the zero padding of a partial block), so a "
+    "pixel's noise depends on the other pixels of its block and on the image extent",
+)
+def test_noise_of_a_pixel_does_not_depend_on_the_image_extent():
+    x = np.random.default_rng(0).uniform(0.1, 0.9, (100, 100))
+    whole = SENSOR.convert(x, origin=(0, 0), units="electrons", noise=True, seed=3)
+    crop = SENSOR.convert(x[:70, :50], origin=(0, 0), units="electrons", noise=True, seed=3)
+    np.testing.assert_array_equal(crop, whole[:70, :50])
+
+
+def test_simulated_noise_reproducible_and_nearly_tiling_independent():
+    """Same seed -> same image. Different tile budgets change the noise-free values by ~1e-7 (float32
+    rounding in different tiles), which may move a Poisson draw by one electron in a rare pixel; the
+    noise field itself (generators per fixed output block) does not depend on the tiling."""
+    img = np.random.default_rng(0).uniform(0.1, 0.9, (1400, 1260))
+    src = ArraySource(img, pixel_m=0.035)
+    kw = dict(sensor=SENSOR, units="electrons", noise=True, seed=5)
+    sim = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape)
+    a, a2 = sim.run(src, **kw), sim.run(src, **kw)
+    np.testing.assert_array_equal(a, a2)
+    tiled = Simulator(
+        BASE, input_pixel_m=0.035, input_shape=img.shape, params=SimParams(max_tile_bytes=12 * 2**20)
+    )
+    b = tiled.run(src, **kw)
+    assert len(tiled.tiles) > 1
+    differ = a != b
+    assert np.count_nonzero(differ) <= 0.01 * a.size and np.max(np.abs(a - b)) <= 1.0
+
+
+def test_full_well_clipping():
+    sensor = SensorModel(electrons_per_unit=1e5, read_noise_e=10.0, full_well_e=30000.0)
+    e = sensor.convert(_flat(1.0, (64, 64)), origin=(0, 0), units="electrons", noise=True, seed=0)
+    assert np.all(e == 30000.0)
+    e = sensor.convert(_flat(0.29, (64, 64)), origin=(0, 0), units="electrons", noise=True, seed=0)
+    assert e.max() <= 30000.0 and np.count_nonzero(e == 30000.0) > 0  # 29000 e + noise reaches the well
+
+
+@pytest.mark.parametrize(
+    ("full_well_e", "bits"), [(60000.0, 12), (10000.0, 12), (1e5, 16), (30000.0, 10), (45000.0, 14)]
+)
+def test_dn_quantisation_range(full_well_e, bits):
+    sensor = SensorModel(
+        electrons_per_unit=full_well_e, read_noise_e=20.0, full_well_e=full_well_e, bit_depth=bits
+    )
+    x = np.linspace(-0.01, 1.2, 64 * 64).reshape(64, 64)  # from below zero to beyond saturation
+    dn = sensor.convert(np.clip(x, 0, None), origin=(0, 0), units="dn", noise=True, seed=0)
+    assert np.all(dn == np.floor(dn))
+    assert dn.min() == 0 and dn.max() == 2**bits - 1
+    # noise-free: floor(electrons / gain), gain = full well / (2^bits - 1)
+    clean = sensor.convert(np.array([[0.0, 0.5, 1.0, 2.0]]), origin=(0, 0), units="dn", noise=False)
+    top = 2**bits - 1
+    np.testing.assert_array_equal(clean[0], [0, np.floor(0.5 * top), top, top])
+
+
+def test_reflectance_round_trip_without_noise():
+    x = np.random.default_rng(1).uniform(0, 1, (16, 16))
+    np.testing.assert_allclose(SENSOR.convert(x, origin=(0, 0), units="reflectance", noise=False), x)
+    sensor = SensorModel(radiance_per_unit=80.0, radiance_offset=5.0)
+    np.testing.assert_allclose(
+        sensor.convert(x, origin=(0, 0), units="radiance", noise=False), 5.0 + 80.0 * x
+    )
+
+
+def test_errors_name_the_parameter():
+    img = np.full((700, 700), 0.2)
+    src = ArraySource(img, pixel_m=0.035)
+    sim = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape)
+    with pytest.raises(ConfigError, match="units = 'counts'"):
+        sim.run(src, units="counts")
+    with pytest.raises(ConfigError, match="units = 'dn'.*SensorModel"):
+        sim.run(src, units="dn")
+    with pytest.raises(ConfigError, match="noise = True"):
+        sim.run(src, noise=True)
+    with pytest.raises(ConfigError, match="pixel_m"):
+        simulate(img, BASE)
+    with pytest.raises(ConfigError, match="input_pixel_m = -0.035"):
+        Simulator(BASE, input_pixel_m=-0.035, input_shape=img.shape)
+    with pytest.raises(ConfigError, match="border = 'mirror'"):
+        SimParams(border="mirror")
+    with pytest.raises(ConfigError, match="electrons_per_unit = 0"):
+        SensorModel(electrons_per_unit=0.0)
+    with pytest.raises(ConfigError, match="bit_depth = 40"):
+        SensorModel(bit_depth=40)
+    with pytest.raises(ConfigError, match="full_well_e"):
+        SensorModel().convert(img[:4, :4], origin=(0, 0), units="dn", noise=False)
+    with pytest.raises(ConfigError, match="origin"):
+        SENSOR.convert(img[:4, :4], origin=(3, 0), units="electrons", noise=True)
