@@ -57,7 +57,7 @@ def _handle_errors(fn):
         try:
             return fn(*args, **kwargs)
         except SatchainError as exc:
-            Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
+            Console(stderr=True, soft_wrap=True).print(f"[bold red]error:[/] {exc}", highlight=False)
             raise typer.Exit(2) from None
 
     return wrapper

@@ -56,12 +56,12 @@ class MeasurementConfig(_Frozen):
 class Tolerances(_Frozen):
     """Pass/fail limits of measured vs predicted figures of merit (absolute unless said otherwise)."""
 
-    edge_mtf_at_nyquist: float = Field(default=0.03, gt=0)
+    edge_mtf_at_nyquist: float = Field(default=0.02, gt=0)
     edge_angle_deg: float = Field(default=0.2, gt=0)
-    star_mtf: float = Field(default=0.08, gt=0)
-    bar_ctf: float = Field(default=0.08, gt=0)
-    wedge_resolution_rel: float = Field(default=0.25, gt=0)
-    niirs: float = Field(default=0.3, gt=0)
+    star_mtf: float = Field(default=0.05, gt=0)
+    bar_ctf: float = Field(default=0.06, gt=0)
+    wedge_resolution_rel: float = Field(default=0.15, gt=0)
+    niirs: float = Field(default=0.2, gt=0)
 
 
 class RunConfig(_Frozen):
@@ -123,12 +123,12 @@ border = "symmetric"           # symmetric | periodic | constant
 wedge_threshold = 0.15         # the paper's contrast threshold (Rayleigh)
 
 [tolerances]                   # |measured - predicted| for pass/fail
-edge_mtf_at_nyquist = 0.03
+edge_mtf_at_nyquist = 0.02
 edge_angle_deg = 0.2
-star_mtf = 0.08
-bar_ctf = 0.08
-wedge_resolution_rel = 0.25    # relative
-niirs = 0.3
+star_mtf = 0.05
+bar_ctf = 0.06
+wedge_resolution_rel = 0.15    # relative
+niirs = 0.2
 """
 
 

@@ -1,6 +1,17 @@
 """Figures of image-quality measurements: edge ESF/LSF/MTF, star MTF per direction, bars CTF/MTF, wedge scan.
 
 Each function takes the result object of :mod:`satchain.measure` and writes one PNG atomically.
+
+Examples
+--------
+>>> import os, tempfile
+>>> from satchain.measure import measure_edge
+>>> y, x = np.mgrid[0:64, 0:64]
+>>> img = 0.1 + 0.8 / (1 + np.exp(-((x - 31.6) * np.cos(0.1) - (y - 31.5) * np.sin(0.1)) / 0.6))
+>>> path = os.path.join(tempfile.mkdtemp(), "edge.png")
+>>> plot_edge(measure_edge(img), path)
+>>> os.path.getsize(path) > 10_000
+True
 """
 
 from __future__ import annotations

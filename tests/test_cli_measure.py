@@ -1,0 +1,305 @@
+"""``satchain measure``: every subcommand on TIFF, PNG (8/16 bit) and NPY input, outputs, and clear errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.special import ndtr
+from typer.testing import CliRunner
+
+from satchain.cli_measure import measure_app
+from satchain.io import write_npy, write_png, write_tiff
+from satchain.scene import (
+    BarTarget,
+    Car,
+    HyperbolicWedge,
+    Scene,
+    SiemensStar,
+    SlantedEdge,
+    render_scene_to_file,
+)
+
+runner = CliRunner()
+GSD = 0.49
+SIGMA = 0.5  # px, Gaussian blur of the synthetic edge and star
+
+
+def _edge_image(n=64, angle_deg=5.0):
+    """Point-sampled Gaussian-blurred edge: its MTF along the normal is exactly exp(-2 pi^2 s^2 f^2)."""
+    y, x = np.mgrid[0:n, 0:n].astype(float)
+    t = np.deg2rad(angle_deg)
+    d = (x - 31.6) * np.cos(t) - (y - 31.5) * np.sin(t)
+    return 0.1 + 0.7 * ndtr(d / SIGMA)
+
+
+def _star_image(n=161, cycles=32, mean=100.0, amp=40.0):
+    """Sinusoidal star whose local grating is attenuated by the Gaussian MTF (exact, point-sampled)."""
+    y, x = np.mgrid[0:n, 0:n].astype(float) - (n - 1) / 2
+    r, th = np.hypot(x, y), np.arctan2(y, x)
+    f = cycles / (2 * np.pi * np.maximum(r, 1e-9))
+    return mean + amp * np.exp(-2 * np.pi**2 * SIGMA**2 * f**2) * np.cos(cycles * th)
+
+
+def _gauss(f):
+    return float(np.exp(-2 * np.pi**2 * SIGMA**2 * f**2))
+
+
+def _write(tmp_path, name: str, img: np.ndarray, fmt: str, scale: float = 1.0):
+    """Write ``img`` as tif-float, tif-uint16, png8, png16 or npy (NPY carries no pixel size)."""
+    path = tmp_path / f"{name}_{fmt}.{'npy' if fmt == 'npy' else fmt[:3]}"
+    if fmt == "tif-float":
+        write_tiff(path, img.astype(np.float32), pixel_m=GSD)
+    elif fmt == "tif-uint16":
+        write_tiff(path, np.round(img * scale * 250).astype(np.uint16), pixel_m=GSD)
+    elif fmt == "png8":
+        write_png(path, np.round(img * scale).astype(np.uint8), pixel_m=GSD)
+    elif fmt == "png16":
+        write_png(path, np.round(img * scale * 250).astype(np.uint16), pixel_m=GSD)
+    else:
+        write_npy(path, img)
+    return path
+
+
+FORMATS = ["tif-float", "tif-uint16", "png8", "png16", "npy"]
+
+
+def _ok(args):
+    r = runner.invoke(measure_app, args)
+    assert r.exit_code == 0, r.output
+    return r
+
+
+def _json(args):
+    return json.loads(_ok([*args, "--json"]).stdout)
+
+
+def _pixel_args(fmt):
+    return ["--pixel-m", str(GSD)] if fmt == "npy" else []
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_edge_every_format(tmp_path, fmt):
+    path = _write(tmp_path, "edge", _edge_image(), fmt, scale=255)
+    d = _json(["edge", str(path), *_pixel_args(fmt)])
+    keys = {"f_cy_per_px", "mtf", "mtf_at_nyquist", "mtf50_cy_per_px", "edge_angle_deg", "rer", "overshoot"}
+    assert keys <= set(d)
+    assert d["pixel_m"] == pytest.approx(GSD)  # from the file's metadata, or --pixel-m for NPY
+    assert d["edge_angle_deg"] == pytest.approx(5.0, abs=0.05) and d["direction"] == "ACT"
+    assert d["mtf_at_nyquist"] == pytest.approx(_gauss(0.5), abs=0.01)
+    f = np.asarray(d["f_cy_per_px"])
+    np.testing.assert_allclose(d["f_cy_per_m_ground"], f / GSD)
+    band = f <= 0.5
+    truth = np.exp(-2 * np.pi**2 * SIGMA**2 * f[band] ** 2)
+    assert np.max(np.abs(np.asarray(d["mtf"])[band] - truth)) < 0.015
+
+
+def test_edge_tables_roi_and_outputs(tmp_path):
+    path = _write(tmp_path, "edge", _edge_image(96), "tif-float")
+    r = _ok(["edge", str(path), "--roi", "10,8,90,88", "-o", str(tmp_path / "out")])
+    assert "MTF at Nyquist" in r.stdout and "slanted edge" in r.stdout
+    names = {p.name for p in (tmp_path / "out").iterdir()}
+    assert names == {"edge.json", "edge.png"}  # no temporary files left behind
+    d = json.loads((tmp_path / "out" / "edge.json").read_text())
+    assert d["roi"] == [10, 8, 90, 88] and d["mtf_at_nyquist"] == pytest.approx(_gauss(0.5), abs=0.01)
+    assert (tmp_path / "out" / "edge.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("fmt", ["tif-float", "png8", "png16", "npy"])
+def test_star_formats(tmp_path, fmt):
+    path = _write(tmp_path, "star", _star_image(), fmt)
+    d = _json(["star", str(path), "--cycles", "32", "--input-modulation", "0.4", *_pixel_args(fmt)])
+    for k in ("ACT", "ALT", "D45", "D135"):
+        assert d["mtf_at_nyquist"][k] == pytest.approx(_gauss(0.5), abs=0.02), k
+    np.testing.assert_allclose(d["f_cy_per_m_ground"], np.asarray(d["f_cy_per_px"]) / GSD)
+
+
+def test_star_center_in_image_pixels_with_roi_and_plot(tmp_path):
+    img = np.full((181, 201), 100.0)
+    img[10:171, 30:191] = _star_image()  # star centre at x = 110, y = 90
+    path = _write(tmp_path, "star", img, "npy")
+    args = [
+        "star",
+        str(path),
+        "--cycles",
+        "32",
+        "--roi",
+        "25,5,196,176",
+        "--center",
+        "110,90",
+        "--radius",
+        "78",
+    ]
+    r = _ok([*args, "--input-modulation", "0.4", "-o", str(tmp_path / "o")])
+    assert "MTF at Nyquist, ACT" in r.stdout
+    d = json.loads((tmp_path / "o" / "star.json").read_text())
+    assert d["center_xy_px"] == [85.0, 85.0]  # in the region's coordinates
+    assert d["mtf_at_nyquist"]["ALT"] == pytest.approx(_gauss(0.5), abs=0.02)
+    assert (tmp_path / "o" / "star.png").stat().st_size > 5000
+
+
+def _bars_image():
+    """Two bar groups (period 8 px, levels 50/150; period 4 px, levels 75/125): CTF 1 and 0.5."""
+    x = np.arange(120)
+    row = np.full(120, 100.0)
+    g1 = x < 56
+    row[g1] = np.where((x[g1] // 4) % 2 == 0, 150.0, 50.0)
+    g2 = (x >= 60) & (x < 116)
+    row[g2] = np.where(((x[g2] - 60) // 2) % 2 == 0, 125.0, 75.0)
+    return np.tile(row, (40, 1))
+
+
+@pytest.mark.parametrize("fmt", ["tif-uint16", "png8", "png16", "npy"])
+def test_bars_groups(tmp_path, fmt):
+    path = _write(tmp_path, "bars", _bars_image(), fmt)
+    args = [
+        "bars",
+        str(path),
+        "--periods-px",
+        "8,4",
+        "--group-roi",
+        "0,0,56,40",
+        "--group-roi",
+        "60,0,116,40",
+    ]
+    d = _json([*args, *_pixel_args(fmt)])
+    np.testing.assert_allclose(d["ctf"], [1.0, 0.5], atol=0.01)
+    np.testing.assert_allclose(d["f_cy_per_px"], [0.125, 0.25])
+    assert d["direction"] == "ACT" and len(d["mtf"]) == 2
+
+
+def test_bars_single_roi_alt_and_outputs(tmp_path):
+    path = _write(tmp_path, "bars", _bars_image().T.copy(), "tif-float")
+    args = ["bars", str(path), "--periods-px", "4", "--roi", "0,60,40,116", "--direction", "ALT"]
+    r = _ok([*args, "--levels", "50,150", "-o", str(tmp_path / "o")])
+    assert "CTF" in r.stdout
+    d = json.loads((tmp_path / "o" / "bars.json").read_text())
+    assert d["ctf"] == [pytest.approx(0.5)] and d["direction"] == "ALT"
+    assert (tmp_path / "o" / "bars.png").exists()
+
+
+def _wedge_image():
+    """Stripes 6 -> 1.05 px wide (linear) whose contrast is set to 0.8 (50 - x) / 40: 15 % at x = 42.5."""
+    y, x = np.mgrid[0:40, 0:100]
+    lw = 6.0 - 0.05 * x
+    return 100 + 80 * np.sign(np.sin(np.pi * y / lw)) * np.clip((x - 50) / -40, 0, 1)
+
+
+@pytest.mark.parametrize("fmt", ["tif-float", "png8", "npy"])
+def test_wedge_explicit_linear_profile(tmp_path, fmt):
+    path = _write(tmp_path, "wedge", _wedge_image(), fmt)
+    args = [
+        "wedge",
+        str(path),
+        "--line-width-start-px",
+        "6",
+        "--line-width-end-px",
+        "1.05",
+        "--profile",
+        "linear",
+    ]
+    d = _json([*args, *_pixel_args(fmt)])
+    assert d["resolved_position_px"] == pytest.approx(42.5, abs=0.1)
+    assert d["resolved_line_width_px"] == pytest.approx(3.875, abs=0.01)
+    assert d["resolved_line_width_m"] == pytest.approx(3.875 * GSD, abs=0.01)
+    assert d["line_width_px"][0] == 6.0 and d["line_width_px"][-1] == pytest.approx(1.05)
+
+
+def test_wedge_hyperbolic_profile_and_plot(tmp_path):
+    path = _write(tmp_path, "wedge", _wedge_image(), "tif-float")
+    args = ["wedge", str(path), "--line-width-start-px", "6", "--line-width-end-px", "1.05"]
+    r = _ok([*args, "-o", str(tmp_path / "o")])
+    assert "resolved line width" in r.stdout
+    d = json.loads((tmp_path / "o" / "wedge.json").read_text())
+    lw = np.asarray(d["line_width_px"])
+    np.testing.assert_allclose(1 / lw, np.linspace(1 / 6, 1 / 1.05, 100))  # 1/width linear: a hyperbola
+    assert d["resolved_position_px"] == pytest.approx(42.5, abs=0.1)  # position is set by the contrast ramp
+    assert (tmp_path / "o" / "wedge.png").exists()
+
+
+@pytest.fixture(scope="module")
+def scene_files(tmp_path_factory):
+    """A small scene rendered to TIFF (0.25 m pixels, with metadata) and its truth file."""
+    items = (
+        SlantedEdge("edge", center_m=(10.0, 10.0), size_m=16.0, angle_deg=6.0),
+        SiemensStar("star", center_m=(10.0, 29.0), radius_m=7.0, cycles=24),
+        HyperbolicWedge("wedge", origin_m=(22.0, 2.0), length_m=15.0, line_width_end_m=0.25),
+        BarTarget("bars", origin_m=(21.0, 22.0), periods_m=(2.0, 1.0, 0.5, 0.4), gap_m=1.0),
+        Car("car", origin_m=(34.0, 30.0)),
+    )
+    d = tmp_path_factory.mktemp("scene")
+    files = render_scene_to_file(Scene(40.0, 38.0, items, pixel_m=0.25), d / "scene.tif")
+    return files["tiff"], files["truth"]
+
+
+def test_auto_json_and_outputs(scene_files, tmp_path):
+    tif, truth = scene_files
+    d = _json(["auto", str(tif), "--truth", str(truth)])
+    assert d["pixel_m"] == 0.25
+    measured = {
+        e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]
+    }
+    skipped = {s["id"]: s["reason"] for s in d["skipped"]}
+    assert measured == {"edge", "star", "bars", "wedge"}
+    assert "no measurement defined" in skipped["car"] and "Nyquist" in skipped["bars/group_3"]
+    assert d["slanted_edges"][0]["angle_deg"] == pytest.approx(6.0, abs=0.2)
+    r = _ok(["auto", str(tif), "--truth", str(truth), "-o", str(tmp_path / "o")])
+    assert "slanted edges" in r.stdout and "not measured" in r.stdout
+    names = {p.name for p in (tmp_path / "o").iterdir()}
+    expected = {
+        "slanted_edge_edge.png",
+        "siemens_star_star.png",
+        "bar_target_bars.png",
+        "hyperbolic_wedge_wedge.png",
+    }
+    assert names == {"auto.json", *expected}
+
+
+def test_wedge_from_truth(scene_files):
+    tif, truth = scene_files
+    d = _json(["wedge", str(tif), "--truth", str(truth)])
+    assert d["id"] == "wedge" and d["direction"] == "ALT" and d["threshold"] == 0.15
+    assert d["line_width_m"][0] <= 1.25 and "resolution_m" in d
+    r = runner.invoke(measure_app, ["wedge", str(tif), "--truth", str(truth), "--id", "edge"])
+    assert r.exit_code == 2 and "not a hyperbolic wedge" in r.stderr
+
+
+def _err(args, *needles):
+    r = runner.invoke(measure_app, args)
+    assert r.exit_code == 2, r.output
+    assert "Traceback" not in r.output
+    for n in needles:
+        assert n in r.stderr, r.stderr
+    return r
+
+
+def test_errors_exit_2_with_a_clear_message(tmp_path):
+    edge = _write(tmp_path, "edge", _edge_image(), "tif-float")
+    _err(["edge", str(tmp_path / "missing.tif")], "error:", "no such file")
+    _err(["edge", str(edge), "--roi", "1,2,3"], "--roi", "4 comma-separated numbers")
+    _err(["edge", str(edge), "--roi", "1,2,3.5,9"], "--roi", "integers")
+    _err(["edge", str(edge), "--roi", "50,0,64,64"], "error:", "flat")  # beyond the edge: no edge in the ROI
+    _err(["edge", str(edge), "--roi", "0,0,5,5"], "too small")
+    _err(["edge", str(edge), "--roi", "0,0,100,20"], "roi")
+    _err(["edge", str(edge), "--pixel-m", "-1"], "--pixel-m")
+    noise = 0.5 + 0.01 * np.random.default_rng(1).normal(size=(64, 64))
+    _err(["edge", str(_write(tmp_path, "noise", noise, "npy"))], "no edge found")
+    flat = _write(tmp_path, "flat", np.full((64, 64), 0.3), "npy")
+    _err(["edge", str(flat)], "flat")
+    nan = _edge_image()
+    nan[10, 10] = np.nan
+    _err(["edge", str(_write(tmp_path, "nan", nan, "npy"))], "NaN")
+    jpg = tmp_path / "x.jpg"
+    jpg.write_bytes(b"not an image")
+    _err(["edge", str(jpg)], "unsupported suffix")
+    bars = _write(tmp_path, "bars", _bars_image(), "npy")
+    _err(["bars", str(bars), "--periods-px", "8,4"], "--group-roi")
+    _err(["bars", str(bars), "--periods-px", "8,x"], "--periods-px")
+    _err(["wedge", str(bars)], "--line-width-start-px")
+    _err(["star", str(bars)], "--cycles")  # typer's own usage error, also status 2
+    _err(["star", str(flat), "--cycles", "32"], "flat")
+    bad = tmp_path / "truth.json"
+    bad.write_text("{not json")
+    _err(["auto", str(edge), "--truth", str(bad)], "not JSON")
+    _err(["auto", str(edge), "--truth", str(tmp_path / "none.json")], "no such file")
