@@ -191,24 +191,16 @@ def main() -> None:
     rel = float(np.max(np.abs(ei - ri) / np.abs(ri)))
     print(f"\n(a) {n} x {n} input ({mpx:.1f} Mpx) -> {e.shape[0]} x {e.shape[1]} output")
     print(f"  {'':28s} {'wall s':>8s} {'Mpx/s':>8s} {'peak RSS MiB':>13s}")
-    print(
-        f"  {'engine (Simulator.run)':28s} {eng['wall_s']:8.2f} {mpx / eng['wall_s']:8.1f} {eng['peak_rss_mib']:13.0f}"
-    )
-    print(
-        f"  {'reference (full-frame FFT)':28s} {ref['wall_s']:8.2f} {mpx / ref['wall_s']:8.1f} {ref['peak_rss_mib']:13.0f}"
-    )
+    for label, res in (("engine (Simulator.run)", eng), ("reference (full-frame FFT)", ref)):
+        print(f"  {label:28s} {res['wall_s']:8.2f} {mpx / res['wall_s']:8.1f} {res['peak_rss_mib']:13.0f}")
     print(f"  speed ratio reference / engine: {ref['wall_s'] / eng['wall_s']:.2f}x   (target >= 3x)")
     print(f"  engine tiles: {eng['tiles']}, decimation D = {eng['D']}")
-    print(
-        f"  {'engine, border=periodic':28s} {per['wall_s']:8.2f} {mpx / per['wall_s']:8.1f} {per['peak_rss_mib']:13.0f}"
-    )
-    print(
-        f"  max relative difference engine(periodic) vs reference, all pixels: {rel_all:.2e}   (target <= 1e-4)"
-    )
+    label = "engine, border=periodic"
+    print(f"  {label:28s} {per['wall_s']:8.2f} {mpx / per['wall_s']:8.1f} {per['peak_rss_mib']:13.0f}")
+    print(f"  max relative difference engine(periodic) vs reference, all px: {rel_all:.2e}  (target <= 1e-4)")
     print(f"  max relative difference engine(mirror) vs reference, >= {m} px in: {rel:.2e}   (border rule)")
-    print(
-        f"  peak RSS target for the engine: <= 1024 MiB -> {'ok' if eng['peak_rss_mib'] <= 1024 else 'EXCEEDED'}"
-    )
+    ok = "ok" if eng["peak_rss_mib"] <= 1024 else "EXCEEDED"
+    print(f"  peak RSS target for the engine: <= 1024 MiB -> {ok}")
 
     if a.gigapixel:
         g = a.giga_size
@@ -216,12 +208,10 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as d:
             res = run_child("gigapixel", g, os.path.join(d, "giga.npy"))
             img = np.load(os.path.join(d, "giga.npy"))
-        print(
-            f"\n(b) {g} x {g} procedural input ({gpx / 1e3:.2f} Gpx, rendered per tile) -> {img.shape[0]} x {img.shape[1]}"
-        )
-        print(
-            f"  wall {res['wall_s']:.1f} s, {gpx / res['wall_s']:.1f} Mpx/s, {res['tiles']} tiles, peak RSS {res['peak_rss_mib']:.0f} MiB"
-        )
+        print(f"\n(b) {g} x {g} procedural input ({gpx / 1e3:.2f} Gpx, rendered per tile)", end="")
+        print(f" -> {img.shape[0]} x {img.shape[1]}")
+        print(f"  wall {res['wall_s']:.1f} s, {gpx / res['wall_s']:.1f} Mpx/s, {res['tiles']} tiles", end="")
+        print(f", peak RSS {res['peak_rss_mib']:.0f} MiB")
         print(f"  peak RSS target: <= 2048 MiB -> {'ok' if res['peak_rss_mib'] <= 2048 else 'EXCEEDED'}")
         print(f"  output finite: {bool(np.all(np.isfinite(img)))}, range [{img.min():.3f}, {img.max():.3f}]")
 

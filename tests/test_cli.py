@@ -15,7 +15,9 @@ def test_budget_json_schema_and_values(ankarasat3):
     r = runner.invoke(app, ["budget", "--preset", "ankarasat3", "--freqs", "10,42.5,85.034", "--json"])
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
-    assert d["derived"]["gsd_act_m"] == pytest.approx(0.49) and d["derived"]["gsd_alt_m"] == pytest.approx(0.49)
+    assert d["derived"]["gsd_act_m"] == pytest.approx(0.49) and d["derived"]["gsd_alt_m"] == pytest.approx(
+        0.49
+    )
     assert d["derived"]["nyquist_cy_per_mm"] == pytest.approx(85.034, abs=1e-3)
     assert d["frequencies_cy_per_mm"] == [10.0, 42.5, 85.034]
     for direction in ("alt", "act"):
@@ -32,7 +34,13 @@ def test_budget_text_and_outputs(tmp_path):
     assert r.exit_code == 0, r.output
     assert "MTF at Nyquist: ALT 0.12" in r.stdout
     names = {p.name for p in (tmp_path / "out").iterdir()}
-    assert {"budget.json", "mtf_alt.csv", "mtf_act.csv", "fig3a_mtf_budget.png", "fig3b_square_wave.png"} <= names
+    assert {
+        "budget.json",
+        "mtf_alt.csv",
+        "mtf_act.csv",
+        "fig3a_mtf_budget.png",
+        "fig3b_square_wave.png",
+    } <= names
     assert not any(n.startswith(".") for n in names)  # no temp files left
     png = (tmp_path / "out" / "fig3a_mtf_budget.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
@@ -86,19 +94,36 @@ def test_scene_then_simulate_through_cli(tmp_path):
     from satchain import load_preset
     from satchain.io import read_image
 
-    r = runner.invoke(app, ["scene", "--pixel-m", "0.245", "--window", "0,0,400,300", "-o", str(tmp_path / "s" / "sc.tif")])
+    r = runner.invoke(
+        app, ["scene", "--pixel-m", "0.245", "--window", "0,0,400,300", "-o", str(tmp_path / "s" / "sc.tif")]
+    )
     assert r.exit_code == 0, r.output
     for name in ("sc.tif", "sc.png", "sc.truth.json"):
         assert (tmp_path / "s" / name).exists()
     img, meta = read_image(tmp_path / "s" / "sc.tif")
     assert img.shape == (300, 400) and meta["pixel_m"] == pytest.approx(0.245)
     out = tmp_path / "sim.tif"
-    r = runner.invoke(app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--units", "reflectance", "--no-noise",
-                            "--focal-plane", str(tmp_path / "fp.tif"), "-o", str(out)])
+    r = runner.invoke(
+        app,
+        [
+            "simulate",
+            str(tmp_path / "s" / "sc.tif"),
+            "--units",
+            "reflectance",
+            "--no-noise",
+            "--focal-plane",
+            str(tmp_path / "fp.tif"),
+            "-o",
+            str(out),
+        ],
+    )
     assert r.exit_code == 0, r.output
     sim, meta = read_image(out)
     s = load_preset("ankarasat3")
-    assert sim.shape == (int(300 * 0.245 / s.gsd_alt_m + 1e-9), int(400 * 0.245 / s.gsd_act_m + 1e-9))  # k = 2
+    assert sim.shape == (
+        int(300 * 0.245 / s.gsd_alt_m + 1e-9),
+        int(400 * 0.245 / s.gsd_act_m + 1e-9),
+    )  # k = 2
     assert meta["pixel_m"] == pytest.approx(s.gsd_act_m)
     # reflectance units, no noise: the filtered values stay within the scene's reflectance range
     assert img.min() - 0.02 <= sim.min() and sim.max() <= img.max() + 0.1
@@ -107,7 +132,12 @@ def test_scene_then_simulate_through_cli(tmp_path):
     # DN with noise: integer, within the ADC range, reproducible from the seed
     a, b = tmp_path / "a.tif", tmp_path / "b.tif"
     for p in (a, b):
-        assert runner.invoke(app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--seed", "7", "-o", str(p)]).exit_code == 0
+        assert (
+            runner.invoke(
+                app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--seed", "7", "-o", str(p)]
+            ).exit_code
+            == 0
+        )
     da, db = tifffile.imread(a), tifffile.imread(b)
     assert da.dtype == np.uint16 and da.max() < 2**12
     np.testing.assert_array_equal(da, db)

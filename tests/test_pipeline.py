@@ -60,14 +60,24 @@ def reduced_run(tmp_path_factory):
 def test_run_outputs_complete(reduced_run):
     out, res, stages = reduced_run
     assert stages[0] == "budget" and stages[-1] == "report"
-    for name in ("report.html", "results.json", "manifest.json", "config.toml", "images/simulated.tif",
-                 "images/simulated.png", "images/focal_plane.tif", "images/scene.truth.json",
-                 "figures/fig1_scene.png", "figures/edges_mtf.png", "budget/fig3a_mtf_budget.png"):
+    for name in (
+        "report.html",
+        "results.json",
+        "manifest.json",
+        "config.toml",
+        "images/simulated.tif",
+        "images/simulated.png",
+        "images/focal_plane.tif",
+        "images/scene.truth.json",
+        "figures/fig1_scene.png",
+        "figures/edges_mtf.png",
+        "budget/fig3a_mtf_budget.png",
+    ):
         assert (out / name).is_file(), name
     assert not list(out.parent.glob(".out.*")), "staging directories left behind"
     html = (out / "report.html").read_text()
     assert html.count("data:image/png;base64,") >= 8  # self-contained: every figure embedded
-    assert "src=\"http" not in html and "<script" not in html
+    assert 'src="http' not in html and "<script" not in html
     on_disk = json.loads((out / "results.json").read_text())
     assert on_disk["gsd_m"] == pytest.approx(0.49)
     manifest = json.loads((out / "manifest.json").read_text())

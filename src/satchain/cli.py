@@ -104,7 +104,10 @@ def _print_budget(res: dict[str, Any]) -> None:
     )
     for key in ("radiometry", "quality"):
         if key in res:
-            console.print(f"[bold]{key}[/]: " + ", ".join(f"{k}={_fmt(v)}" for k, v in res[key].items() if not isinstance(v, (list, dict))))
+            console.print(
+                f"[bold]{key}[/]: "
+                + ", ".join(f"{k}={_fmt(v)}" for k, v in res[key].items() if not isinstance(v, (list, dict)))
+            )
 
 
 def _budget(system_obj, freqs: list[float] | None) -> dict[str, Any]:
@@ -118,9 +121,13 @@ def _budget(system_obj, freqs: list[float] | None) -> dict[str, Any]:
 def budget(
     preset: PresetOpt = None,
     system: SystemOpt = None,
-    freqs: Annotated[str | None, typer.Option("--freqs", help="focal-plane frequencies in cy/mm, e.g. 10,42.5,85")] = None,
+    freqs: Annotated[
+        str | None, typer.Option("--freqs", help="focal-plane frequencies in cy/mm, e.g. 10,42.5,85")
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")] = None,
+    out: Annotated[
+        Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")
+    ] = None,
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
     s = _system(preset, system)
@@ -142,8 +149,13 @@ def _progress(description: str):
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     bar = Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-        TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=False,
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err_console,
+        transient=False,
     )
     task = bar.add_task(description, total=None)
 
@@ -157,9 +169,13 @@ def _progress(description: str):
 @_handle_errors
 def scene(
     layout: Annotated[str, typer.Option("--layout", help="'paper' or a scene file (.toml/.json)")] = "paper",
-    pixel_m: Annotated[float | None, typer.Option("--pixel-m", help="ground pixel size, m (default: the layout's)")] = None,
+    pixel_m: Annotated[
+        float | None, typer.Option("--pixel-m", help="ground pixel size, m (default: the layout's)")
+    ] = None,
     window: Annotated[str | None, typer.Option("--window", help="X0,Y0,W,H in pixels (X0 = column)")] = None,
-    out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF; a .png preview and .truth.json go beside it")] = ...,
+    out: Annotated[
+        Path, typer.Option("-o", "--out", help="output TIFF; a .png preview and .truth.json go beside it")
+    ] = ...,
 ) -> None:
     """Render a synthetic ground-truth scene exactly (area coverage), tile by tile."""
     from satchain.scene import parse_cli_window, render_scene_to_file
@@ -190,15 +206,23 @@ def _ground_truth(input_: str, scene_pixel_m: float | None):
 @app.command()
 @_handle_errors
 def simulate(
-    input_: Annotated[str, typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY)")],
-    scene_pixel_m: Annotated[float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")] = None,
+    input_: Annotated[
+        str, typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY)")
+    ],
+    scene_pixel_m: Annotated[
+        float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")
+    ] = None,
     preset: PresetOpt = None,
     system: SystemOpt = None,
     units_: Annotated[str, typer.Option("--units", help="dn | electrons | radiance | reflectance")] = "dn",
     no_noise: Annotated[bool, typer.Option("--no-noise", help="no noise (deterministic)")] = False,
     seed: Annotated[int, typer.Option("--seed", help="noise seed")] = 0,
-    focal_plane: Annotated[Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")] = None,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address, or 'local'")] = None,
+    focal_plane: Annotated[
+        Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")
+    ] = None,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler address, or 'local'")
+    ] = None,
     out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF")] = ...,
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size)."""
@@ -226,16 +250,30 @@ def simulate(
         else:
             coarse = sim.decimate(src, progress=update)
     img = sim.run(src, sensor=sensor, units=units_, noise=not no_noise, seed=seed, coarse=coarse)
-    dtype = np.uint16 if units_ == "dn" and s.detector.bit_depth and s.detector.bit_depth <= 16 else np.float32
-    meta = {"units": units_, "system": s.name, "seed": seed, "noise": not no_noise,
-            "gsd_act_m": s.gsd_act_m, "gsd_alt_m": s.gsd_alt_m, "input": str(input_), "input_pixel_m": src.pixel_m}
+    dtype = (
+        np.uint16 if units_ == "dn" and s.detector.bit_depth and s.detector.bit_depth <= 16 else np.float32
+    )
+    meta = {
+        "units": units_,
+        "system": s.name,
+        "seed": seed,
+        "noise": not no_noise,
+        "gsd_act_m": s.gsd_act_m,
+        "gsd_alt_m": s.gsd_alt_m,
+        "input": str(input_),
+        "input_pixel_m": src.pixel_m,
+    }
     io.write_tiff(out, img.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
     io.write_png(out.with_suffix(".png"), io.preview_uint8(img), pixel_m=s.gsd_act_m)
     console.print(f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}")
     if focal_plane is not None:
         fp = sim.focal_plane(coarse)
-        io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=src.pixel_m * sim.D,
-                      metadata={"units": "input (reflectance) filtered by the optics", "system": s.name})
+        io.write_tiff(
+            focal_plane,
+            fp.astype(np.float32),
+            pixel_m=src.pixel_m * sim.D,
+            metadata={"units": "input (reflectance) filtered by the optics", "system": s.name},
+        )
         console.print(f"wrote {focal_plane} (focal-plane image, {src.pixel_m * sim.D:g} m samples)")
 
 
@@ -243,9 +281,15 @@ def simulate(
 @_handle_errors
 def run(
     preset: PresetOpt = None,
-    config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")] = None,
-    out: Annotated[Path, typer.Option("-o", "--out", help="output directory (replaced atomically)")] = Path("satchain-run"),
-    print_config: Annotated[bool, typer.Option("--print-config", help="print the default configuration and exit")] = False,
+    config: Annotated[
+        Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")
+    ] = None,
+    out: Annotated[Path, typer.Option("-o", "--out", help="output directory (replaced atomically)")] = Path(
+        "satchain-run"
+    ),
+    print_config: Annotated[
+        bool, typer.Option("--print-config", help="print the default configuration and exit")
+    ] = False,
 ) -> None:
     """The main job: predict, simulate, measure, compare and report (report.html, results.json)."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -259,8 +303,13 @@ def run(
     cfg = load_run_config(config)
     if preset is not None:
         cfg = RunConfig.from_dict({**cfg.to_dict(), "system": {"preset": preset}}, base_dir=cfg.base_dir)
-    bar = Progress(TextColumn("[bold]{task.description:<9}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-                   TimeElapsedColumn(), console=err_console)
+    bar = Progress(
+        TextColumn("[bold]{task.description:<9}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+        console=err_console,
+    )
     tasks = {name: bar.add_task(name, total=None, start=False) for name in STAGES}
 
     def update(stage: str, done: int, total: int) -> None:
@@ -274,8 +323,13 @@ def run(
     for c in ("figure of merit", "measured", "predicted", "tolerance", "result"):
         t.add_column(c, justify="left" if c == "figure of merit" else "right")
     for r in res["summary"]:
-        t.add_row(r["figure"], _fmt(r["measured"]), _fmt(r["predicted"]), r["tolerance"],
-                  "[green]pass[/]" if r["pass"] else "[red]FAIL[/]")
+        t.add_row(
+            r["figure"],
+            _fmt(r["measured"]),
+            _fmt(r["predicted"]),
+            r["tolerance"],
+            "[green]pass[/]" if r["pass"] else "[red]FAIL[/]",
+        )
     console.print(t)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
 

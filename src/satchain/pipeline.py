@@ -79,7 +79,9 @@ def _stage_scene(ctx: RunContext, progress: Progress) -> None:
 
     write_text(ctx.out / "images" / "scene.truth.json", json.dumps(ctx.truth, indent=1))
     overview = ctx.scene.render(pixel_m=sc.overview_pixel_m)
-    run_figures.plot_scene_overview(overview, ctx.truth, sc.overview_pixel_m, ctx.out / "figures" / "fig1_scene.png")
+    run_figures.plot_scene_overview(
+        overview, ctx.truth, sc.overview_pixel_m, ctx.out / "figures" / "fig1_scene.png"
+    )
     progress("scene", 1, 1)
 
 
@@ -92,7 +94,9 @@ def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     c = ctx.config.simulation
     src = SceneSource(ctx.scene, pixel_m=ctx.config.scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
-    ctx.simulator = sim = Simulator(ctx.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=ctx.otf)
+    ctx.simulator = sim = Simulator(
+        ctx.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=ctx.otf
+    )
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
     ctx.sensor = sensor_from_system(ctx.system)
     ctx.image = sim.run(src, sensor=ctx.sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
@@ -103,8 +107,12 @@ def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     io.write_tiff(d / "simulated.tif", ctx.image.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
     io.write_png(d / "simulated.png", io.preview_uint8(ctx.image), pixel_m=s.gsd_act_m)
     fp_pixel = src.pixel_m * sim.D
-    io.write_tiff(d / "focal_plane.tif", ctx.focal_plane.astype(np.float32), pixel_m=fp_pixel,
-                  metadata={"units": "scene reflectance filtered by the optics and motion", "system": s.name})
+    io.write_tiff(
+        d / "focal_plane.tif",
+        ctx.focal_plane.astype(np.float32),
+        pixel_m=fp_pixel,
+        metadata={"units": "scene reflectance filtered by the optics and motion", "system": s.name},
+    )
     io.write_png(d / "focal_plane.png", io.preview_uint8(ctx.focal_plane), pixel_m=fp_pixel)
     progress("simulate", len(sim.tiles) + 1, len(sim.tiles) + 1)
 
@@ -154,8 +162,12 @@ def _manifest(ctx: RunContext) -> dict[str, Any]:
         "config": ctx.config.to_dict(),
         "system": ctx.system.to_dict() if ctx.system is not None else None,
         "seed": ctx.config.simulation.seed,
-        "versions": {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
-                     "matplotlib": matplotlib.__version__},
+        "versions": {
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "matplotlib": matplotlib.__version__,
+        },
         "platform": platform.platform(),
         "timings_s": ctx.timings_s,
         "reproduce": "satchain run --config config.toml -o DIR  (config.toml is beside this manifest)",
@@ -170,7 +182,9 @@ def _check_out_dir(out: Path) -> None:
         )
 
 
-def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+def run_pipeline(
+    config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None
+) -> dict[str, Any]:
     """Run every stage into ``out_dir`` (atomically replaced); return ``results.json``'s content."""
     out = Path(out_dir).resolve()
     _check_out_dir(out)

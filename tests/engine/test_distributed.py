@@ -20,9 +20,7 @@ from satchain.engine.tiling import Window  # noqa: E402
 from satchain.errors import ConfigError  # noqa: E402
 
 BASE = load_preset("ankarasat3")
-SENSOR = SensorModel(
-    electrons_per_unit=20000.0, offset_e=100.0, dark_e=50.0, read_noise_e=10.0, full_well_e=60000.0
-)
+SENSOR = SensorModel(electrons_per_unit=20000.0, offset_e=100.0, dark_e=50.0, read_noise_e=10.0, full_well_e=60000.0)
 PARAMS = SimParams(max_tile_bytes=12 * 2**20, workers=1)  # many small tiles
 
 
@@ -35,19 +33,13 @@ class Stripes:
     def read(self, window: Window) -> np.ndarray:
         y = np.arange(window.row0, window.row0 + window.height)[:, None]
         x = np.arange(window.col0, window.col0 + window.width)[None, :]
-        return (
-            0.5
-            + 0.2 * np.sin(2 * np.pi * x / 97.0) * np.cos(2 * np.pi * y / 61.0)
-            + 0.1 * (x + 0.6 * y > 700)
-        )
+        return 0.5 + 0.2 * np.sin(2 * np.pi * x / 97.0) * np.cos(2 * np.pi * y / 61.0) + 0.1 * (x + 0.6 * y > 700)
 
 
 @pytest.fixture(scope="module")
 def client():
     with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster,
         distributed.Client(cluster) as c,
     ):
         yield c
@@ -104,3 +96,16 @@ def test_errors_name_the_parameter(tmp_path):
         simulate_distributed(img, BASE, pixel_m=0.035, units="dn")
     with pytest.raises(ConfigError, match="zarr_chunk_px = 0"):
         write_zarr(img, tmp_path / "x.zarr", chunk_px=0)
+
+
+def test_simulator_and_sources_survive_pickling_for_process_workers():
+    """Process-based workers receive the simulator and the source by (cloud)pickle."""
+    cloudpickle = pytest.importorskip("cloudpickle")
+    img = make_scene((700, 630), np.random.default_rng(9), rectangles=3)
+    src = ArraySource(img, pixel_m=0.035)
+    sim = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape, params=PARAMS)
+    sim2, src2 = cloudpickle.loads(cloudpickle.dumps((sim, src)))
+    tile = sim.tiles[len(sim.tiles) // 2]
+    np.testing.assert_array_equal(sim2.decimate_tile(src2, tile), sim.decimate_tile(src, tile))
+    stripes = cloudpickle.loads(cloudpickle.dumps(Stripes()))
+    np.testing.assert_array_equal(stripes.read(Window(3, 4, 5, 6)), Stripes().read(Window(3, 4, 5, 6)))

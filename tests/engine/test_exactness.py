@@ -55,9 +55,7 @@ def _otf(name: str) -> SystemOTF:
 
 
 def _run(system, pixel_m, image, *, otf=None, **params):
-    sim = Simulator(
-        system, input_pixel_m=pixel_m, input_shape=image.shape, params=SimParams(**params), otf=otf
-    )
+    sim = Simulator(system, input_pixel_m=pixel_m, input_shape=image.shape, params=SimParams(**params), otf=otf)
     return sim, sim.run(ArraySource(image, pixel_m=pixel_m))
 
 
@@ -80,9 +78,7 @@ def test_periodic_equals_full_frame_reference(name, system, pixel_m, shape, phas
 
 def test_output_shape_counts_whole_pixels():
     # 1400 input px at k = 14 -> 100 whole output pixels; a 3.3 px phase leaves room for 99
-    sim = Simulator(
-        BASE, input_pixel_m=0.035, input_shape=(1400, 1400), params=SimParams(phase_px=(3.3, 0.0))
-    )
+    sim = Simulator(BASE, input_pixel_m=0.035, input_shape=(1400, 1400), params=SimParams(phase_px=(3.3, 0.0)))
     assert sim.output_shape == (99, 100)
 
 
@@ -97,9 +93,7 @@ def test_symmetric_border_interior_equals_padded_reference(pixel_m, shape, phase
     img = make_scene(shape, np.random.default_rng(7))
     sim, out = _run(BASE, pixel_m, img, phase_px=phase)
     pad = tuple(int(np.ceil(150 * k)) for k in sim.k)
-    ref = reference_image(
-        img, BASE, pixel_m, output_shape=out.shape, phase_px=phase, pad_px=pad, pad_mode="symmetric"
-    )
+    ref = reference_image(img, BASE, pixel_m, output_shape=out.shape, phase_px=phase, pad_px=pad, pad_mode="symmetric")
     m = 40
     assert out.shape[0] > 2 * m and out.shape[1] > 2 * m
     np.testing.assert_allclose(out[m:-m, m:-m], ref[m:-m, m:-m], rtol=RTOL, atol=0)
@@ -127,16 +121,12 @@ def test_border_rule_holds_up_to_the_edge(border, shape, pad_mode):
     img = make_scene(shape, np.random.default_rng(11))
     sim, out = _run(BASE, 0.035, img, border=border, border_value=0.5)
     pad = (0, 0) if border == "periodic" else tuple(int(np.ceil(150 * k)) for k in sim.k)
-    ref = reference_image(
-        img, BASE, 0.035, output_shape=out.shape, pad_px=pad, pad_mode=pad_mode, pad_value=0.5
-    )
+    ref = reference_image(img, BASE, 0.035, output_shape=out.shape, pad_px=pad, pad_mode=pad_mode, pad_value=0.5)
     np.testing.assert_allclose(out, ref, rtol=RTOL, atol=0)
 
 
 @pytest.mark.parametrize("border", ["symmetric", "periodic", "constant"])
-@pytest.mark.parametrize(
-    ("pixel_m", "phase"), [(0.035, (0.0, 0.0)), (0.04, (2.2, 0.9))], ids=["k14", "k12.25"]
-)
+@pytest.mark.parametrize(("pixel_m", "phase"), [(0.035, (0.0, 0.0)), (0.04, (2.2, 0.9))], ids=["k14", "k12.25"])
 def test_flat_field_in_flat_field_out(border, pixel_m, phase):
     img = np.full((700, 630), 0.37)
     sim, out = _run(BASE, pixel_m, img, border=border, border_value=0.37, phase_px=phase)

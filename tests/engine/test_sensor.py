@@ -12,9 +12,7 @@ from satchain.engine.sources import ArraySource
 from satchain.errors import ConfigError
 
 BASE = load_preset("ankarasat3")
-SENSOR = SensorModel(
-    electrons_per_unit=20000.0, offset_e=100.0, dark_e=50.0, read_noise_e=10.0, full_well_e=60000.0
-)
+SENSOR = SensorModel(electrons_per_unit=20000.0, offset_e=100.0, dark_e=50.0, read_noise_e=10.0, full_well_e=60000.0)
 
 
 def _flat(value=0.5, shape=(512, 512)):
@@ -85,9 +83,7 @@ def test_simulated_noise_reproducible_and_nearly_tiling_independent():
     sim = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape)
     a, a2 = sim.run(src, **kw), sim.run(src, **kw)
     np.testing.assert_array_equal(a, a2)
-    tiled = Simulator(
-        BASE, input_pixel_m=0.035, input_shape=img.shape, params=SimParams(max_tile_bytes=12 * 2**20)
-    )
+    tiled = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape, params=SimParams(max_tile_bytes=12 * 2**20))
     b = tiled.run(src, **kw)
     assert len(tiled.tiles) > 1
     differ = a != b
@@ -106,9 +102,7 @@ def test_full_well_clipping():
     ("full_well_e", "bits"), [(60000.0, 12), (10000.0, 12), (1e5, 16), (30000.0, 10), (45000.0, 14)]
 )
 def test_dn_quantisation_range(full_well_e, bits):
-    sensor = SensorModel(
-        electrons_per_unit=full_well_e, read_noise_e=20.0, full_well_e=full_well_e, bit_depth=bits
-    )
+    sensor = SensorModel(electrons_per_unit=full_well_e, read_noise_e=20.0, full_well_e=full_well_e, bit_depth=bits)
     x = np.linspace(-0.01, 1.2, 64 * 64).reshape(64, 64)  # from below zero to beyond saturation
     dn = sensor.convert(np.clip(x, 0, None), origin=(0, 0), units="dn", noise=True, seed=0)
     assert np.all(dn == np.floor(dn))
@@ -123,9 +117,7 @@ def test_reflectance_round_trip_without_noise():
     x = np.random.default_rng(1).uniform(0, 1, (16, 16))
     np.testing.assert_allclose(SENSOR.convert(x, origin=(0, 0), units="reflectance", noise=False), x)
     sensor = SensorModel(radiance_per_unit=80.0, radiance_offset=5.0)
-    np.testing.assert_allclose(
-        sensor.convert(x, origin=(0, 0), units="radiance", noise=False), 5.0 + 80.0 * x
-    )
+    np.testing.assert_allclose(sensor.convert(x, origin=(0, 0), units="radiance", noise=False), 5.0 + 80.0 * x)
 
 
 def test_errors_name_the_parameter():

@@ -45,9 +45,7 @@ def test_tiled_equals_untiled(rows, cols, tile_mib, pixel_m, border):
 
 def test_progress_reports_every_tile():
     img = make_scene((700, 700), np.random.default_rng(6), rectangles=3)
-    sim = Simulator(
-        BASE, input_pixel_m=0.035, input_shape=img.shape, params=SimParams(max_tile_bytes=12 * MiB)
-    )
+    sim = Simulator(BASE, input_pixel_m=0.035, input_shape=img.shape, params=SimParams(max_tile_bytes=12 * MiB))
     calls = []
     sim.run(ArraySource(img, pixel_m=0.035), progress=lambda done, total: calls.append((done, total)))
     n = len(sim.tiles)

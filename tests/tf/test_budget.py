@@ -31,12 +31,25 @@ def test_system_is_product_of_named_components(ankarasat3):
 def test_optional_components_appear_only_when_present(ankarasat3):
     assert set(SystemOTF(ankarasat3).component_names) == {"diffraction", "detector", "smear"}
     s = ankarasat3.replace(
-        {"motion.jitter_rms_px": 0.2, "detector.charge_diffusion_length_m": 2e-6, "detector.tdi_stages": 16,
-         "detector.tdi_sync_error": 0.01, "motion.smear_px": 0.0}
+        {
+            "motion.jitter_rms_px": 0.2,
+            "detector.charge_diffusion_length_m": 2e-6,
+            "detector.tdi_stages": 16,
+            "detector.tdi_sync_error": 0.01,
+            "motion.smear_px": 0.0,
+        }
     )
-    assert set(SystemOTF(s).component_names) == {"diffraction", "detector", "jitter", "charge_diffusion", "tdi_sync"}
+    assert set(SystemOTF(s).component_names) == {
+        "diffraction",
+        "detector",
+        "jitter",
+        "charge_diffusion",
+        "tdi_sync",
+    }
     b = mtf_budget(s, [40.0, 85.0])
-    prod = np.prod([b.alt[k] for k in ("diffraction", "detector", "jitter", "charge_diffusion", "tdi_sync")], axis=0)
+    prod = np.prod(
+        [b.alt[k] for k in ("diffraction", "detector", "jitter", "charge_diffusion", "tdi_sync")], axis=0
+    )
     np.testing.assert_allclose(b.alt["system"], prod)
     # tdi sync acts along-track only
     np.testing.assert_allclose(b.act["tdi_sync"], 1.0)
@@ -97,9 +110,16 @@ def test_negative_frequency_rejected(ankarasat3):
 
 def test_aberrated_system_uses_pupil_fft_and_lowers_mtf():
     s = ImagingSystem.from_dict(
-        {"orbit": {"altitude_m": 5e5}, "detector": {"pitch_m": 5e-6},
-         "optics": {"aperture_diameter_m": 0.5, "f_number": 10, "wavelengths_m": [6e-7],
-                    "zernike_rms_waves": {"4": 0.1}}}
+        {
+            "orbit": {"altitude_m": 5e5},
+            "detector": {"pitch_m": 5e-6},
+            "optics": {
+                "aperture_diameter_m": 0.5,
+                "f_number": 10,
+                "wavelengths_m": [6e-7],
+                "zernike_rms_waves": {"4": 0.1},
+            },
+        }
     )
     clean = s.replace({"optics.zernike_rms_waves": {}})
     f = [30.0, 60.0, 100.0]

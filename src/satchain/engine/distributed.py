@@ -72,7 +72,8 @@ def _client_for(scheduler) -> tuple[Any, bool]:
     if hasattr(scheduler, "scatter") and hasattr(scheduler, "submit"):
         return scheduler, False
     raise ConfigError(
-        f"scheduler = {type(scheduler).__name__}: must be None, a scheduler address string or a distributed.Client"
+        f"scheduler = {type(scheduler).__name__}: must be None, a scheduler address string or a "
+        "distributed.Client"
     )
 
 

@@ -122,17 +122,32 @@ class Simulator:
         self.system, self.params, self.input_pixel_m = system, params, a
         self.input_shape = (int(input_shape[0]), int(input_shape[1]))
         det = system.detector
-        self.ys = AxisSampling(system.gsd_alt_m / a, det.active_width_y_m / det.pitch_y_m, params.phase_px[0], self.input_shape[0])
-        self.xs = AxisSampling(system.gsd_act_m / a, det.active_width_x_m / det.pitch_x_m, params.phase_px[1], self.input_shape[1])
+        self.ys = AxisSampling(
+            system.gsd_alt_m / a,
+            det.active_width_y_m / det.pitch_y_m,
+            params.phase_px[0],
+            self.input_shape[0],
+        )
+        self.xs = AxisSampling(
+            system.gsd_act_m / a,
+            det.active_width_x_m / det.pitch_x_m,
+            params.phase_px[1],
+            self.input_shape[1],
+        )
         if self.ys.n_output < 1 or self.xs.n_output < 1:
             raise ConfigError(
                 f"input_shape = {self.input_shape!r} at input_pixel_m = {a!r}: smaller than one detector pixel "
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
-        self.to_cy_per_mm = float(
-            units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
-        ) / a  # cycles per input pixel -> focal-plane cy/mm
+        self.to_cy_per_mm = (
+            float(
+                units.ground_to_focal_cy_per_mm(
+                    1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
+                )
+            )
+            / a
+        )  # cycles per input pixel -> focal-plane cy/mm
         self.f_cut = self.otf.cutoff_cy_per_mm / self.to_cy_per_mm  # cycles per input pixel
         self._plan_decimation()
         self._plan_frame()
@@ -157,7 +172,9 @@ class Simulator:
                 f"needs at least {_TILE_BYTES_PER_PX * (16 * self.D + 2 * self.margin_fine) ** 2 / 2**20:.0f} MiB"
             )
         self.tile_coarse = min(tile_coarse, max(self.n_coarse))
-        self.tiles: list[Tile] = plan_tiles(self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine)
+        self.tiles: list[Tile] = plan_tiles(
+            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine
+        )
 
     def _plan_frame(self) -> None:
         """Coarse frame: the coarse scene plus an extension on each side; with an integer ratio k the frame
@@ -167,7 +184,10 @@ class Simulator:
         ext, length = [], []
         if p.border == "periodic":  # the coarse scene is itself the period: no extension
             self.frame_ext, self.frame_shape = (0, 0), self.n_coarse
-            self.k_int = tuple(ki if ki and (nc * D) % ki == 0 else None for ki, nc in zip(self.k_int, self.n_coarse, strict=True))
+            self.k_int = tuple(
+                ki if ki and (nc * D) % ki == 0 else None
+                for ki, nc in zip(self.k_int, self.n_coarse, strict=True)
+            )
             return
         for ax, (kk, ki, nc) in enumerate(zip(self.k, self.k_int, self.n_coarse, strict=True)):
             e = int(math.ceil(p.far_margin_px * kk / D))
@@ -199,7 +219,9 @@ class Simulator:
         """The coarse samples of one tile (its margins read through the border rule)."""
         p = self.params
         data = read_with_border(source, tile.input, rule=p.border, value=p.border_value)
-        out = spectral.decimate_tile(data.astype(np.float32), D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
+        out = spectral.decimate_tile(
+            data.astype(np.float32), D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers
+        )
         m = self.margin_fine // self.D
         return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
@@ -225,7 +247,9 @@ class Simulator:
         kw = {"constant_values": p.border_value} if mode == "constant" else {}
         frame = np.pad(coarse, pad, mode=mode, **kw) if mode != "reflect" else _reflect_pad(coarse, pad)
         f_band = self.f_cut * D  # cycles per coarse sample
-        spec = spectral.tile_band_spectrum(frame, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=p.workers)
+        spec = spectral.tile_band_spectrum(
+            frame, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=p.workers
+        )
         del frame
         ny_f, nx_f = ly * D, lx * D  # frame length in input pixels
         fy = spec.my / ny_f * self.to_cy_per_mm
@@ -233,14 +257,25 @@ class Simulator:
         vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
         scale = 1.0 / (ly * lx)
         if all(self.k_int):
-            ay = spectral.footprint_transfer(spec.my, centre=self.ys.centres(0, 1)[0], width_px=self.ys.width_px, n_total=ny_f)
-            ax = spectral.footprint_transfer(spec.mx, centre=self.xs.centres(0, 1)[0], width_px=self.xs.width_px, n_total=nx_f)
+            ay = spectral.footprint_transfer(
+                spec.my, centre=self.ys.centres(0, 1)[0], width_px=self.ys.width_px, n_total=ny_f
+            )
+            ax = spectral.footprint_transfer(
+                spec.mx, centre=self.xs.centres(0, 1)[0], width_px=self.xs.width_px, n_total=nx_f
+            )
             n_out = (ny_f // self.k_int[0], nx_f // self.k_int[1])
-            img = spectral.fold_onto_grid(vals * ay[:, None] * ax[None, :], spec.my, spec.mx, spec.cx, n_out) * scale
+            img = (
+                spectral.fold_onto_grid(vals * ay[:, None] * ax[None, :], spec.my, spec.mx, spec.cx, n_out)
+                * scale
+            )
             oy, ox = (ey * D) // self.k_int[0], (ex * D) // self.k_int[1]
             return img[oy : oy + self.output_shape[0], ox : ox + self.output_shape[1]]
-        my = spectral.sampling_matrix(self.ys.centres(0, self.output_shape[0]) + ey * D, self.ys.width_px, 0, ny_f, spec.my)
-        mx = spectral.sampling_matrix(self.xs.centres(0, self.output_shape[1]) + ex * D, self.xs.width_px, 0, nx_f, spec.mx)
+        my = spectral.sampling_matrix(
+            self.ys.centres(0, self.output_shape[0]) + ey * D, self.ys.width_px, 0, ny_f, spec.my
+        )
+        mx = spectral.sampling_matrix(
+            self.xs.centres(0, self.output_shape[1]) + ex * D, self.xs.width_px, 0, nx_f, spec.mx
+        )
         return np.real(my @ ((vals * spec.cx[None, :]) @ mx.T)) * scale
 
     def focal_plane(self, coarse: np.ndarray) -> np.ndarray:
@@ -253,7 +288,9 @@ class Simulator:
         f = sfft.rfft2(coarse, workers=self.params.workers)
         fy = np.fft.fftfreq(ny)[:, None] / self.D * self.to_cy_per_mm
         fx = np.fft.rfftfreq(nx)[None, :] / self.D * self.to_cy_per_mm
-        return sfft.irfft2(f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers)
+        return sfft.irfft2(
+            f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers
+        )
 
     def run(
         self,
@@ -270,12 +307,18 @@ class Simulator:
         already computed by :meth:`decimate` (e.g. to also form :meth:`focal_plane` from it)."""
         check_choice("units", units, OUTPUT_UNITS)
         if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
-            raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
+            raise ConfigError(
+                f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that"
+            )
         if tuple(source.shape_px) != self.input_shape:
-            raise ConfigError(f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}")
+            raise ConfigError(
+                f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}"
+            )
         img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
         if sensor is not None:
-            img = sensor.convert(img, origin=(0, 0), units=units, noise=noise, seed=seed, block_px=self.params.noise_block_px)
+            img = sensor.convert(
+                img, origin=(0, 0), units=units, noise=noise, seed=seed, block_px=self.params.noise_block_px
+            )
         return img
 
 

@@ -73,7 +73,9 @@ def tile_band_spectrum(tile: np.ndarray, *, by: int, bx: int, workers: int = 1) 
     x = sfft.rfft(tile, axis=1, workers=workers)[:, : bx + 1]
     y = sfft.fft(x, axis=0, workers=workers, overwrite_x=True)
     if 2 * by + 1 >= ny:
-        return BandSpectrum(y, np.fft.fftfreq(ny, 1.0 / ny).round().astype(np.int64), np.arange(bx + 1), (ny, nx))
+        return BandSpectrum(
+            y, np.fft.fftfreq(ny, 1.0 / ny).round().astype(np.int64), np.arange(bx + 1), (ny, nx)
+        )
     my = np.concatenate([np.arange(by + 1), np.arange(-by, 0)])
     vals = np.concatenate([y[: by + 1], y[ny - by :]], axis=0)
     return BandSpectrum(vals, my, np.arange(bx + 1), (ny, nx))
@@ -105,7 +107,9 @@ def footprint_transfer(m: np.ndarray, *, centre: float, width_px: float, n_total
     return ph @ w[0]
 
 
-def fold_onto_grid(values: np.ndarray, my: np.ndarray, mx: np.ndarray, cx: np.ndarray, n_out: tuple[int, int]) -> np.ndarray:
+def fold_onto_grid(
+    values: np.ndarray, my: np.ndarray, mx: np.ndarray, cx: np.ndarray, n_out: tuple[int, int]
+) -> np.ndarray:
     """Sample a band-limited real signal on an output grid that divides the frame: fold the (Hermitian-half)
     spectrum onto the output DFT grid and inverse-transform. ``values`` must already contain the phase of
     the output grid's first sample; returns ``Re(sum values e^{2 pi i (my i / Ny + mx j / Nx)})``."""

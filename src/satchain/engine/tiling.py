@@ -148,7 +148,9 @@ def plan_tiles(n_coarse: tuple[int, int], *, D: int, tile_coarse: int, margin_px
                 Tile(
                     index=(ti, tj),
                     coarse=Window(j0, i0, h, w),
-                    input=Window(D * j0 - margin_px, D * i0 - margin_px, D * h + 2 * margin_px, D * w + 2 * margin_px),
+                    input=Window(
+                        D * j0 - margin_px, D * i0 - margin_px, D * h + 2 * margin_px, D * w + 2 * margin_px
+                    ),
                 )
             )
     return tiles

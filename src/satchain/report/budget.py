@@ -42,14 +42,18 @@ def _pitch(system: ImagingSystem, d: str) -> float:
     return system.detector.pitch_y_m if d == "alt" else system.detector.pitch_x_m
 
 
-def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None) -> dict[str, Any]:
+def budget_results(
+    system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None
+) -> dict[str, Any]:
     """Derived quantities, MTF per component, CTF (Coltman and the paper's synthesis), MTF at Nyquist, MTFA."""
     otf = SystemOTF(system) if otf is None else otf
     b = mtf_budget(system, f_cy_per_mm, otf=otf)
     f = b.f_cy_per_mm
     out: dict[str, Any] = {"system": system.name, "derived": system.derived()}
     out.update(b.to_dict())
-    out["frequencies_cy_per_px"] = {d: units.cy_per_mm_to_cy_per_px(f, pitch_m=_pitch(system, d)).tolist() for d in DIRECTIONS}
+    out["frequencies_cy_per_px"] = {
+        d: units.cy_per_mm_to_cy_per_px(f, pitch_m=_pitch(system, d)).tolist() for d in DIRECTIONS
+    }
     out["frequencies_cy_per_m_ground"] = units.focal_to_ground_cy_per_m(
         f, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
     ).tolist()
@@ -79,11 +83,17 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
     return out
 
 
-def square_wave_figure_data(system: ImagingSystem, *, period_m: float = FIG3B_PERIOD_M, otf: SystemOTF | None = None):
+def square_wave_figure_data(
+    system: ImagingSystem, *, period_m: float = FIG3B_PERIOD_M, otf: SystemOTF | None = None
+):
     """Positions (ground m), input and ALT-degraded truncated square-wave series for Figure 3(b)."""
     otf = SystemOTF(system) if otf is None else otf
     x = np.linspace(0.0, 2.0 * period_m, 2001)
-    scale = float(units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m))
+    scale = float(
+        units.ground_to_focal_cy_per_mm(
+            1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
+        )
+    )
     square = _ctf.square_wave_series(x, period_m)
     degraded = _ctf.square_wave_series(x, period_m, mtf=DirectionalMTF(otf, "alt"), f_unit_scale=scale)
     return x, np.asarray(square), np.asarray(degraded)
@@ -94,7 +104,14 @@ def _csv_text(results: dict[str, Any], d: str) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
-        ["f_cy_per_mm", "f_cy_per_px", "f_cy_per_m_ground", *[f"mtf_{c}" for c in comps], "ctf_coltman", "ctf_fourier_synthesis"]
+        [
+            "f_cy_per_mm",
+            "f_cy_per_px",
+            "f_cy_per_m_ground",
+            *[f"mtf_{c}" for c in comps],
+            "ctf_coltman",
+            "ctf_fourier_synthesis",
+        ]
     )
     cols = [
         results["frequencies_cy_per_mm"],
@@ -109,7 +126,9 @@ def _csv_text(results: dict[str, Any], d: str) -> str:
     return buf.getvalue()
 
 
-def write_budget_outputs(system: ImagingSystem, results: dict[str, Any], out_dir: str | Path, *, otf=None) -> list[Path]:
+def write_budget_outputs(
+    system: ImagingSystem, results: dict[str, Any], out_dir: str | Path, *, otf=None
+) -> list[Path]:
     """Write JSON, CSV tables and the Figure 3(a)/(b) plots into ``out_dir``; return the paths written."""
     from satchain.report import figures
     from satchain.report._save import write_text

@@ -31,10 +31,20 @@ from satchain.tf.budget import SystemOTF
 #: period shows a (max - min) that depends on its phase to the pixel grid, not only on the system.
 BAR_COMPARE_MAX_CY_PER_PX = 0.45
 
-__all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "AxisMTF", "compare_all", "measured_snr", "predicted_wedge_resolution_m"]
+__all__ = [
+    "BAR_COMPARE_MAX_CY_PER_PX",
+    "AxisMTF",
+    "compare_all",
+    "measured_snr",
+    "predicted_wedge_resolution_m",
+]
 
-_DIRECTIONS = {"ACT": (1.0, 0.0), "ALT": (0.0, 1.0), "D45": (math.sqrt(0.5), math.sqrt(0.5)),
-               "D135": (math.sqrt(0.5), -math.sqrt(0.5))}
+_DIRECTIONS = {
+    "ACT": (1.0, 0.0),
+    "ALT": (0.0, 1.0),
+    "D45": (math.sqrt(0.5), math.sqrt(0.5)),
+    "D135": (math.sqrt(0.5), -math.sqrt(0.5)),
+}
 
 
 class AxisMTF:
@@ -63,14 +73,23 @@ def _edges(measured: dict, truth_items: dict, otf: SystemOTF, tol: Any) -> list[
         f = np.asarray(e["f_cy_per_px"], float)
         meas = e["mtf_at_nyquist"]
         angle_truth = e.get("angle_deg_truth")
-        out.append({
-            "id": e["id"], "direction": e["direction"], "angle_deg": e["angle_deg"], "angle_deg_truth": angle_truth,
-            "mtf_at_nyquist_measured": meas, "mtf_at_nyquist_predicted": pred,
-            "mtf_at_nyquist_error": None if meas is None else meas - pred,
-            "pass": meas is not None and abs(meas - pred) <= tol.edge_mtf_at_nyquist,
-            "rer_measured": e.get("rer"), "mtf50_cy_per_px": e.get("mtf50_cy_per_px"),
-            "f_cy_per_px": f.tolist(), "mtf_measured": e["mtf"], "mtf_predicted": m(f).tolist(),
-        })
+        out.append(
+            {
+                "id": e["id"],
+                "direction": e["direction"],
+                "angle_deg": e["angle_deg"],
+                "angle_deg_truth": angle_truth,
+                "mtf_at_nyquist_measured": meas,
+                "mtf_at_nyquist_predicted": pred,
+                "mtf_at_nyquist_error": None if meas is None else meas - pred,
+                "pass": meas is not None and abs(meas - pred) <= tol.edge_mtf_at_nyquist,
+                "rer_measured": e.get("rer"),
+                "mtf50_cy_per_px": e.get("mtf50_cy_per_px"),
+                "f_cy_per_px": f.tolist(),
+                "mtf_measured": e["mtf"],
+                "mtf_predicted": m(f).tolist(),
+            }
+        )
     return out
 
 
@@ -87,8 +106,16 @@ def _stars(measured: dict, otf: SystemOTF, tol: Any) -> list[dict]:
             err = float(np.max(np.abs(meas[ok] - pred[ok]))) if ok.any() else float("nan")
             worst = max(worst, err) if np.isfinite(err) else worst
             per_dir[d] = {"mtf_predicted": pred.tolist(), "max_abs_error_to_nyquist": err}
-        out.append({"id": st["id"], "directions": per_dir, "max_abs_error_to_nyquist": worst,
-                    "pass": worst <= tol.star_mtf, "f_cy_per_px": st["f_cy_per_px"], "mtf_measured": st.get("mtf", {})})
+        out.append(
+            {
+                "id": st["id"],
+                "directions": per_dir,
+                "max_abs_error_to_nyquist": worst,
+                "pass": worst <= tol.star_mtf,
+                "f_cy_per_px": st["f_cy_per_px"],
+                "mtf_measured": st.get("mtf", {}),
+            }
+        )
     return out
 
 
@@ -103,10 +130,19 @@ def _bars(measured: dict, otf: SystemOTF, tol: Any) -> list[dict]:
         paper = np.asarray(_ctf.ctf_fourier_synthesis(f, m))
         ok = np.isfinite(meas) & (f <= BAR_COMPARE_MAX_CY_PER_PX)
         err = float(np.max(np.abs(meas[ok] - col[ok]))) if ok.any() else float("nan")
-        out.append({"id": b["id"], "compared_up_to_cy_per_px": BAR_COMPARE_MAX_CY_PER_PX, "direction": b.get("direction"), "f_cy_per_px": f.tolist(),
-                    "ctf_measured": meas.tolist(), "ctf_coltman_predicted": col.tolist(),
-                    "ctf_fourier_synthesis_predicted": paper.tolist(), "max_abs_error": err,
-                    "pass": bool(np.isfinite(err) and err <= tol.bar_ctf)})
+        out.append(
+            {
+                "id": b["id"],
+                "compared_up_to_cy_per_px": BAR_COMPARE_MAX_CY_PER_PX,
+                "direction": b.get("direction"),
+                "f_cy_per_px": f.tolist(),
+                "ctf_measured": meas.tolist(),
+                "ctf_coltman_predicted": col.tolist(),
+                "ctf_fourier_synthesis_predicted": paper.tolist(),
+                "max_abs_error": err,
+                "pass": bool(np.isfinite(err) and err <= tol.bar_ctf),
+            }
+        )
     return out
 
 
@@ -118,7 +154,9 @@ def predicted_wedge_resolution_m(otf: SystemOTF, direction: str, *, threshold: f
     dm = DirectionalMTF(otf, direction.lower())
 
     def ctf_minus(w_m: float) -> float:
-        f_mm = units.ground_to_focal_cy_per_mm(1.0 / (2.0 * w_m), focal_length_m=s.focal_length_m, range_m=s.orbit.range_m)
+        f_mm = units.ground_to_focal_cy_per_mm(
+            1.0 / (2.0 * w_m), focal_length_m=s.focal_length_m, range_m=s.orbit.range_m
+        )
         return float(_ctf.coltman_ctf(np.atleast_1d(f_mm), dm)[0]) - threshold
 
     gsd = s.gsd_alt_m if direction.upper() == "ALT" else s.gsd_act_m
@@ -137,19 +175,29 @@ def _wedges(measured: dict, otf: SystemOTF, cfg: Any, system) -> list[dict]:
         pred = predicted_wedge_resolution_m(otf, axis, threshold=cfg.measurement.wedge_threshold)
         res = w.get("resolution_m")
         rel = None if res is None or not np.isfinite(pred) else res / pred - 1.0
-        out.append({"id": w["id"], "orientation": w["orientation"], "axis": axis, "resolution_m": res,
-                    "resolution_predicted_m": pred, "gsd_m": gsd,
-                    "resolution_over_gsd": None if res is None else res / gsd,
-                    "relative_error": rel,
-                    "pass": rel is not None and abs(rel) <= cfg.tolerances.wedge_resolution_rel,
-                    "threshold": w.get("threshold"), "position_m": w.get("position_m"), "contrast": w.get("contrast")})
+        out.append(
+            {
+                "id": w["id"],
+                "orientation": w["orientation"],
+                "axis": axis,
+                "resolution_m": res,
+                "resolution_predicted_m": pred,
+                "gsd_m": gsd,
+                "resolution_over_gsd": None if res is None else res / gsd,
+                "relative_error": rel,
+                "pass": rel is not None and abs(rel) <= cfg.tolerances.wedge_resolution_rel,
+                "threshold": w.get("threshold"),
+                "position_m": w.get("position_m"),
+                "contrast": w.get("contrast"),
+            }
+        )
     return out
 
 
 def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str, float]:
     """GIQE contrast SNR measured on the image alone: the radiometric gain (DN per unit reflectance) is the
-    step between the slanted edges' plateaus (medians >= 4 px from the edge) over their truth reflectance step, the noise the robust sigma of the flattest
-    background patch (pixel differences, so scene texture and shading cancel); SNR = gain (0.15 - 0.07) /
+    step between the slanted edges' plateaus (medians >= 4 px from the edge) over their truth reflectance
+    step, the noise the robust sigma of the flattest background patch (pixel differences, so scene texture and shading cancel); SNR = gain (0.15 - 0.07) /
     sigma, with the noise at the background reflectance (0.2) rather than at 0.15 (a <= 5 % difference for
     shot-noise-limited pixels)."""
     from satchain.measure._common import robust_sigma
@@ -169,19 +217,30 @@ def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str,
         block = image[r0:r1, c0:c1].astype(float)
         far = 4 * pixel_m
         if (d > far).sum() > 20 and (d < -far).sum() > 20:
-            gains.append((np.median(block[d > far]) - np.median(block[d < -far])) / (it["bright"] - it["dark"]))
+            gains.append(
+                (np.median(block[d > far]) - np.median(block[d < -far])) / (it["bright"] - it["dark"])
+            )
     occupied = np.zeros(image.shape, bool)
     for it in truth["items"]:
         x0, y0, x1, y1 = it["bbox_m"]
-        occupied[max(int(y0 / pixel_m) - 2, 0): int(y1 / pixel_m) + 3, max(int(x0 / pixel_m) - 2, 0): int(x1 / pixel_m) + 3] = True
+        occupied[
+            max(int(y0 / pixel_m) - 2, 0) : int(y1 / pixel_m) + 3,
+            max(int(x0 / pixel_m) - 2, 0) : int(x1 / pixel_m) + 3,
+        ] = True
     n, best = 16, None
     for r in range(0, image.shape[0] - n, n):
         for c in range(0, image.shape[1] - n, n):
-            if not occupied[r:r + n, c:c + n].any():
-                sig = robust_sigma(np.diff(image[r:r + n, c:c + n].astype(float), axis=1).ravel()) / math.sqrt(2)
+            if not occupied[r : r + n, c : c + n].any():
+                sig = robust_sigma(
+                    np.diff(image[r : r + n, c : c + n].astype(float), axis=1).ravel()
+                ) / math.sqrt(2)
                 best = sig if best is None else min(best, sig)
     if best is None or not gains or best <= 0:
-        return {"snr": float("nan"), "noise_dn": best, "gain_dn_per_reflectance": float(np.mean(gains)) if gains else None}
+        return {
+            "snr": float("nan"),
+            "noise_dn": best,
+            "gain_dn_per_reflectance": float(np.mean(gains)) if gains else None,
+        }
     gain = float(np.median(gains))
     return {"snr": gain * (0.15 - 0.07) / best, "noise_dn": best, "gain_dn_per_reflectance": gain}
 
@@ -198,34 +257,92 @@ def compare_all(ctx) -> dict[str, Any]:
     q = b["quality"]
 
     def mean_rer(direction):
-        v = [e["rer_measured"] for e in edges if e["direction"] == direction and e["rer_measured"] is not None]
+        v = [
+            e["rer_measured"] for e in edges if e["direction"] == direction and e["rer_measured"] is not None
+        ]
         return float(np.mean(v)) if v else float("nan")
 
     snr_m = measured_snr(ctx.image, ctx.truth, pixel_m=s.gsd_act_m)
     rer_m = giqe5_rer(mean_rer("ACT"), mean_rer("ALT"))
     gsd_in = float(units.m_to_inches(s.gsd_m))
-    niirs_m = giqe5(gsd_in=gsd_in, rer=rer_m, snr=snr_m["snr"]) if np.isfinite(rer_m) and np.isfinite(snr_m["snr"]) else float("nan")
-    niirs = {"giqe5_predicted": q["giqe5"], "giqe5_measured": niirs_m, "rer_predicted": q["rer_giqe5"],
-             "rer_measured": rer_m, "snr_predicted": q["snr"], "snr_measured": snr_m["snr"],
-             "pass": bool(np.isfinite(niirs_m) and abs(niirs_m - q["giqe5"]) <= cfg.tolerances.niirs)}
+    niirs_m = (
+        giqe5(gsd_in=gsd_in, rer=rer_m, snr=snr_m["snr"])
+        if np.isfinite(rer_m) and np.isfinite(snr_m["snr"])
+        else float("nan")
+    )
+    niirs = {
+        "giqe5_predicted": q["giqe5"],
+        "giqe5_measured": niirs_m,
+        "rer_predicted": q["rer_giqe5"],
+        "rer_measured": rer_m,
+        "snr_predicted": q["snr"],
+        "snr_measured": snr_m["snr"],
+        "pass": bool(np.isfinite(niirs_m) and abs(niirs_m - q["giqe5"]) <= cfg.tolerances.niirs),
+    }
     results = {
-        "system": s.name, "gsd_m": s.gsd_m, "gsd_act_m": s.gsd_act_m, "gsd_alt_m": s.gsd_alt_m,
-        "mtf_at_nyquist": b["mtf_at_nyquist"], "mtfa": b["mtfa"],
-        "radiometry": {k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")},
+        "system": s.name,
+        "gsd_m": s.gsd_m,
+        "gsd_act_m": s.gsd_act_m,
+        "gsd_alt_m": s.gsd_alt_m,
+        "mtf_at_nyquist": b["mtf_at_nyquist"],
+        "mtfa": b["mtfa"],
+        "radiometry": {
+            k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")
+        },
         "quality_predicted": q,
-        "slanted_edges": edges, "siemens_star": stars, "bar_targets": bars, "hyperbolic_wedge": wedges,
-        "niirs": niirs, "snr_measurement": snr_m, "skipped": meas.get("skipped", []),
+        "slanted_edges": edges,
+        "siemens_star": stars,
+        "bar_targets": bars,
+        "hyperbolic_wedge": wedges,
+        "niirs": niirs,
+        "snr_measurement": snr_m,
+        "skipped": meas.get("skipped", []),
         "tolerances": cfg.tolerances.model_dump(),
     }
     rows = []
     for e in edges:
-        rows.append((f"edge {e['id']} MTF@Nyquist ({e['direction']})", e["mtf_at_nyquist_measured"], e["mtf_at_nyquist_predicted"], f"±{cfg.tolerances.edge_mtf_at_nyquist}", e["pass"]))
+        rows.append(
+            (
+                f"edge {e['id']} MTF@Nyquist ({e['direction']})",
+                e["mtf_at_nyquist_measured"],
+                e["mtf_at_nyquist_predicted"],
+                f"±{cfg.tolerances.edge_mtf_at_nyquist}",
+                e["pass"],
+            )
+        )
     for st in stars:
-        rows.append((f"star {st['id']} max |MTF error| to Nyquist", st["max_abs_error_to_nyquist"], 0.0, f"≤{cfg.tolerances.star_mtf}", st["pass"]))
+        rows.append(
+            (
+                f"star {st['id']} max |MTF error| to Nyquist",
+                st["max_abs_error_to_nyquist"],
+                0.0,
+                f"≤{cfg.tolerances.star_mtf}",
+                st["pass"],
+            )
+        )
     for br in bars:
-        rows.append((f"bars {br['id']} max |CTF error| (Coltman)", br["max_abs_error"], 0.0, f"≤{cfg.tolerances.bar_ctf}", br["pass"]))
+        rows.append(
+            (
+                f"bars {br['id']} max |CTF error| (Coltman)",
+                br["max_abs_error"],
+                0.0,
+                f"≤{cfg.tolerances.bar_ctf}",
+                br["pass"],
+            )
+        )
     for w in wedges:
-        rows.append((f"wedge {w['id']} resolution (m, {w['axis']})", w["resolution_m"], w["resolution_predicted_m"], f"±{cfg.tolerances.wedge_resolution_rel:.0%}", w["pass"]))
+        rows.append(
+            (
+                f"wedge {w['id']} resolution (m, {w['axis']})",
+                w["resolution_m"],
+                w["resolution_predicted_m"],
+                f"±{cfg.tolerances.wedge_resolution_rel:.0%}",
+                w["pass"],
+            )
+        )
     rows.append(("NIIRS (GIQE 5)", niirs_m, q["giqe5"], f"±{cfg.tolerances.niirs}", niirs["pass"]))
-    results["summary"] = [{"figure": r[0], "measured": r[1], "predicted": r[2], "tolerance": r[3], "pass": bool(r[4])} for r in rows]
+    results["summary"] = [
+        {"figure": r[0], "measured": r[1], "predicted": r[2], "tolerance": r[3], "pass": bool(r[4])}
+        for r in rows
+    ]
     return {"results": results, "rows": rows}

@@ -59,7 +59,13 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
 
 
 def plot_square_wave(
-    x_m: np.ndarray, square: np.ndarray, degraded: np.ndarray, path: str | Path, *, period_m: float, note: str = ""
+    x_m: np.ndarray,
+    square: np.ndarray,
+    degraded: np.ndarray,
+    path: str | Path,
+    *,
+    period_m: float,
+    note: str = "",
 ) -> None:
     """The paper's Figure 3(b): truncated Fourier series of a bar pattern and its MTF-degraded version."""
     fig, ax = plt.subplots(figsize=(8, 4))

@@ -43,9 +43,18 @@ def table1_rows(ctx) -> tuple[list[dict], bool]:
     paper = _ctf.ctf_fourier_synthesis(f, m)
     g = units.focal_to_ground_cy_per_m(f, focal_length_m=s.focal_length_m, range_m=s.orbit.range_m)
     is_paper = s.name == "ankarasat3"
-    rows = [{"f": float(f[i]), "period": float(1 / g[i]), "mtf": float(m(f[i])), "coltman": float(col[i]),
-             "paper_method": float(paper[i]), "paper_mtf": float(t.system_mtf[i]), "paper_ctf": float(t.ctf[i])}
-            for i in range(f.size)]
+    rows = [
+        {
+            "f": float(f[i]),
+            "period": float(1 / g[i]),
+            "mtf": float(m(f[i])),
+            "coltman": float(col[i]),
+            "paper_method": float(paper[i]),
+            "paper_mtf": float(t.system_mtf[i]),
+            "paper_ctf": float(t.ctf[i]),
+        }
+        for i in range(f.size)
+    ]
     return rows, is_paper
 
 
@@ -57,23 +66,50 @@ def write_report(ctx, path: Path) -> None:
         if not p.exists():
             return Markup("")
         data = base64.b64encode(p.read_bytes()).decode("ascii")
-        return Markup('<figure><img src="data:image/png;base64,{}" alt="{}"><figcaption>{}</figcaption></figure>').format(
-            Markup(data), caption, caption
-        )
+        return Markup(
+            '<figure><img src="data:image/png;base64,{}" alt="{}"><figcaption>{}</figcaption></figure>'
+        ).format(Markup(data), caption, caption)
 
-    env = Environment(loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"]))
+    env = Environment(
+        loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"])
+    )
     res = ctx.comparison["results"]
     rows = res["summary"]
-    plots = [(n, c) for n, c in (("edges_mtf.png", "Slanted edges: measured e-SFR vs the predicted MTF along each edge normal."),
-                                  ("star_mtf.png", "Siemens star: MTF per direction, measured vs predicted."),
-                                  ("bars_ctf.png", "Bar targets: measured CTF vs Coltman's predicted CTF (and the paper's method)."),
-                                  ("wedge_contrast.png", "Hyperbolic wedges: contrast across the stripes along the wedge (the paper's scan)."))]
-    chains = [(p.name, p.stem.replace("_", " ")) for p in sorted(figs.glob("fig4_wedge_*.png")) + sorted(figs.glob("target_*.png"))]
+    plots = [
+        (n, c)
+        for n, c in (
+            ("edges_mtf.png", "Slanted edges: measured e-SFR vs the predicted MTF along each edge normal."),
+            ("star_mtf.png", "Siemens star: MTF per direction, measured vs predicted."),
+            (
+                "bars_ctf.png",
+                "Bar targets: measured CTF vs Coltman's predicted CTF (and the paper's method).",
+            ),
+            (
+                "wedge_contrast.png",
+                "Hyperbolic wedges: contrast across the stripes along the wedge (the paper's scan).",
+            ),
+        )
+    ]
+    chains = [
+        (p.name, p.stem.replace("_", " "))
+        for p in sorted(figs.glob("fig4_wedge_*.png")) + sorted(figs.glob("target_*.png"))
+    ]
     t1, is_paper = table1_rows(ctx)
     html = env.get_template("report.html.j2").render(
-        system=ctx.system, version=satchain.__version__, seed=ctx.config.simulation.seed,
-        total_s=sum(ctx.timings_s.values()), rows=rows, n_pass=sum(r["pass"] for r in rows),
-        derived=ctx.budget["derived"], results=res, radiometry=ctx.budget["radiometry"], table1=t1,
-        table1_paper=is_paper, plots=plots, chains=chains, img=img, fmt=_fmt,
+        system=ctx.system,
+        version=satchain.__version__,
+        seed=ctx.config.simulation.seed,
+        total_s=sum(ctx.timings_s.values()),
+        rows=rows,
+        n_pass=sum(r["pass"] for r in rows),
+        derived=ctx.budget["derived"],
+        results=res,
+        radiometry=ctx.budget["radiometry"],
+        table1=t1,
+        table1_paper=is_paper,
+        plots=plots,
+        chains=chains,
+        img=img,
+        fmt=_fmt,
     )
     write_text(path, html)

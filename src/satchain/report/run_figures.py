@@ -15,15 +15,21 @@ from satchain.report._save import save_figure  # noqa: E402
 
 __all__ = ["plot_scene_overview", "plot_target_chain", "write_run_figures"]
 
-_KIND_COLOURS = {"slanted_edge": "tab:red", "bar_target": "tab:orange", "hyperbolic_wedge": "tab:green",
-                 "siemens_star": "tab:blue"}
+_KIND_COLOURS = {
+    "slanted_edge": "tab:red",
+    "bar_target": "tab:orange",
+    "hyperbolic_wedge": "tab:green",
+    "siemens_star": "tab:blue",
+}
 
 
 def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Path) -> None:
     """The ground truth with every measurable target outlined and labelled (the paper's Figure 1)."""
     h, w = image.shape
     fig, ax = plt.subplots(figsize=(7, 7 * h / w + 0.6))
-    ax.imshow(image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest")
+    ax.imshow(
+        image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest"
+    )
     for it in truth["items"]:
         c = _KIND_COLOURS.get(it["kind"])
         if c is None:
@@ -56,8 +62,11 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
     fp, fp_ext = _crop(ctx.focal_plane, item["bbox_m"], p * ctx.simulator.D)
     det, det_ext = _crop(ctx.image, item["bbox_m"], ctx.system.gsd_act_m)
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
-    panels = ((gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"), (fp, fp_ext, f"(b) focal plane, {p * ctx.simulator.D * 100:g} cm samples"),
-              (det, det_ext, f"(c) detector, GSD {ctx.system.gsd_act_m:.3g} m"))
+    panels = (
+        (gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"),
+        (fp, fp_ext, f"(b) focal plane, {p * ctx.simulator.D * 100:g} cm samples"),
+        (det, det_ext, f"(c) detector, GSD {ctx.system.gsd_act_m:.3g} m"),
+    )
     for ax, (im, ext, title) in zip(axes, panels, strict=True):
         ax.imshow(im, cmap="gray", extent=ext, interpolation="nearest")
         ax.set_title(title, fontsize=9)
@@ -110,8 +119,20 @@ def _plot_bars(bars: list[dict], path: Path) -> None:
     for i, b in enumerate(bars):
         c = f"C{i}"
         ax.plot(b["f_cy_per_px"], b["ctf_measured"], "o", color=c, label=f"{b['id']} measured CTF")
-        ax.plot(b["f_cy_per_px"], b["ctf_coltman_predicted"], "-", color=c, label=f"{b['id']} Coltman CTF (predicted)")
-        ax.plot(b["f_cy_per_px"], b["ctf_fourier_synthesis_predicted"], ":", color=c, label=f"{b['id']} paper's method")
+        ax.plot(
+            b["f_cy_per_px"],
+            b["ctf_coltman_predicted"],
+            "-",
+            color=c,
+            label=f"{b['id']} Coltman CTF (predicted)",
+        )
+        ax.plot(
+            b["f_cy_per_px"],
+            b["ctf_fourier_synthesis_predicted"],
+            ":",
+            color=c,
+            label=f"{b['id']} paper's method",
+        )
     ax.axvline(0.5, color="gray", lw=1)
     ax.set_xlabel("bar frequency (cycles/pixel)")
     ax.set_ylabel("CTF")
@@ -128,7 +149,12 @@ def _plot_wedges(wedges: list[dict], path: Path) -> None:
         if w.get("contrast") is None:
             continue
         x = w.get("position_m") or list(range(len(w["contrast"])))
-        ax.plot(x, w["contrast"], color=f"C{i}", label=f"{w['id']} ({w['axis']}): {w['resolution_m'] or float('nan'):.3g} m")
+        ax.plot(
+            x,
+            w["contrast"],
+            color=f"C{i}",
+            label=f"{w['id']} ({w['axis']}): {w['resolution_m'] or float('nan'):.3g} m",
+        )
     if wedges:
         ax.axhline(wedges[0].get("threshold") or 0.15, color="k", ls="--", lw=1, label="threshold")
     ax.set_xlabel("position along the wedge (m)")
@@ -144,10 +170,16 @@ def write_run_figures(ctx) -> None:
     """All run figures into ``ctx.out / "figures"``."""
     d = ctx.out / "figures"
     r = ctx.comparison["results"]
-    measured_ids = {e["id"] for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in r[key]}
+    measured_ids = {
+        e["id"]
+        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
+        for e in r[key]
+    }
     for item in ctx.truth["items"]:
         if item["id"] in measured_ids:
-            name = "fig4_wedge_" + item["id"] if item["kind"] == "hyperbolic_wedge" else "target_" + item["id"]
+            name = (
+                "fig4_wedge_" + item["id"] if item["kind"] == "hyperbolic_wedge" else "target_" + item["id"]
+            )
             plot_target_chain(ctx, item, d / f"{name}.png")
     if r["slanted_edges"]:
         _plot_edges(r["slanted_edges"], d / "edges_mtf.png")
