@@ -195,9 +195,11 @@ def _wedges(measured: dict, otf: SystemOTF, cfg: Any, system) -> list[dict]:
 
 
 def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str, float]:
-    """GIQE contrast SNR measured on the image alone: the radiometric gain (DN per unit reflectance) is the
-    step between the slanted edges' plateaus (medians >= 4 px from the edge) over their truth reflectance
-    step, the noise the robust sigma of the flattest background patch (pixel differences, so scene texture and shading cancel); SNR = gain (0.15 - 0.07) /
+    """GIQE contrast SNR measured on the image alone.
+
+    The radiometric gain (DN per unit reflectance) is the step between the slanted edges' plateaus (medians
+    >= 4 px from the edge) over their truth reflectance step; the noise is the robust sigma of the flattest
+    background patch (of pixel differences, so scene texture and shading cancel). SNR = gain (0.15 - 0.07) /
     sigma, with the noise at the background reflectance (0.2) rather than at 0.15 (a <= 5 % difference for
     shot-noise-limited pixels)."""
     from satchain.measure._common import robust_sigma
