@@ -23,7 +23,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 console = Console(width=max(shutil.get_terminal_size((150, 40)).columns, 120))
-err_console = Console(stderr=True)
+err_console = Console(stderr=True, soft_wrap=True)
 
 PresetOpt = Annotated[str | None, typer.Option("--preset", help="packaged system preset, e.g. ankarasat3")]
 SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML file")]
@@ -332,6 +332,11 @@ def run(
         )
     console.print(t)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
+
+
+from satchain.cli_measure import measure_app  # noqa: E402
+
+app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto.")
 
 
 def main() -> None:  # pragma: no cover
