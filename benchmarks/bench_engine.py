@@ -103,9 +103,7 @@ def child_reference(n: int, out_path: str) -> dict:
     system = load_preset("ankarasat3")
     k = int(round(system.gsd_alt_m / PIXEL_M))
     scale = float(
-        units.ground_to_focal_cy_per_mm(
-            1 / PIXEL_M, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
-        )
+        units.ground_to_focal_cy_per_mm(1 / PIXEL_M, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
     )
     fy = np.fft.fftfreq(n)[:, None] * scale
     fx = np.fft.rfftfreq(n)[None, :] * scale

@@ -72,8 +72,7 @@ def _client_for(scheduler) -> tuple[Any, bool]:
     if hasattr(scheduler, "scatter") and hasattr(scheduler, "submit"):
         return scheduler, False
     raise ConfigError(
-        f"scheduler = {type(scheduler).__name__}: must be None, a scheduler address string or a "
-        "distributed.Client"
+        f"scheduler = {type(scheduler).__name__}: must be None, a scheduler address string or a distributed.Client"
     )
 
 
@@ -202,9 +201,7 @@ def simulate_distributed(
     return img
 
 
-def write_zarr(
-    image: np.ndarray, path: str | os.PathLike, *, chunk_px: int = 1024, attrs: dict | None = None
-) -> Path:
+def write_zarr(image: np.ndarray, path: str | os.PathLike, *, chunk_px: int = 1024, attrs: dict | None = None) -> Path:
     """Write a 2-D image as a Zarr array at ``path``, atomically: the store is written beside it under a
     temporary name and renamed into place (a previous store at ``path`` is replaced only once the new one is
     complete).

@@ -164,9 +164,7 @@ def _poisson_ppf(u: np.ndarray, mean: np.ndarray) -> np.ndarray:
     z = ndtri(np.clip(u, 1e-300, 1 - 1e-16))
     sq = np.sqrt(mean)
     # Cornish-Fisher: quantile of Poisson(m) ~ m + sqrt(m) z + (z^2 - 1)/6 + (z^3 - 7 z)/(72 sqrt(m)) (cont. corr.)
-    cf = np.floor(
-        mean + sq * z + (z * z - 1.0) / 6.0 + (z**3 - 7.0 * z) / (72.0 * np.maximum(sq, 1e-12)) + 0.5
-    )
+    cf = np.floor(mean + sq * z + (z * z - 1.0) / 6.0 + (z**3 - 7.0 * z) / (72.0 * np.maximum(sq, 1e-12)) + 0.5)
     out = np.maximum(cf, 0.0)
     low = mean < _POISSON_EXACT_BELOW
     if np.any(low):
@@ -195,9 +193,7 @@ def sensor_from_system(system) -> SensorModel:
 
     det = system.detector
     n0, n1 = (float(v) for v in radiometry.signal_electrons(system, [0.0, 1.0]))
-    l0, l1 = (
-        radiometry.radiometric_budget(system, reflectance=r).radiance_toa_band_w_per_m2_sr for r in (0.0, 1.0)
-    )
+    l0, l1 = (radiometry.radiometric_budget(system, reflectance=r).radiance_toa_band_w_per_m2_sr for r in (0.0, 1.0))
     stages = det.tdi_stages
     read = det.read_noise_e * (math.sqrt(stages) if det.readout == "cmos" else 1.0)
     return SensorModel(

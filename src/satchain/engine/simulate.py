@@ -51,8 +51,13 @@ class SimParams:
     far_margin_px : int
         Output pixels by which the coarse frame extends beyond the ground truth (by the border rule); the
         PSF tails are exact within the frame.
+    exact_border_px : int
+        Output pixels beyond the ground truth's edge that stage 1 decimates from the input continued by the
+        border rule itself (exact); farther out the coarse frame is continued by the same rule on the coarse
+        grid, an approximation that reaches the image only through the PSF's far tails.
     border : {"symmetric", "periodic", "constant"}
-        How the ground truth is continued beyond its edge; ``border_value`` for "constant".
+        How the ground truth is continued beyond its edge; ``border_value`` for "constant". "periodic" is
+        exact when the input size is a multiple of the decimation factor ``Simulator.D``.
     phase_px : (float, float)
         Offset (rows, cols) of the detector grid's origin on the input grid, input pixels, >= 0.
     stopband_ratio : float
@@ -69,6 +74,7 @@ class SimParams:
     """
 
     far_margin_px: int = 128
+    exact_border_px: int = 16
     border: str = "symmetric"
     border_value: float = 0.0
     phase_px: tuple[float, float] = (0.0, 0.0)
@@ -82,6 +88,8 @@ class SimParams:
         check_choice("border", self.border, BORDER_RULES)
         if not 0 <= int(self.far_margin_px) <= 100_000:
             raise ConfigError(f"far_margin_px = {self.far_margin_px!r}: must be in [0, 100000]")
+        if not 0 <= int(self.exact_border_px) <= 100_000:
+            raise ConfigError(f"exact_border_px = {self.exact_border_px!r}: must be in [0, 100000]")
         for v in self.phase_px:
             check_range("phase_px", v, 0, None)
         check_range("stopband_ratio", self.stopband_ratio, 1.05, 10)
@@ -142,9 +150,7 @@ class Simulator:
         self.otf = SystemOTF(system) if otf is None else otf
         self.to_cy_per_mm = (
             float(
-                units.ground_to_focal_cy_per_mm(
-                    1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
-                )
+                units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
             )
             / a
         )  # cycles per input pixel -> focal-plane cy/mm
@@ -163,7 +169,12 @@ class Simulator:
         else:
             m = spectral.LOWPASS_SUPPORT / (self.f_stop - self.f_cut)
             self.margin_fine = int(math.ceil(m / self.D)) * self.D
-        self.n_coarse = (-(-self.input_shape[0] // self.D), -(-self.input_shape[1] // self.D))
+        periodic = p.border == "periodic"
+        self.coarse_ext = tuple(
+            0 if periodic else int(math.ceil(min(p.exact_border_px, p.far_margin_px) * kk / self.D))
+            for kk in (self.ys.k, self.xs.k)
+        )
+        self.n_coarse = tuple(-(-n // self.D) + 2 * e for n, e in zip(self.input_shape, self.coarse_ext, strict=True))
         side = math.sqrt(p.max_tile_bytes / _TILE_BYTES_PER_PX) - 2 * self.margin_fine
         tile_coarse = int(side // self.D)
         if tile_coarse < 16:
@@ -172,8 +183,9 @@ class Simulator:
                 f"needs at least {_TILE_BYTES_PER_PX * (16 * self.D + 2 * self.margin_fine) ** 2 / 2**20:.0f} MiB"
             )
         self.tile_coarse = min(tile_coarse, max(self.n_coarse))
+        origin = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D)
         self.tiles: list[Tile] = plan_tiles(
-            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine
+            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine, origin_px=origin
         )
 
     def _plan_frame(self) -> None:
@@ -185,18 +197,17 @@ class Simulator:
         if p.border == "periodic":  # the coarse scene is itself the period: no extension
             self.frame_ext, self.frame_shape = (0, 0), self.n_coarse
             self.k_int = tuple(
-                ki if ki and (nc * D) % ki == 0 else None
-                for ki, nc in zip(self.k_int, self.n_coarse, strict=True)
+                ki if ki and (nc * D) % ki == 0 else None for ki, nc in zip(self.k_int, self.n_coarse, strict=True)
             )
             return
         for ax, (kk, ki, nc) in enumerate(zip(self.k, self.k_int, self.n_coarse, strict=True)):
+            nc -= 2 * self.coarse_ext[ax]  # the ground truth's own coarse samples
             e = int(math.ceil(p.far_margin_px * kk / D))
             q = ki // math.gcd(ki, D) if ki else 1  # coarse samples per aligned output period
             e = -(-e // q) * q
             n = q * spectral_len(-(-(nc + 2 * e) // q))  # a multiple of q with a fast cofactor
             ext.append(e)
             length.append(n)
-            del ax
         self.frame_ext, self.frame_shape = tuple(ext), tuple(length)
         need = _FRAME_BYTES_PER_PX * length[0] * length[1]
         if need > p.max_frame_bytes:
@@ -242,7 +253,8 @@ class Simulator:
             raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
         p, D = self.params, self.D
         (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
-        pad = ((ey, ly - self.n_coarse[0] - ey), (ex, lx - self.n_coarse[1] - ex))
+        cy, cx = self.coarse_ext  # the coarse grid already holds cy, cx exact samples beyond the edge
+        pad = ((ey - cy, ly - self.n_coarse[0] - ey + cy), (ex - cx, lx - self.n_coarse[1] - ex + cx))
         mode = {"symmetric": "reflect", "periodic": "wrap", "constant": "constant"}[p.border]
         kw = {"constant_values": p.border_value} if mode == "constant" else {}
         frame = np.pad(coarse, pad, mode=mode, **kw) if mode != "reflect" else _reflect_pad(coarse, pad)
@@ -264,10 +276,7 @@ class Simulator:
                 spec.mx, centre=self.xs.centres(0, 1)[0], width_px=self.xs.width_px, n_total=nx_f
             )
             n_out = (ny_f // self.k_int[0], nx_f // self.k_int[1])
-            img = (
-                spectral.fold_onto_grid(vals * ay[:, None] * ax[None, :], spec.my, spec.mx, spec.cx, n_out)
-                * scale
-            )
+            img = spectral.fold_onto_grid(vals * ay[:, None] * ax[None, :], spec.my, spec.mx, spec.cx, n_out) * scale
             oy, ox = (ey * D) // self.k_int[0], (ex * D) // self.k_int[1]
             return img[oy : oy + self.output_shape[0], ox : ox + self.output_shape[1]]
         my = spectral.sampling_matrix(
@@ -281,16 +290,16 @@ class Simulator:
     def focal_plane(self, coarse: np.ndarray) -> np.ndarray:
         """The focal-plane irradiance pattern on the coarse grid (the paper's Figure 4b, in input units):
         the coarse frame filtered by the OTF without the detector aperture (exact band-limited samples at
-        every ``D``-th input pixel)."""
+        every ``D``-th input pixel, starting at input pixel (0, 0); periodic over the coarse grid)."""
         import scipy.fft as sfft
 
         ny, nx = coarse.shape
         f = sfft.rfft2(coarse, workers=self.params.workers)
         fy = np.fft.fftfreq(ny)[:, None] / self.D * self.to_cy_per_mm
         fx = np.fft.rfftfreq(nx)[None, :] / self.D * self.to_cy_per_mm
-        return sfft.irfft2(
-            f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers
-        )
+        out = sfft.irfft2(f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers)
+        cy, cx = self.coarse_ext
+        return out[cy : ny - cy, cx : nx - cx]  # sample (0, 0) is input pixel (0, 0)
 
     def run(
         self,
@@ -307,13 +316,9 @@ class Simulator:
         already computed by :meth:`decimate` (e.g. to also form :meth:`focal_plane` from it)."""
         check_choice("units", units, OUTPUT_UNITS)
         if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
-            raise ConfigError(
-                f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that"
-            )
+            raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
         if tuple(source.shape_px) != self.input_shape:
-            raise ConfigError(
-                f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}"
-            )
+            raise ConfigError(f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}")
         img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
         if sensor is not None:
             img = sensor.convert(

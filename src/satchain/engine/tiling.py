@@ -124,10 +124,13 @@ class Tile(NamedTuple):
     input: Window
 
 
-def plan_tiles(n_coarse: tuple[int, int], *, D: int, tile_coarse: int, margin_px: int) -> list[Tile]:
+def plan_tiles(
+    n_coarse: tuple[int, int], *, D: int, tile_coarse: int, margin_px: int, origin_px: tuple[int, int] = (0, 0)
+) -> list[Tile]:
     """Cut the coarse grid (coarse sample ``j`` = fine pixel ``D j``) into square tiles of ``tile_coarse``
     samples; each reads fine pixels ``[D j0 - margin_px, D j1 + margin_px)`` (``margin_px`` a multiple of
-    ``D``). Input windows may extend beyond the ground truth: the border rule fills them.
+    ``D``), offset by ``origin_px`` (the fine pixel of coarse sample 0). Input windows may extend beyond the
+    ground truth: the border rule fills them.
 
     Examples
     --------
@@ -149,7 +152,10 @@ def plan_tiles(n_coarse: tuple[int, int], *, D: int, tile_coarse: int, margin_px
                     index=(ti, tj),
                     coarse=Window(j0, i0, h, w),
                     input=Window(
-                        D * j0 - margin_px, D * i0 - margin_px, D * h + 2 * margin_px, D * w + 2 * margin_px
+                        origin_px[0] + D * j0 - margin_px,
+                        origin_px[1] + D * i0 - margin_px,
+                        D * h + 2 * margin_px,
+                        D * w + 2 * margin_px,
                     ),
                 )
             )
