@@ -99,24 +99,12 @@ def test_symmetric_border_interior_equals_padded_reference(pixel_m, shape, phase
     np.testing.assert_allclose(out[m:-m, m:-m], ref[m:-m, m:-m], rtol=RTOL, atol=0)
 
 
-# The border rule up to the edge pixels, against a reference that continues the *input* by the rule.
-# Known gaps (xfail, strict): beyond SimParams.exact_border_px (16 output px) the coarse frame is continued by
-# mirroring the decimated grid about a coarse sample, which is not the decimation of the mirrored input (the
-# mirror axis is off by 1 input px at the first edge and up to 2D - 1 px at the far edge): edge pixels are
-# off by ~4e-4 (~1.2e-4 with exact_border_px=40; ~2e-2 before exact_border_px existed). A periodic border is
-# exact only when the input size is a multiple of D (the period becomes ceil(n / D) * D): ~3e-3.
+# The border rule up to the edge pixels, against a reference that continues the *input* by the rule. Stage 1
+# decimates an exact band beyond the edge through the rule, and coarse samples sit at block centres, so mirroring
+# them about the edge is mirroring the input. A periodic border is exact only when the input size is a multiple
+# of D (the period becomes ceil(n / D) * D): a documented limitation, xfail (strict).
 BORDER_CASES = [
-    pytest.param(
-        "symmetric",
-        (1400, 1260),
-        "symmetric",
-        id="symmetric",
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="engine: beyond exact_border_px the mirror is applied to the coarse grid (wrong axis); "
-            "edge pixels off by ~4e-4",
-        ),
-    ),
+    pytest.param("symmetric", (1400, 1260), "symmetric", id="symmetric"),
     pytest.param("constant", (1400, 1260), "constant", id="constant"),
     pytest.param(
         "periodic",

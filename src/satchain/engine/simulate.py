@@ -163,7 +163,8 @@ class Simulator:
         p = self.params
         f_stop = p.stopband_ratio * self.f_cut
         self.D = max(1, int(math.floor(0.5 / f_stop - 1e-9))) if f_stop < 0.25 else 1
-        self.f_stop = min(f_stop, 0.5 / self.D * (1 - 1e-6))
+        # use all the room decimation leaves: the wider the transition, the shorter the low-pass kernel
+        self.f_stop = 0.5 / self.D * (1 - 1e-3) if self.D > 1 else f_stop
         if self.D == 1:
             self.margin_fine = 0
         else:
@@ -255,9 +256,12 @@ class Simulator:
         (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
         cy, cx = self.coarse_ext  # the coarse grid already holds cy, cx exact samples beyond the edge
         pad = ((ey - cy, ly - self.n_coarse[0] - ey + cy), (ex - cx, lx - self.n_coarse[1] - ex + cx))
-        mode = {"symmetric": "reflect", "periodic": "wrap", "constant": "constant"}[p.border]
-        kw = {"constant_values": p.border_value} if mode == "constant" else {}
-        frame = np.pad(coarse, pad, mode=mode, **kw) if mode != "reflect" else _reflect_pad(coarse, pad)
+        if p.border == "constant":
+            frame = np.pad(coarse, pad, mode="constant", constant_values=p.border_value)
+        elif p.border == "periodic":
+            frame = coarse
+        else:
+            frame = self._mirror_frame(coarse)
         f_band = self.f_cut * D  # cycles per coarse sample
         spec = spectral.tile_band_spectrum(
             frame, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=p.workers
@@ -267,6 +271,10 @@ class Simulator:
         fy = spec.my / ny_f * self.to_cy_per_mm
         fx = spec.mx / nx_f * self.to_cy_per_mm
         vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
+        c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
+        vals = (
+            vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
+        )
         scale = 1.0 / (ly * lx)
         if all(self.k_int):
             ay = spectral.footprint_transfer(
@@ -287,10 +295,25 @@ class Simulator:
         )
         return np.real(my @ ((vals * spec.cx[None, :]) @ mx.T)) * scale
 
+    def _mirror_frame(self, coarse: np.ndarray) -> np.ndarray:
+        """The coarse frame under the mirror rule: the exact border band from stage 1, then the ground truth's
+        coarse samples mirrored about its edges (exact at an edge whose length is a multiple of D, because
+        the samples sit at block centres)."""
+        from satchain.engine.sources import _map_indices
+
+        idx = []
+        for e, c, n_all, length in zip(self.frame_ext, self.coarse_ext, self.n_coarse, self.frame_shape, strict=True):
+            nc = n_all - 2 * c  # the ground truth's own samples
+            t = np.arange(-e, length - e)
+            mirrored = _map_indices(-e, length, nc, "symmetric")
+            idx.append(np.where((t >= -c) & (t < nc + c), t, mirrored) + c)
+        return coarse[np.ix_(idx[0], idx[1])]
+
     def focal_plane(self, coarse: np.ndarray) -> np.ndarray:
         """The focal-plane irradiance pattern on the coarse grid (the paper's Figure 4b, in input units):
         the coarse frame filtered by the OTF without the detector aperture (exact band-limited samples at
-        every ``D``-th input pixel, starting at input pixel (0, 0); periodic over the coarse grid)."""
+        the centre of every ``D x D`` input block, i.e. sample (j, i) at input pixel (D j + (D-1)/2, D i + (D-1)/2);
+        periodic over the coarse grid)."""
         import scipy.fft as sfft
 
         ny, nx = coarse.shape
@@ -299,7 +322,7 @@ class Simulator:
         fx = np.fft.rfftfreq(nx)[None, :] / self.D * self.to_cy_per_mm
         out = sfft.irfft2(f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers)
         cy, cx = self.coarse_ext
-        return out[cy : ny - cy, cx : nx - cx]  # sample (0, 0) is input pixel (0, 0)
+        return out[cy : ny - cy, cx : nx - cx]  # sample (0, 0) is the centre of input block (0, 0)
 
     def run(
         self,
@@ -332,19 +355,6 @@ def spectral_len(n: int) -> int:
     import scipy.fft as sfft
 
     return sfft.next_fast_len(n, real=True)
-
-
-def _reflect_pad(a: np.ndarray, pad) -> np.ndarray:
-    """Mirror padding that also works when the pad exceeds the array (repeated reflection)."""
-    out = a
-    for axis, (lo, hi) in enumerate(pad):
-        n = a.shape[axis]
-        idx = np.arange(-lo, n + hi)
-        period = 2 * (n - 1) if n > 1 else 1
-        j = np.mod(idx, period) if n > 1 else np.zeros_like(idx)
-        j = np.where(j < n, j, period - j)
-        out = np.take(out, j, axis=axis)
-    return out
 
 
 def simulate(

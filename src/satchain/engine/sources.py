@@ -106,17 +106,12 @@ def _map_indices(start: int, length: int, n: int, rule: str) -> np.ndarray:
     return np.where(j < n, j, 2 * n - 1 - j)
 
 
-def read_with_border(
-    source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0
-) -> np.ndarray:
+def read_with_border(source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0) -> np.ndarray:
     """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``."""
     check_choice("border", rule, BORDER_RULES)
     ny, nx = source.shape_px
     inside = (
-        window.row0 >= 0
-        and window.col0 >= 0
-        and window.row0 + window.height <= ny
-        and window.col0 + window.width <= nx
+        window.row0 >= 0 and window.col0 >= 0 and window.row0 + window.height <= ny and window.col0 + window.width <= nx
     )
     if inside:
         return source.read(window)
