@@ -149,3 +149,14 @@ def test_simulate_errors(tmp_path):
     r = runner.invoke(app, ["simulate", str(tmp_path / "missing.tif"), "-o", str(tmp_path / "x.tif")])
     assert r.exit_code == 2 and "missing.tif" in r.stderr
     assert not (tmp_path / "x.tif").exists()
+
+
+def test_simulate_on_a_local_dask_cluster_equals_in_process(tmp_path):
+    pytest.importorskip("distributed")
+    import tifffile
+
+    a, b = tmp_path / "dask.tif", tmp_path / "local.tif"
+    common = ["paper", "--scene-pixel-m", "0.245", "--units", "reflectance", "--no-noise"]
+    assert runner.invoke(app, ["simulate", *common, "--scheduler", "local", "-o", str(a)]).exit_code == 0
+    assert runner.invoke(app, ["simulate", *common, "-o", str(b)]).exit_code == 0
+    np.testing.assert_array_equal(tifffile.imread(a), tifffile.imread(b))

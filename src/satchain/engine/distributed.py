@@ -33,7 +33,7 @@ from satchain.engine.tiling import Tile
 from satchain.errors import ConfigError, SatchainIOError
 from satchain.system import ImagingSystem
 
-__all__ = ["simulate_distributed", "write_zarr"]
+__all__ = ["decimate_distributed", "simulate_distributed", "write_zarr"]
 
 Progress = Callable[[int, int], None]
 _EXTRA = "pip install 'satchain[dask]'"
@@ -119,6 +119,34 @@ def _decimate_client(sim: Simulator, source, coarse: np.ndarray, client, progres
         del sim_f, src_f
 
 
+def decimate_distributed(sim: Simulator, source, *, scheduler=None, progress: Progress | None = None) -> np.ndarray:
+    """Stage 1 of ``sim`` (:meth:`Simulator.decimate`) with its tiles spread over Dask: ``scheduler`` as for
+    :func:`simulate_distributed`, or ``"local"`` for a ``distributed.LocalCluster`` on this machine (one
+    worker process per core). Returns the coarse grid, identical to ``sim.decimate(source)``."""
+    _require("dask")
+    cluster = None
+    if scheduler == "local":
+        distributed = _require("distributed")
+        cluster = distributed.LocalCluster(n_workers=max(1, os.cpu_count() or 1), threads_per_worker=1)
+        scheduler = distributed.Client(cluster)
+        owned = True
+        client = scheduler
+    else:
+        client, owned = _client_for(scheduler)
+    coarse = np.empty(sim.n_coarse, dtype=np.float32)
+    try:
+        if client is None:
+            _decimate_threads(sim, source, coarse, progress)
+        else:
+            _decimate_client(sim, source, coarse, client, progress)
+    finally:
+        if owned:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    return coarse
+
+
 def simulate_distributed(
     source,
     system: ImagingSystem,
@@ -175,16 +203,7 @@ def simulate_distributed(
     _require("dask")
     src = as_ground_truth(source, pixel_m=pixel_m)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
-    client, owned = _client_for(scheduler)
-    coarse = np.empty(sim.n_coarse, dtype=np.float32)
-    try:
-        if client is None:
-            _decimate_threads(sim, src, coarse, progress)
-        else:
-            _decimate_client(sim, src, coarse, client, progress)
-    finally:
-        if owned:
-            client.close()
+    coarse = decimate_distributed(sim, src, scheduler=scheduler, progress=progress)
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)
     if zarr_path is not None:
         attrs = {
