@@ -125,9 +125,7 @@ def budget(
         str | None, typer.Option("--freqs", help="focal-plane frequencies in cy/mm, e.g. 10,42.5,85")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
-    out: Annotated[
-        Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")
-    ] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")] = None,
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
     s = _system(preset, system)
@@ -206,9 +204,7 @@ def _ground_truth(input_: str, scene_pixel_m: float | None):
 @app.command()
 @_handle_errors
 def simulate(
-    input_: Annotated[
-        str, typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY)")
-    ],
+    input_: Annotated[str, typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY)")],
     scene_pixel_m: Annotated[
         float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")
     ] = None,
@@ -217,12 +213,11 @@ def simulate(
     units_: Annotated[str, typer.Option("--units", help="dn | electrons | radiance | reflectance")] = "dn",
     no_noise: Annotated[bool, typer.Option("--no-noise", help="no noise (deterministic)")] = False,
     seed: Annotated[int, typer.Option("--seed", help="noise seed")] = 0,
-    focal_plane: Annotated[
-        Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")
-    ] = None,
-    scheduler: Annotated[
-        str | None, typer.Option("--scheduler", help="Dask scheduler address, or 'local'")
-    ] = None,
+    focal_plane: Annotated[Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")] = None,
+    fp_grid: Annotated[
+        str, typer.Option("--focal-plane-grid", help="input: on the input grid (exact); coarse: every D-th pixel")
+    ] = "input",
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address, or 'local'")] = None,
     out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF")] = ...,
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size)."""
@@ -250,9 +245,7 @@ def simulate(
         else:
             coarse = sim.decimate(src, progress=update)
     img = sim.run(src, sensor=sensor, units=units_, noise=not no_noise, seed=seed, coarse=coarse)
-    dtype = (
-        np.uint16 if units_ == "dn" and s.detector.bit_depth and s.detector.bit_depth <= 16 else np.float32
-    )
+    dtype = np.uint16 if units_ == "dn" and s.detector.bit_depth and s.detector.bit_depth <= 16 else np.float32
     meta = {
         "units": units_,
         "system": s.name,
@@ -267,23 +260,18 @@ def simulate(
     io.write_png(out.with_suffix(".png"), io.preview_uint8(img), pixel_m=s.gsd_act_m)
     console.print(f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}")
     if focal_plane is not None:
-        fp = sim.focal_plane(coarse)
-        io.write_tiff(
-            focal_plane,
-            fp.astype(np.float32),
-            pixel_m=src.pixel_m * sim.D,
-            metadata={"units": "input (reflectance) filtered by the optics", "system": s.name},
-        )
-        console.print(f"wrote {focal_plane} (focal-plane image, {src.pixel_m * sim.D:g} m samples)")
+        fp = sim.focal_plane(coarse, grid=fp_grid)
+        fp_pixel = src.pixel_m * (sim.D if fp_grid == "coarse" else 1)
+        meta = {"units": "input (reflectance) filtered by the optics and motion", "system": s.name, "grid": fp_grid}
+        io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=fp_pixel, metadata=meta)
+        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)")
 
 
 @app.command()
 @_handle_errors
 def run(
     preset: PresetOpt = None,
-    config: Annotated[
-        Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")
-    ] = None,
+    config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")] = None,
     out: Annotated[Path, typer.Option("-o", "--out", help="output directory (replaced atomically)")] = Path(
         "satchain-run"
     ),

@@ -309,20 +309,42 @@ class Simulator:
             idx.append(np.where((t >= -c) & (t < nc + c), t, mirrored) + c)
         return coarse[np.ix_(idx[0], idx[1])]
 
-    def focal_plane(self, coarse: np.ndarray) -> np.ndarray:
-        """The focal-plane irradiance pattern on the coarse grid (the paper's Figure 4b, in input units):
-        the coarse frame filtered by the OTF without the detector aperture (exact band-limited samples at
-        the centre of every ``D x D`` input block, i.e. sample (j, i) at input pixel (D j + (D-1)/2, D i + (D-1)/2);
-        periodic over the coarse grid)."""
+    def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
+        """The focal-plane irradiance image (the paper's Figure 4b, in input units): the ground truth filtered
+        by the system OTF without the detector aperture.
+
+        ``grid="input"``: on the input grid, pixel (i, j) at input pixel (i, j) -- exact, because the image is
+        band-limited below the coarse grid's Nyquist frequency, so zero-padding its spectrum interpolates it
+        without error. ``grid="coarse"``: the same image sampled at the centre of every ``D x D`` input block
+        (sample (j, i) at input pixel (D j + (D-1)/2, D i + (D-1)/2)), ``D**2`` times smaller. Periodic over
+        the coarse grid (the mirror band beyond the edges included)."""
         import scipy.fft as sfft
 
+        check_choice("grid", grid, ("input", "coarse"))
+        D, w = self.D, self.params.workers
         ny, nx = coarse.shape
-        f = sfft.rfft2(coarse, workers=self.params.workers)
-        fy = np.fft.fftfreq(ny)[:, None] / self.D * self.to_cy_per_mm
-        fx = np.fft.rfftfreq(nx)[None, :] / self.D * self.to_cy_per_mm
-        out = sfft.irfft2(f * self.otf(fx, fy, exclude=("detector",)), s=(ny, nx), workers=self.params.workers)
+        f = sfft.rfft2(coarse, workers=w)
+        fy = np.fft.fftfreq(ny)[:, None] / D  # cycles per input pixel
+        fx = np.fft.rfftfreq(nx)[None, :] / D
+        f *= self.otf(fx * self.to_cy_per_mm, fy * self.to_cy_per_mm, exclude=("detector",))
         cy, cx = self.coarse_ext
-        return out[cy : ny - cy, cx : nx - cx]  # sample (0, 0) is the centre of input block (0, 0)
+        if grid == "coarse" or D == 1:
+            out = sfft.irfft2(f, s=(ny, nx), workers=w)
+            return out[cy : ny - cy, cx : nx - cx]
+        need = 16 * ny * nx * D * D
+        if need > self.params.max_frame_bytes:
+            raise ResourceLimitError(
+                f"focal plane on the input grid needs about {need / 2**30:.2f} GiB; SimParams.max_frame_bytes "
+                f"allows {self.params.max_frame_bytes / 2**30:.2f} GiB: use grid='coarse'"
+            )
+        c = (D - 1) / 2.0  # coarse samples sit at block centres: shift so that sample n is input pixel n
+        f *= np.exp(-2j * np.pi * fy * c) * np.exp(-2j * np.pi * fx * c)
+        big = np.zeros((ny * D, nx * D // 2 + 1), dtype=np.complex128)
+        rows = np.mod(np.fft.fftfreq(ny, 1.0 / ny).round().astype(np.int64), ny * D)
+        big[rows, : nx // 2 + 1] = f
+        out = sfft.irfft2(big, s=(ny * D, nx * D), workers=w) * (D * D)
+        r0, c0 = cy * D, cx * D
+        return out[r0 : r0 + self.input_shape[0], c0 : c0 + self.input_shape[1]]
 
     def run(
         self,
