@@ -76,7 +76,15 @@ def test_run_outputs_complete(reduced_run):
         assert (out / name).is_file(), name
     assert not list(out.parent.glob(".out.*")), "staging directories left behind"
     html = (out / "report.html").read_text()
-    assert html.count("data:image/png;base64,") >= 8  # self-contained: every figure embedded
+    import base64
+    import re
+
+    images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
+    assert len(images) >= 10  # self-contained: every figure embedded
+    assert all(base64.b64decode(b)[:8] == b"\x89PNG\r\n\x1a\n" for b in images)
+    for section in ("Figure 1", "Figure 2", "Figure 3", "Figure 4", "Measured vs predicted"):
+        assert section in html
+    assert html.count("<img") == len(images)
     assert 'src="http' not in html and "<script" not in html
     on_disk = json.loads((out / "results.json").read_text())
     assert on_disk["gsd_m"] == pytest.approx(0.49)

@@ -42,9 +42,7 @@ def _pitch(system: ImagingSystem, d: str) -> float:
     return system.detector.pitch_y_m if d == "alt" else system.detector.pitch_x_m
 
 
-def budget_results(
-    system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None
-) -> dict[str, Any]:
+def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None) -> dict[str, Any]:
     """Derived quantities, MTF per component, CTF (Coltman and the paper's synthesis), MTF at Nyquist, MTFA."""
     otf = SystemOTF(system) if otf is None else otf
     b = mtf_budget(system, f_cy_per_mm, otf=otf)
@@ -83,16 +81,12 @@ def budget_results(
     return out
 
 
-def square_wave_figure_data(
-    system: ImagingSystem, *, period_m: float = FIG3B_PERIOD_M, otf: SystemOTF | None = None
-):
+def square_wave_figure_data(system: ImagingSystem, *, period_m: float = FIG3B_PERIOD_M, otf: SystemOTF | None = None):
     """Positions (ground m), input and ALT-degraded truncated square-wave series for Figure 3(b)."""
     otf = SystemOTF(system) if otf is None else otf
     x = np.linspace(0.0, 2.0 * period_m, 2001)
     scale = float(
-        units.ground_to_focal_cy_per_mm(
-            1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
-        )
+        units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
     )
     square = _ctf.square_wave_series(x, period_m)
     degraded = _ctf.square_wave_series(x, period_m, mtf=DirectionalMTF(otf, "alt"), f_unit_scale=scale)

@@ -139,6 +139,8 @@ def _bars(measured: dict, otf: SystemOTF, tol: Any) -> list[dict]:
                 "ctf_measured": meas.tolist(),
                 "ctf_coltman_predicted": col.tolist(),
                 "ctf_fourier_synthesis_predicted": paper.tolist(),
+                "mtf_from_ctf_measured": [np.nan if v is None else float(v) for v in b.get("mtf", [None] * f.size)],
+                "mtf_predicted": m(f).tolist(),
                 "max_abs_error": err,
                 "pass": bool(np.isfinite(err) and err <= tol.bar_ctf),
             }
@@ -219,9 +221,7 @@ def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str,
         block = image[r0:r1, c0:c1].astype(float)
         far = 4 * pixel_m
         if (d > far).sum() > 20 and (d < -far).sum() > 20:
-            gains.append(
-                (np.median(block[d > far]) - np.median(block[d < -far])) / (it["bright"] - it["dark"])
-            )
+            gains.append((np.median(block[d > far]) - np.median(block[d < -far])) / (it["bright"] - it["dark"]))
     occupied = np.zeros(image.shape, bool)
     for it in truth["items"]:
         x0, y0, x1, y1 = it["bbox_m"]
@@ -233,9 +233,7 @@ def measured_snr(image: np.ndarray, truth: dict, *, pixel_m: float) -> dict[str,
     for r in range(0, image.shape[0] - n, n):
         for c in range(0, image.shape[1] - n, n):
             if not occupied[r : r + n, c : c + n].any():
-                sig = robust_sigma(
-                    np.diff(image[r : r + n, c : c + n].astype(float), axis=1).ravel()
-                ) / math.sqrt(2)
+                sig = robust_sigma(np.diff(image[r : r + n, c : c + n].astype(float), axis=1).ravel()) / math.sqrt(2)
                 best = sig if best is None else min(best, sig)
     if best is None or not gains or best <= 0:
         return {
@@ -259,9 +257,7 @@ def compare_all(ctx) -> dict[str, Any]:
     q = b["quality"]
 
     def mean_rer(direction):
-        v = [
-            e["rer_measured"] for e in edges if e["direction"] == direction and e["rer_measured"] is not None
-        ]
+        v = [e["rer_measured"] for e in edges if e["direction"] == direction and e["rer_measured"] is not None]
         return float(np.mean(v)) if v else float("nan")
 
     snr_m = measured_snr(ctx.image, ctx.truth, pixel_m=s.gsd_act_m)
@@ -288,9 +284,7 @@ def compare_all(ctx) -> dict[str, Any]:
         "gsd_alt_m": s.gsd_alt_m,
         "mtf_at_nyquist": b["mtf_at_nyquist"],
         "mtfa": b["mtfa"],
-        "radiometry": {
-            k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")
-        },
+        "radiometry": {k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")},
         "quality_predicted": q,
         "slanted_edges": edges,
         "siemens_star": stars,
@@ -344,7 +338,6 @@ def compare_all(ctx) -> dict[str, Any]:
         )
     rows.append(("NIIRS (GIQE 5)", niirs_m, q["giqe5"], f"±{cfg.tolerances.niirs}", niirs["pass"]))
     results["summary"] = [
-        {"figure": r[0], "measured": r[1], "predicted": r[2], "tolerance": r[3], "pass": bool(r[4])}
-        for r in rows
+        {"figure": r[0], "measured": r[1], "predicted": r[2], "tolerance": r[3], "pass": bool(r[4])} for r in rows
     ]
     return {"results": results, "rows": rows}

@@ -58,9 +58,7 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     axes[1].set_ylabel("LSF (1/px)")
     f, m = np.asarray(result.f_cy_per_px), np.asarray(result.mtf)
     axes[2].plot(f, m, color="black", label=f"MTF ({result.direction})")
-    axes[2].plot(
-        [0.5], [result.mtf_at_nyquist], "o", color="tab:red", label=f"at Nyquist {result.mtf_at_nyquist:.3f}"
-    )
+    axes[2].plot([0.5], [result.mtf_at_nyquist], "o", color="tab:red", label=f"at Nyquist {result.mtf_at_nyquist:.3f}")
     if result.mtf50_cy_per_px is not None:
         axes[2].plot(
             [result.mtf50_cy_per_px],
@@ -77,9 +75,7 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     axes[2].legend(fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
-    fig.suptitle(
-        _title(title, f"slanted edge {result.angle_deg:.2f} deg ({result.direction}), RER {result.rer:.3f}")
-    )
+    fig.suptitle(_title(title, f"slanted edge {result.angle_deg:.2f} deg ({result.direction}), RER {result.rer:.3f}"))
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
 
@@ -108,9 +104,7 @@ def plot_bars(result, path: str | Path, *, title: str = "") -> None:
     f = np.asarray(result.f_cy_per_px)
     order = np.argsort(f)
     ax.plot(f[order], np.asarray(result.ctf)[order], "o-", color="tab:red", label="CTF (measured)")
-    ax.plot(
-        f[order], np.asarray(result.mtf)[order], "s--", color="black", label="MTF (inverse Coltman series)"
-    )
+    ax.plot(f[order], np.asarray(result.mtf)[order], "s--", color="black", label="MTF (inverse Coltman series)")
     _nyquist(ax)
     ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
     ax.set_ylim(0, 1.15)

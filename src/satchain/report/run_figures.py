@@ -27,9 +27,7 @@ def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Pa
     """The ground truth with every measurable target outlined and labelled (the paper's Figure 1)."""
     h, w = image.shape
     fig, ax = plt.subplots(figsize=(7, 7 * h / w + 0.6))
-    ax.imshow(
-        image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest"
-    )
+    ax.imshow(image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest")
     for it in truth["items"]:
         c = _KIND_COLOURS.get(it["kind"])
         if c is None:
@@ -115,7 +113,19 @@ def _plot_stars(stars: list[dict], path: Path) -> None:
 
 
 def _plot_bars(bars: list[dict], path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    for i, b in enumerate(bars):
+        c = f"C{i}"
+        ax2.plot(
+            b["f_cy_per_px"], b["mtf_from_ctf_measured"], "s", color=c, label=f"{b['id']} from CTF (inverse Coltman)"
+        )
+        ax2.plot(b["f_cy_per_px"], b["mtf_predicted"], "-", color=c, label=f"{b['id']} predicted MTF")
+    ax2.axvline(0.5, color="gray", lw=1)
+    ax2.set_xlabel("bar frequency (cycles/pixel)")
+    ax2.set_ylabel("MTF")
+    ax2.set_title("Bar targets: MTF derived from the measured CTF")
+    ax2.grid(alpha=0.3)
+    ax2.legend(fontsize=7)
     for i, b in enumerate(bars):
         c = f"C{i}"
         ax.plot(b["f_cy_per_px"], b["ctf_measured"], "o", color=c, label=f"{b['id']} measured CTF")
@@ -171,15 +181,11 @@ def write_run_figures(ctx) -> None:
     d = ctx.out / "figures"
     r = ctx.comparison["results"]
     measured_ids = {
-        e["id"]
-        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
-        for e in r[key]
+        e["id"] for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in r[key]
     }
     for item in ctx.truth["items"]:
         if item["id"] in measured_ids:
-            name = (
-                "fig4_wedge_" + item["id"] if item["kind"] == "hyperbolic_wedge" else "target_" + item["id"]
-            )
+            name = "fig4_wedge_" + item["id"] if item["kind"] == "hyperbolic_wedge" else "target_" + item["id"]
             plot_target_chain(ctx, item, d / f"{name}.png")
     if r["slanted_edges"]:
         _plot_edges(r["slanted_edges"], d / "edges_mtf.png")
