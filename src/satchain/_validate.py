@@ -38,9 +38,7 @@ def check_range(
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise error(
-            f"{name} = {value!r}: must be a number in {_interval(lo, hi, lo_open, hi_open)}"
-        ) from None
+        raise error(f"{name} = {value!r}: must be a number in {_interval(lo, hi, lo_open, hi_open)}") from None
     bad = not math.isfinite(v)
     if lo is not None:
         bad |= v <= lo if lo_open else v < lo
@@ -56,9 +54,7 @@ def check_positive(name: str, value: float, *, error: type[Exception] = ConfigEr
     return check_range(name, value, 0.0, None, lo_open=True, error=error)
 
 
-def check_choice(
-    name: str, value: str, choices: Iterable[str], *, error: type[Exception] = ConfigError
-) -> str:
+def check_choice(name: str, value: str, choices: Iterable[str], *, error: type[Exception] = ConfigError) -> str:
     """``value`` must be one of ``choices``."""
     choices = tuple(choices)
     if value not in choices:

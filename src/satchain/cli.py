@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import math
-import shutil
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
-from satchain.errors import ConfigError, SatchainError
+from satchain._cli_common import console, err_console, handle_errors
+from satchain.errors import ConfigError
 
 app = typer.Typer(
     name="satchain",
@@ -22,25 +20,12 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console(width=max(shutil.get_terminal_size((150, 40)).columns, 120))
-err_console = Console(stderr=True, soft_wrap=True)
 
 PresetOpt = Annotated[str | None, typer.Option("--preset", help="packaged system preset, e.g. ankarasat3")]
 SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML file")]
 
 
-def _handle_errors(fn):
-    """Turn satchain's errors into one clear line on stderr and exit status 2."""
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        try:
-            return fn(*args, **kwargs)
-        except SatchainError as exc:
-            err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
-            raise typer.Exit(2) from None
-
-    return wrapper
+_handle_errors = handle_errors
 
 
 def _system(preset: str | None, system: Path | None):

@@ -9,7 +9,6 @@ Regions are ``X0,Y0,X1,Y1`` in pixels (x = column, y = row), half-open.  ``--jso
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 import shutil
@@ -20,7 +19,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from satchain.errors import ConfigError, SatchainError, SatchainIOError
+from satchain._cli_common import handle_errors
+from satchain.errors import ConfigError, SatchainIOError
 
 __all__ = ["measure_app"]
 
@@ -32,9 +32,7 @@ measure_app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-ImageArg = Annotated[
-    Path, typer.Argument(help="image: .tif/.tiff (float or integer), .png (8/16-bit) or .npy")
-]
+ImageArg = Annotated[Path, typer.Argument(help="image: .tif/.tiff (float or integer), .png (8/16-bit) or .npy")]
 RoiOpt = Annotated[
     str | None, typer.Option("--roi", help="region X0,Y0,X1,Y1 in pixels (x = column, y = row; half-open)")
 ]
@@ -49,18 +47,7 @@ def _console() -> Console:
     return Console(width=max(shutil.get_terminal_size((120, 40)).columns, 110))
 
 
-def _handle_errors(fn):
-    """satchain's errors -> one clear line on stderr and exit status 2 (no traceback)."""
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        try:
-            return fn(*args, **kwargs)
-        except SatchainError as exc:
-            Console(stderr=True, soft_wrap=True).print(f"[bold red]error:[/] {exc}", highlight=False)
-            raise typer.Exit(2) from None
-
-    return wrapper
+_handle_errors = handle_errors
 
 
 def _numbers(name: str, text: str, n: int | None = None) -> list[float]:
@@ -261,9 +248,7 @@ def bars(
         list[str] | None,
         typer.Option("--group-roi", help="X0,Y0,X1,Y1 of one group (repeat, one per period)"),
     ] = None,
-    direction: Annotated[
-        str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")
-    ] = "ACT",
+    direction: Annotated[str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")] = "ACT",
     levels: Annotated[
         str | None, typer.Option("--levels", help="large-area DARK,BRIGHT levels; default: the widest group")
     ] = None,
@@ -287,9 +272,7 @@ def bars(
     else:
         raise ConfigError(f"--periods-px = {periods_px!r}: {len(periods)} groups need one --group-roi each")
     lv = None if levels is None else tuple(_numbers("--levels", levels, 2))
-    r = measure_bars(
-        data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p
-    )
+    r = measure_bars(data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p)
     payload = {"image": str(image), "group_rois": rois, "pixel_m": p, **r.to_dict()}
 
     def plot(d: Path):
@@ -364,9 +347,7 @@ def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, th
             raise ConfigError(f"--id: the truth file has {len(wedges)} hyperbolic wedges {wedges}; name one")
         item_id = wedges[0]
     elif item_id not in wedges:
-        raise ConfigError(
-            f"--id = {item_id!r}: not a hyperbolic wedge of the truth file; choose from {wedges}"
-        )
+        raise ConfigError(f"--id = {item_id!r}: not a hyperbolic wedge of the truth file; choose from {wedges}")
     res = measure_auto(data, truth, pixel_m=p, origin_m=origin, ids=[item_id], wedge_threshold=threshold)
     found = res.by_kind("hyperbolic_wedge")
     if not found:
@@ -391,16 +372,10 @@ def wedge(
     direction: Annotated[
         str, typer.Option("--direction", help="ALT: stripes along x, scan along x; ACT: the transpose")
     ] = "ALT",
-    threshold: Annotated[
-        float, typer.Option("--threshold", help="contrast where lines stop resolving")
-    ] = 0.15,
-    truth: Annotated[
-        Path | None, typer.Option("--truth", help="scene truth JSON: geometry from there")
-    ] = None,
+    threshold: Annotated[float, typer.Option("--threshold", help="contrast where lines stop resolving")] = 0.15,
+    truth: Annotated[Path | None, typer.Option("--truth", help="scene truth JSON: geometry from there")] = None,
     item_id: Annotated[str | None, typer.Option("--id", help="wedge id in the truth file")] = None,
-    origin_m: Annotated[
-        str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image corner")
-    ] = None,
+    origin_m: Annotated[str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image corner")] = None,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
@@ -418,16 +393,12 @@ def wedge(
     data, p, meta = _load(image, pixel_m)
     if truth is not None:
         if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
-            raise ConfigError(
-                "--truth: the geometry comes from the truth file; drop --roi and --line-width-*"
-            )
+            raise ConfigError("--truth: the geometry comes from the truth file; drop --roi and --line-width-*")
         r, summary, p = _wedge_from_truth(data, truth, item_id, p, _origin(origin_m, meta), threshold)
         payload = {"image": str(image), "truth": str(truth), "pixel_m": p, **summary}
     else:
         if line_width_start_px is None or line_width_end_px is None:
-            raise ConfigError(
-                "wedge: give --line-width-start-px and --line-width-end-px, or --truth TRUTH.json"
-            )
+            raise ConfigError("wedge: give --line-width-start-px and --line-width-end-px, or --truth TRUTH.json")
         region = _roi("--roi", roi) or (0, 0, data.shape[-1], data.shape[0])
         axis = region[2] - region[0] if direction.upper() == "ALT" else region[3] - region[1]
         lw = _line_widths(line_width_start_px, line_width_end_px, axis, profile)
@@ -509,9 +480,7 @@ def _auto_tables(d: dict) -> None:
             ("resolution (line width, m)", w["resolution_m"]),
             ("frequency (cy/px)", w["resolved_f_cy_per_px"]),
         ]
-        c.print(
-            _kv_table(f"hyperbolic wedge {w['id']} ({w['direction']}, threshold {w['threshold']:.0%})", rows)
-        )
+        c.print(_kv_table(f"hyperbolic wedge {w['id']} ({w['direction']}, threshold {w['threshold']:.0%})", rows))
     if d["skipped"]:
         t = Table(title="not measured")
         for col in ("id", "kind", "reason"):
@@ -540,8 +509,6 @@ def auto(
     from satchain.measure.auto import measure_auto
 
     data, p, meta = _load(image, pixel_m)
-    res = measure_auto(
-        data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold
-    )
+    res = measure_auto(data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
     _emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))

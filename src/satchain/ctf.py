@@ -347,9 +347,7 @@ def coltman_ctf(f, mtf, *, rtol: float = 1e-12, max_terms: int = 100_000):
     >>> round(float(coltman_ctf(1.0, gauss)), 6)  # (4/pi)(e^-1 - e^-9 / 3 + ...)
     0.468346
     """
-    return _series_transform(
-        f, mtf, _coltman_signs, 4.0 / math.pi, name="mtf", rtol=rtol, max_terms=max_terms
-    )
+    return _series_transform(f, mtf, _coltman_signs, 4.0 / math.pi, name="mtf", rtol=rtol, max_terms=max_terms)
 
 
 def mtf_from_ctf(f, ctf, *, rtol: float = 1e-12, max_terms: int = 100_000):
@@ -389,9 +387,7 @@ def mtf_from_ctf(f, ctf, *, rtol: float = 1e-12, max_terms: int = 100_000):
     >>> np.round(mtf_from_ctf([0.1, 0.3, 0.7], ctf), 12).tolist()
     [0.9, 0.7, 0.3]
     """
-    return _series_transform(
-        f, ctf, _inverse_coefficients, math.pi / 4.0, name="ctf", rtol=rtol, max_terms=max_terms
-    )
+    return _series_transform(f, ctf, _inverse_coefficients, math.pi / 4.0, name="ctf", rtol=rtol, max_terms=max_terms)
 
 
 # --------------------------------------------------------------------------------------------------

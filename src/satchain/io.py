@@ -275,9 +275,7 @@ def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         desc = page.tags.get(270)
         if desc is not None:
             with contextlib.suppress(ValueError, TypeError, AttributeError):
-                meta.update(
-                    {k: v for k, v in json.loads(desc.value).get("satchain", {}).items() if v is not None}
-                )
+                meta.update({k: v for k, v in json.loads(desc.value).get("satchain", {}).items() if v is not None})
         scale = page.tags.get(_MODEL_PIXEL_SCALE)
         if scale is not None:
             sx, sy = float(scale.value[0]), float(scale.value[1])

@@ -79,9 +79,7 @@ def _stage_scene(ctx: RunContext, progress: Progress) -> None:
 
     write_text(ctx.out / "images" / "scene.truth.json", json.dumps(ctx.truth, indent=1))
     overview = ctx.scene.render(pixel_m=sc.overview_pixel_m)
-    run_figures.plot_scene_overview(
-        overview, ctx.truth, sc.overview_pixel_m, ctx.out / "figures" / "fig1_scene.png"
-    )
+    run_figures.plot_scene_overview(overview, ctx.truth, sc.overview_pixel_m, ctx.out / "figures" / "fig1_scene.png")
     progress("scene", 1, 1)
 
 
@@ -182,9 +180,7 @@ def _check_out_dir(out: Path) -> None:
         )
 
 
-def run_pipeline(
-    config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None
-) -> dict[str, Any]:
+def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
     """Run every stage into ``out_dir`` (atomically replaced); return ``results.json``'s content."""
     out = Path(out_dir).resolve()
     _check_out_dir(out)

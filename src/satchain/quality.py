@@ -58,15 +58,12 @@ def _otf_on_grid(f_cy_per_px, otf) -> tuple[np.ndarray, np.ndarray]:
     if np.iscomplexobj(o):
         if o.size and np.max(np.abs(o.imag)) > 1e-9 * max(np.max(np.abs(o)), 1e-300):
             raise InputError(
-                "mtf: complex OTF with a non-zero phase; pass np.abs(otf) (the MTF, as the GIQE uses) "
-                "or its real part"
+                "mtf: complex OTF with a non-zero phase; pass np.abs(otf) (the MTF, as the GIQE uses) or its real part"
             )
         o = o.real
     m = as_float_array("mtf", o, ndim=1)
     if f.shape != m.shape or f.size < 2:
-        raise InputError(
-            f"f_cy_per_px and mtf: must be 1-D of equal length >= 2, got {f.shape} and {m.shape}"
-        )
+        raise InputError(f"f_cy_per_px and mtf: must be 1-D of equal length >= 2, got {f.shape} and {m.shape}")
     if f[0] != 0.0 or np.any(np.diff(f) <= 0):
         raise InputError("f_cy_per_px: must start at 0 and increase strictly")
     if abs(m[0] - 1.0) > 1e-6:
@@ -252,9 +249,7 @@ def giqe5(*, gsd_in: float, rer: float, snr: float, elevation_deg: float = 90.0)
     """
     g, r, s, sin_e = _check_common(gsd_in, rer, snr, elevation_deg)
     lr = math.log10(r)
-    return (
-        9.57 - 3.32 * math.log10(g / sin_e**0.25) + 3.32 * (1 - math.exp(-1.9 / s)) * lr - 2 * lr**4 - 1.8 / s
-    )
+    return 9.57 - 3.32 * math.log10(g / sin_e**0.25) + 3.32 * (1 - math.exp(-1.9 / s)) * lr - 2 * lr**4 - 1.8 / s
 
 
 def giqe5_rer(rer_act: float, rer_alt: float) -> float:

@@ -37,12 +37,8 @@ class SystemRef(_Frozen):
 
 class SceneConfig(_Frozen):
     layout: str = Field(default="paper", description="'paper' or a scene file (.toml/.json)")
-    pixel_m: float = Field(
-        default=0.035, gt=0, le=100, description="ground-truth pixel size, m (the paper's 3.5 cm)"
-    )
-    overview_pixel_m: float = Field(
-        default=0.25, gt=0, le=100, description="pixel size of the Figure 1 overview"
-    )
+    pixel_m: float = Field(default=0.035, gt=0, le=100, description="ground-truth pixel size, m (the paper's 3.5 cm)")
+    overview_pixel_m: float = Field(default=0.25, gt=0, le=100, description="pixel size of the Figure 1 overview")
 
 
 class SimulationConfig(_Frozen):
@@ -54,9 +50,7 @@ class SimulationConfig(_Frozen):
 
 
 class MeasurementConfig(_Frozen):
-    wedge_threshold: float = Field(
-        default=0.15, gt=0, lt=1, description="contrast at which a wedge stops resolving"
-    )
+    wedge_threshold: float = Field(default=0.15, gt=0, lt=1, description="contrast at which a wedge stops resolving")
 
 
 class Tolerances(_Frozen):
@@ -86,9 +80,7 @@ class RunConfig(_Frozen):
             return cls.model_validate({**data, "base_dir": str(base_dir)})
         except ValidationError as exc:
             err = _config_error(exc)
-            raise ConfigError(
-                str(err).replace("invalid imaging system", "invalid run configuration")
-            ) from None
+            raise ConfigError(str(err).replace("invalid imaging system", "invalid run configuration")) from None
 
     def load_system(self) -> ImagingSystem:
         ref = self.system
@@ -170,9 +162,7 @@ def _toml_value(v: Any) -> str:
 
 
 def _toml_table(name: str, d: dict[str, Any], lines: list[str]) -> None:
-    scalars = {
-        k: v for k, v in d.items() if not isinstance(v, dict) or not v or name.endswith("zernike_rms_waves")
-    }
+    scalars = {k: v for k, v in d.items() if not isinstance(v, dict) or not v or name.endswith("zernike_rms_waves")}
     tables = {k: v for k, v in d.items() if k not in scalars}
     lines.append(f"[{name}]")
     lines.extend(f"{k} = {_toml_value(v)}" for k, v in scalars.items())

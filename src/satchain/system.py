@@ -82,9 +82,7 @@ class Spiders(_Frozen):
 
     count: int = Field(ge=0, le=16)
     width_m: float = Field(gt=0)
-    angle_deg: float = Field(
-        default=0.0, ge=-360, le=360, description="angle of the first vane from +x (ACT)"
-    )
+    angle_deg: float = Field(default=0.0, ge=-360, le=360, description="angle of the first vane from +x (ACT)")
 
 
 class Optics(_Frozen):
@@ -93,12 +91,8 @@ class Optics(_Frozen):
     aperture_diameter_m: float = Field(gt=0, le=100)
     focal_length_m: float = Field(gt=0, le=1e3)
     f_number: float = Field(gt=0, le=1e3)
-    obscuration_ratio: float = Field(
-        default=0.0, ge=0, lt=1, description="central obscuration diameter ratio"
-    )
-    wavelengths_m: tuple[float, ...] = Field(
-        min_length=1, description="wavelengths for the polychromatic MTF"
-    )
+    obscuration_ratio: float = Field(default=0.0, ge=0, lt=1, description="central obscuration diameter ratio")
+    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="wavelengths for the polychromatic MTF")
     wavelength_weights: tuple[float, ...] | None = None
     transmission: float = Field(default=1.0, gt=0, le=1)
     wfe_rms_waves: float = Field(default=0.0, ge=0, le=0.25, description="random wavefront error, rms waves")
@@ -144,9 +138,7 @@ class Optics(_Frozen):
     def _wavelengths(cls, v: tuple[float, ...]) -> tuple[float, ...]:
         for i, w in enumerate(v):
             if not (1e-8 <= w <= 1e-4):
-                raise ValueError(
-                    f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)"
-                )
+                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
         return v
 
     @field_validator("zernike_rms_waves")
@@ -169,11 +161,7 @@ class Optics(_Frozen):
                 )
             if any((not math.isfinite(x)) or x < 0 for x in w) or sum(w) <= 0:
                 raise ValueError(f"wavelength_weights = {list(w)!r}: must be >= 0 with a positive sum")
-        if (
-            self.spiders is not None
-            and self.spiders.count
-            and self.spiders.width_m >= self.aperture_diameter_m
-        ):
+        if self.spiders is not None and self.spiders.count and self.spiders.width_m >= self.aperture_diameter_m:
             raise ValueError(
                 f"spiders.width_m = {self.spiders.width_m!r}: must be < aperture_diameter_m "
                 f"({self.aperture_diameter_m!r})"
@@ -183,11 +171,7 @@ class Optics(_Frozen):
     @property
     def weights(self) -> np.ndarray:
         """Normalised polychromatic weights (uniform when none are given)."""
-        w = (
-            np.ones(len(self.wavelengths_m))
-            if self.wavelength_weights is None
-            else np.array(self.wavelength_weights)
-        )
+        w = np.ones(len(self.wavelengths_m)) if self.wavelength_weights is None else np.array(self.wavelength_weights)
         return w / w.sum()
 
     @property
@@ -245,9 +229,7 @@ class Detector(_Frozen):
         if p is not None:
             for k in ("pitch_x_m", "pitch_y_m"):
                 if k in d and d[k] != p:
-                    raise ValueError(
-                        f"detector.pitch_m = {p!r} conflicts with detector.{k} = {d[k]!r}; give one"
-                    )
+                    raise ValueError(f"detector.pitch_m = {p!r} conflicts with detector.{k} = {d[k]!r}; give one")
                 d[k] = p
         elif "pitch_x_m" not in d or "pitch_y_m" not in d:
             raise ValueError("give detector.pitch_m, or both detector.pitch_x_m and detector.pitch_y_m")
@@ -302,15 +284,12 @@ class Detector(_Frozen):
             increasing = all(b > a for a, b in zip(w[:-1], w[1:], strict=True))
             if not increasing or any(not 1e-8 <= x <= 1e-4 for x in w):
                 raise ValueError(
-                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, "
-                    "in [1e-08, 0.0001] m"
+                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, in [1e-08, 0.0001] m"
                 )
             if max(q) <= 0:
                 raise ValueError("detector.qe: a tabulated QE must be > 0 somewhere")
         elif w is not None:
-            raise ValueError(
-                "detector.qe_wavelengths_m is given but detector.qe is a single number; give a qe table"
-            )
+            raise ValueError("detector.qe_wavelengths_m is given but detector.qe is a single number; give a qe table")
         if self.bit_depth is not None and self.full_well_e is None:
             raise ValueError(
                 f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is "
@@ -340,9 +319,7 @@ class Motion(_Frozen):
     """Platform motion during one exposure: linear along-track smear and random jitter (detector pixels)."""
 
     smear_px: float = Field(default=0.0, ge=0, le=100, description="along-track (ALT, y) linear smear length")
-    smear_act_px: float = Field(
-        default=0.0, ge=0, le=100, description="across-track (ACT, x) smear, e.g. yaw"
-    )
+    smear_act_px: float = Field(default=0.0, ge=0, le=100, description="across-track (ACT, x) smear, e.g. yaw")
     jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
 
 
@@ -402,9 +379,7 @@ class ImagingSystem(_Frozen):
     motion: Motion = Field(default_factory=Motion)
     radiometry: Radiometry = Field(default_factory=Radiometry)
     illumination: Illumination = Field(default_factory=Illumination)
-    provenance: dict[str, Any] = Field(
-        default_factory=dict, description="free-form notes, e.g. fitted values"
-    )
+    provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
     # ----------------------------------------------------------------- construction
     @classmethod
@@ -444,11 +419,7 @@ class ImagingSystem(_Frozen):
                 field, v = "wavelengths_m", (v,)
                 sub["wavelength_weights"] = None
             if section == "detector" and field in ("pitch_m", "fill_factor"):
-                ff = (
-                    sub.pop("active_width_x_m")
-                    * sub.pop("active_width_y_m")
-                    / (sub["pitch_x_m"] * sub["pitch_y_m"])
-                )
+                ff = sub.pop("active_width_x_m") * sub.pop("active_width_y_m") / (sub["pitch_x_m"] * sub["pitch_y_m"])
                 if field == "pitch_m":
                     sub.pop("pitch_x_m"), sub.pop("pitch_y_m")
                 sub.setdefault("fill_factor", ff)
@@ -477,16 +448,12 @@ class ImagingSystem(_Frozen):
     @property
     def gsd_act_m(self) -> float:
         """Ground sample distance across-track (x), m."""
-        return units.gsd_m(
-            self.detector.pitch_x_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m
-        )
+        return units.gsd_m(self.detector.pitch_x_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
 
     @property
     def gsd_alt_m(self) -> float:
         """Ground sample distance along-track (y), m."""
-        return units.gsd_m(
-            self.detector.pitch_y_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m
-        )
+        return units.gsd_m(self.detector.pitch_y_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
 
     @property
     def gsd_m(self) -> float:
@@ -621,9 +588,7 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
 def preset_names() -> list[str]:
     """Names of the packaged presets."""
     return sorted(
-        r.name.removesuffix(".toml")
-        for r in resources.files("satchain.presets").iterdir()
-        if r.name.endswith(".toml")
+        r.name.removesuffix(".toml") for r in resources.files("satchain.presets").iterdir() if r.name.endswith(".toml")
     )
 
 

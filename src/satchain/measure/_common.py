@@ -40,9 +40,7 @@ def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarra
         n = int(np.count_nonzero(~np.isfinite(a)))
         raise InputError(f"{name}: the region contains {n} NaN/inf value(s); all values must be finite")
     if min(a.shape) < min_size:
-        raise InputError(
-            f"{name}: region of shape {a.shape} is too small; both sides must be >= {min_size} px"
-        )
+        raise InputError(f"{name}: region of shape {a.shape} is too small; both sides must be >= {min_size} px")
     return np.array(a, dtype=np.float64)
 
 

@@ -504,9 +504,7 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
     periods_px = [float(g["period_m"]) / p for g in groups]
     levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
     direction = "ACT" if orientation == "act" else "ALT"
-    r = measure_bars(
-        refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p
-    )
+    r = measure_bars(refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p)
     rows = [
         {
             "group": k,
@@ -562,9 +560,7 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
     count = inside.sum(axis=0)
     stop = int(np.argmax(count < 3)) if np.any(count < 3) else count.size
     if stop < 4:
-        raise _Skip(
-            f"too small at {p:g} m pixels: fewer than 4 positions with 3 or more rows across the stripes"
-        )
+        raise _Skip(f"too small at {p:g} m pixels: fewer than 4 positions with 3 or more rows across the stripes")
     ts, inside, w, s_m = ts[:, :stop], inside[:, :stop], w[:stop], s_m[:stop]
     if not np.all(np.isfinite(ts[inside])):
         raise InputError("image: the wedge region contains NaN/inf values")

@@ -124,18 +124,14 @@ def measure_bars(
     check_choice("direction", direction, ("ACT", "ALT"))
     periods = np.array([check_positive("periods_px", p) for p in periods_px], dtype=float)
     if len(group_rois) != periods.size or periods.size == 0:
-        raise InputError(
-            f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group"
-        )
+        raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     profiles = []
     for roi in group_rois:
         data = crop_roi(image, roi, min_size=2)
         profiles.append(data.mean(axis=0) if direction == "ACT" else data.mean(axis=1))
     for p, prof in zip(periods, profiles, strict=True):
         if prof.size < p:
-            raise InputError(
-                f"group_rois: a region of {prof.size} px across the bars is shorter than its period {p:g}"
-            )
+            raise InputError(f"group_rois: a region of {prof.size} px across the bars is shorter than its period {p:g}")
     if levels is None:
         dark, bright = np.percentile(profiles[int(np.argmax(periods))], [2, 98])
     else:

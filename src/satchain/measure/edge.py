@@ -208,9 +208,7 @@ def _check_saturation(data: np.ndarray, level: float | None) -> None:
     if level is not None:
         n = int(np.count_nonzero(data >= level))
         if n:
-            raise InputError(
-                f"image: {n} pixel(s) at or above the saturation level {level:g}; the edge is clipped"
-            )
+            raise InputError(f"image: {n} pixel(s) at or above the saturation level {level:g}; the edge is clipped")
     lo, hi = float(data.min()), float(data.max())
     if hi == lo:
         raise InputError(f"image: the region is flat (every pixel = {lo:g}); no edge to measure")

@@ -124,8 +124,6 @@ def measure_wedge(
         resolved_f_cy_per_px=res_f,
         resolved_line_width_m=None if (pixel_m is None or res_lw is None) else res_lw * pixel_m,
         resolved_f_cy_per_m_ground=(
-            None
-            if (pixel_m is None or res_f is None)
-            else float(cy_per_px_to_cy_per_m_ground(res_f, gsd_m=pixel_m))
+            None if (pixel_m is None or res_f is None) else float(cy_per_px_to_cy_per_m_ground(res_f, gsd_m=pixel_m))
         ),
     )

@@ -68,9 +68,7 @@ def read_table1(path: str | Path | None = None) -> Table1:
             text = Path(path).read_text()
         except OSError as exc:
             raise SatchainIOError(f"table path {str(path)!r}: cannot be read ({exc.strerror})") from None
-    rows = list(
-        csv.DictReader(io.StringIO("".join(ln for ln in text.splitlines(True) if not ln.startswith("#"))))
-    )
+    rows = list(csv.DictReader(io.StringIO("".join(ln for ln in text.splitlines(True) if not ln.startswith("#")))))
     col = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
     return Table1(
         period_m=col["period_lpw_m"],

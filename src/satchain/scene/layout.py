@@ -63,8 +63,7 @@ __all__ = [
 ]
 
 ITEM_KINDS: dict[str, type[Item]] = {
-    cls.kind: cls
-    for cls in (SlantedEdge, BarTarget, HyperbolicWedge, SiemensStar, Road, Car, Railway, Wagon, House)
+    cls.kind: cls for cls in (SlantedEdge, BarTarget, HyperbolicWedge, SiemensStar, Road, Car, Railway, Wagon, House)
 }
 TRUTH_FORMAT = "satchain-scene-truth/1"
 CONVENTIONS = {
@@ -269,9 +268,7 @@ def paper_layout() -> Scene:
         (170.0, -5.49, "station_wagon"),
     ]
     for k, (x, v, model) in enumerate(cars):
-        items.append(
-            Car(f"car_hw_{k}", origin_m=(x, 89.0 + v), rotation_deg=0.0 if v > 0 else 180.0, model=model)
-        )
+        items.append(Car(f"car_hw_{k}", origin_m=(x, 89.0 + v), rotation_deg=0.0 if v > 0 else 180.0, model=model))
     items += [
         Railway("railway_1", origin_m=(70.0, 109.0), length_m=128.0),
         Railway("railway_2", origin_m=(70.0, 113.5), length_m=128.0),

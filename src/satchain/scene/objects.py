@@ -30,9 +30,7 @@ from satchain.scene.shapes import place, rectangle
 __all__ = ["Car", "House", "Railway", "Road", "Wagon", "ellipse_arc"]
 
 
-def ellipse_arc(
-    cu: float, cv: float, au: float, av: float, a0: float, a1: float, *, tol: float
-) -> np.ndarray:
+def ellipse_arc(cu: float, cv: float, au: float, av: float, a0: float, a1: float, *, tol: float) -> np.ndarray:
     """Points on ``(cu + au cos a, cv + av sin a)`` for a in [a0, a1], chords within ``tol`` of the arc.
 
     Examples
@@ -82,9 +80,7 @@ class Road(_Placed):
             check_positive(f"road.{name}", getattr(self, name))
         check_range("road.shoulder_m", self.shoulder_m, 0.0)
         if int(self.lanes_per_direction) != self.lanes_per_direction or self.lanes_per_direction < 1:
-            raise ConfigError(
-                f"road.lanes_per_direction = {self.lanes_per_direction!r}: must be an integer >= 1"
-            )
+            raise ConfigError(f"road.lanes_per_direction = {self.lanes_per_direction!r}: must be an integer >= 1")
         for name in ("asphalt", "shoulder", "white", "yellow"):
             check_reflectance(f"road.{name}", getattr(self, name))
 
@@ -304,8 +300,7 @@ class Wagon(_Placed):
         if self.model == "boxcar":
             body = [rectangle(-hl, -hw, hl, hw)]
             seams = [
-                rectangle(u - 0.025, -hw + 0.05, u + 0.025, hw - 0.05)
-                for u in np.arange(-hl + 1.3, hl - 1.0, 1.3)
+                rectangle(u - 0.025, -hw + 0.05, u + 0.025, hw - 0.05) for u in np.arange(-hl + 1.3, hl - 1.0, 1.3)
             ]
             walk = [rectangle(-hl + 0.2, -0.25, hl - 0.2, 0.25)]
             return [(self._place(couplers + body), self.body), (self._place(seams + walk), self.detail)]
@@ -352,9 +347,7 @@ class House(_Placed):
         for name in ("length_m", "width_m", "ridge_width_m"):
             check_positive(f"house.{name}", getattr(self, name))
         if self.ridge_width_m >= self.width_m:
-            raise ConfigError(
-                f"house.ridge_width_m = {self.ridge_width_m}: must be < width_m = {self.width_m}"
-            )
+            raise ConfigError(f"house.ridge_width_m = {self.ridge_width_m}: must be < width_m = {self.width_m}")
         for name in ("roof_lit", "roof_shaded", "ridge"):
             check_reflectance(f"house.{name}", getattr(self, name))
 

@@ -86,9 +86,7 @@ def _edge_integrals(ax, ay, bx, by, k: int, r_in: float, r_out: float):
         for n in np.unique(panels[crosses == crossing]):
             sel = np.flatnonzero((crosses == crossing) & (panels == n))
             if crossing:
-                t = np.sort(
-                    np.concatenate([np.zeros((sel.size, 1)), roots[sel], np.ones((sel.size, 1))], 1), 1
-                )
+                t = np.sort(np.concatenate([np.zeros((sel.size, 1)), roots[sel], np.ones((sel.size, 1))], 1), 1)
             else:
                 t = np.tile([0.0, 1.0], (sel.size, 1))
             out[sel] = _piece_integrals(ax[sel], ay[sel], dx[sel], dy[sel], t, k, r_in, r_out, int(n))

@@ -146,9 +146,7 @@ class BarTarget(Item):
 
     def __post_init__(self):
         object.__setattr__(self, "origin_m", check_point("bar_target.origin_m", self.origin_m))
-        periods = tuple(
-            float(check_positive("bar_target.periods_m", p)) for p in np.atleast_1d(self.periods_m)
-        )
+        periods = tuple(float(check_positive("bar_target.periods_m", p)) for p in np.atleast_1d(self.periods_m))
         if not periods:
             raise ConfigError("bar_target.periods_m = (): must list at least one period")
         object.__setattr__(self, "periods_m", periods)
@@ -324,9 +322,7 @@ class SiemensStar(Item):
     def __post_init__(self):
         object.__setattr__(self, "center_m", check_point("siemens_star.center_m", self.center_m))
         check_positive("siemens_star.radius_m", self.radius_m)
-        check_range(
-            "siemens_star.inner_radius_m", self.inner_radius_m, 0.0, self.radius_m, lo_open=True, hi_open=True
-        )
+        check_range("siemens_star.inner_radius_m", self.inner_radius_m, 0.0, self.radius_m, lo_open=True, hi_open=True)
         if isinstance(self.cycles, bool) or int(self.cycles) != self.cycles or self.cycles < 1:
             raise ConfigError(f"siemens_star.cycles = {self.cycles!r}: must be an integer >= 1")
         check_reflectance("siemens_star.mean", self.mean)

@@ -124,9 +124,7 @@ class SystemOTF:
         space."""
         unknown = set(exclude) - set(self._components)
         if unknown:
-            raise ConfigError(
-                f"exclude = {sorted(unknown)!r}: not components of this system ({self.component_names})"
-            )
+            raise ConfigError(f"exclude = {sorted(unknown)!r}: not components of this system ({self.component_names})")
         out = None
         for name, v in self.components(fx_cy_per_mm, fy_cy_per_mm).items():
             if name not in exclude:
@@ -185,11 +183,7 @@ def mtf_budget(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None
     >>> round(float(b.alt["detector"][0]), 4), round(float(b.act["smear"][0]), 4)
     (0.6366, 1.0)
     """
-    f = (
-        default_frequencies_cy_per_mm(system)
-        if f_cy_per_mm is None
-        else as_float_array("f_cy_per_mm", f_cy_per_mm)
-    )
+    f = default_frequencies_cy_per_mm(system) if f_cy_per_mm is None else as_float_array("f_cy_per_mm", f_cy_per_mm)
     f = np.atleast_1d(f)
     if np.any(f < 0):
         raise ConfigError(f"f_cy_per_mm: must be >= 0, got minimum {f.min()!r}")
@@ -253,9 +247,7 @@ def mtfa(f_cy_per_px, mtf, *, f_max_cy_per_px: float = 0.5, threshold=None) -> f
     f = as_float_array("f_cy_per_px", f_cy_per_px, ndim=1)
     m = as_float_array("mtf", mtf, ndim=1)
     if f.shape != m.shape or f.size < 2:
-        raise ConfigError(
-            f"f_cy_per_px and mtf: must be 1-D of equal length >= 2, got {f.shape} and {m.shape}"
-        )
+        raise ConfigError(f"f_cy_per_px and mtf: must be 1-D of equal length >= 2, got {f.shape} and {m.shape}")
     if np.any(np.diff(f) <= 0):
         raise ConfigError("f_cy_per_px: must be strictly increasing")
     if not f[0] <= f_max_cy_per_px <= f[-1]:

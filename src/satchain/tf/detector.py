@@ -50,9 +50,7 @@ def charge_diffusion_otf(fx_cy_per_mm, fy_cy_per_mm, *, diffusion_length_m: floa
     return (1.0 + (2.0 * np.pi * L_mm) ** 2 * (fx * fx + fy * fy)) ** -1.5
 
 
-def tdi_sync_otf(
-    fx_cy_per_mm, fy_cy_per_mm, *, stages: int, sync_error: float, pitch_y_m: float
-) -> np.ndarray:
+def tdi_sync_otf(fx_cy_per_mm, fy_cy_per_mm, *, stages: int, sync_error: float, pitch_y_m: float) -> np.ndarray:
     """OTF of a TDI line-rate mismatch: the image drifts ``sync_error`` pixels per stage relative to the
     charge packet, a linear smear of ``stages * |sync_error|`` pixels along-track in total.
 

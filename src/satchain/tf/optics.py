@@ -257,9 +257,7 @@ def _pupil_transmission(n: int, eps: float, spiders, dx_m: float):
             ang = math.radians(spiders.angle_deg + 360.0 * k / spiders.count)
             ex, ey = math.cos(ang), math.sin(ang)
             along, across = ex * x + ey * y, -ey * x + ex * y
-            strip = _halfplane_coverage(w / 2 - across, -ey, ex) - _halfplane_coverage(
-                -w / 2 - across, -ey, ex
-            )
+            strip = _halfplane_coverage(w / 2 - across, -ey, ex) - _halfplane_coverage(-w / 2 - across, -ey, ex)
             t = t * (1.0 - strip * _halfplane_coverage(along, ex, ey))
     return np.clip(t, 0.0, 1.0), r / radius, np.arctan2(y, x)
 
