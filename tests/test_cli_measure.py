@@ -237,9 +237,7 @@ def test_auto_json_and_outputs(scene_files, tmp_path):
     tif, truth = scene_files
     d = _json(["auto", str(tif), "--truth", str(truth)])
     assert d["pixel_m"] == 0.25
-    measured = {
-        e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]
-    }
+    measured = {e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]}
     skipped = {s["id"]: s["reason"] for s in d["skipped"]}
     assert measured == {"edge", "star", "bars", "wedge"}
     assert "no measurement defined" in skipped["car"] and "Nyquist" in skipped["bars/group_3"]
@@ -275,31 +273,36 @@ def _err(args, *needles):
 
 
 def test_errors_exit_2_with_a_clear_message(tmp_path):
+    results = []
     edge = _write(tmp_path, "edge", _edge_image(), "tif-float")
-    _err(["edge", str(tmp_path / "missing.tif")], "error:", "no such file")
-    _err(["edge", str(edge), "--roi", "1,2,3"], "--roi", "4 comma-separated numbers")
-    _err(["edge", str(edge), "--roi", "1,2,3.5,9"], "--roi", "integers")
-    _err(["edge", str(edge), "--roi", "50,0,64,64"], "error:", "flat")  # beyond the edge: no edge in the ROI
-    _err(["edge", str(edge), "--roi", "0,0,5,5"], "too small")
-    _err(["edge", str(edge), "--roi", "0,0,100,20"], "roi")
-    _err(["edge", str(edge), "--pixel-m", "-1"], "--pixel-m")
+    results.append(_err(["edge", str(tmp_path / "missing.tif")], "error:", "no such file"))
+    results.append(_err(["edge", str(edge), "--roi", "1,2,3"], "--roi", "4 comma-separated numbers"))
+    results.append(_err(["edge", str(edge), "--roi", "1,2,3.5,9"], "--roi", "integers"))
+    results.append(
+        _err(["edge", str(edge), "--roi", "50,0,64,64"], "error:", "flat")
+    )  # beyond the edge: no edge in the ROI
+    results.append(_err(["edge", str(edge), "--roi", "0,0,5,5"], "too small"))
+    results.append(_err(["edge", str(edge), "--roi", "0,0,100,20"], "roi"))
+    results.append(_err(["edge", str(edge), "--pixel-m", "-1"], "--pixel-m"))
     noise = 0.5 + 0.01 * np.random.default_rng(1).normal(size=(64, 64))
-    _err(["edge", str(_write(tmp_path, "noise", noise, "npy"))], "no edge found")
+    results.append(_err(["edge", str(_write(tmp_path, "noise", noise, "npy"))], "no edge found"))
     flat = _write(tmp_path, "flat", np.full((64, 64), 0.3), "npy")
-    _err(["edge", str(flat)], "flat")
+    results.append(_err(["edge", str(flat)], "flat"))
     nan = _edge_image()
     nan[10, 10] = np.nan
-    _err(["edge", str(_write(tmp_path, "nan", nan, "npy"))], "NaN")
+    results.append(_err(["edge", str(_write(tmp_path, "nan", nan, "npy"))], "NaN"))
     jpg = tmp_path / "x.jpg"
     jpg.write_bytes(b"not an image")
-    _err(["edge", str(jpg)], "unsupported suffix")
+    results.append(_err(["edge", str(jpg)], "unsupported suffix"))
     bars = _write(tmp_path, "bars", _bars_image(), "npy")
-    _err(["bars", str(bars), "--periods-px", "8,4"], "--group-roi")
-    _err(["bars", str(bars), "--periods-px", "8,x"], "--periods-px")
-    _err(["wedge", str(bars)], "--line-width-start-px")
-    _err(["star", str(bars)], "--cycles")  # typer's own usage error, also status 2
-    _err(["star", str(flat), "--cycles", "32"], "flat")
+    results.append(_err(["bars", str(bars), "--periods-px", "8,4"], "--group-roi"))
+    results.append(_err(["bars", str(bars), "--periods-px", "8,x"], "--periods-px"))
+    results.append(_err(["wedge", str(bars)], "--line-width-start-px"))
+    results.append(_err(["star", str(bars)], "--cycles"))  # typer's own usage error, also status 2
+    results.append(_err(["star", str(flat), "--cycles", "32"], "flat"))
     bad = tmp_path / "truth.json"
     bad.write_text("{not json")
-    _err(["auto", str(edge), "--truth", str(bad)], "not JSON")
-    _err(["auto", str(edge), "--truth", str(tmp_path / "none.json")], "no such file")
+    results.append(_err(["auto", str(edge), "--truth", str(bad)], "not JSON"))
+    results.append(_err(["auto", str(edge), "--truth", str(tmp_path / "none.json")], "no such file"))
+
+    assert len(results) >= 15 and all(r.exit_code == 2 and r.stderr for r in results)
