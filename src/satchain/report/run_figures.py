@@ -75,22 +75,36 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
     save_figure(fig, path, dpi=110)
 
 
+def _finish(fig, ax, path: Path, *, xlabel: str, ylabel: str, title: str, nyquist: bool = True, **legend) -> None:
+    """Common decoration (Nyquist line, labels, grid, legend) and an atomic save."""
+    if nyquist:
+        ax.axvline(0.5, color="gray", lw=1)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, **legend)
+    if fig is not None:
+        fig.tight_layout()
+        save_figure(fig, path, dpi=120)
+
+
 def _plot_edges(edges: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for i, e in enumerate(edges):
         c = f"C{i}"
         ax.plot(e["f_cy_per_px"], e["mtf_measured"], "-", color=c, label=f"{e['id']} measured")
         ax.plot(e["f_cy_per_px"], e["mtf_predicted"], "--", color=c, label=f"{e['id']} predicted")
-    ax.axvline(0.5, color="gray", lw=1)
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.05)
-    ax.set_xlabel("frequency along the edge normal (cycles/pixel)")
-    ax.set_ylabel("MTF")
-    ax.set_title("Slanted edges: measured vs predicted MTF")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
+    _finish(
+        fig,
+        ax,
+        path,
+        xlabel="frequency along the edge normal (cycles/pixel)",
+        ylabel="MTF",
+        title="Slanted edges: measured vs predicted MTF",
+    )
 
 
 def _plot_stars(stars: list[dict], path: Path) -> None:
@@ -100,16 +114,17 @@ def _plot_stars(stars: list[dict], path: Path) -> None:
         for i, (d, curve) in enumerate(st["mtf_measured"].items()):
             ax.plot(f, curve, ".", color=f"C{i}", ms=3, label=f"{d} measured")
             ax.plot(f, st["directions"][d]["mtf_predicted"], "-", color=f"C{i}", label=f"{d} predicted")
-    ax.axvline(0.5, color="gray", lw=1)
     ax.set_xlim(0, 0.8)
     ax.set_ylim(-0.05, 1.05)
-    ax.set_xlabel("frequency (cycles/pixel)")
-    ax.set_ylabel("MTF")
-    ax.set_title("Siemens star: MTF per direction, measured vs predicted")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
+    _finish(
+        fig,
+        ax,
+        path,
+        xlabel="frequency (cycles/pixel)",
+        ylabel="MTF",
+        title="Siemens star: MTF per direction, measured vs predicted",
+        ncol=2,
+    )
 
 
 def _plot_bars(bars: list[dict], path: Path) -> None:
@@ -120,12 +135,14 @@ def _plot_bars(bars: list[dict], path: Path) -> None:
             b["f_cy_per_px"], b["mtf_from_ctf_measured"], "s", color=c, label=f"{b['id']} from CTF (inverse Coltman)"
         )
         ax2.plot(b["f_cy_per_px"], b["mtf_predicted"], "-", color=c, label=f"{b['id']} predicted MTF")
-    ax2.axvline(0.5, color="gray", lw=1)
-    ax2.set_xlabel("bar frequency (cycles/pixel)")
-    ax2.set_ylabel("MTF")
-    ax2.set_title("Bar targets: MTF derived from the measured CTF")
-    ax2.grid(alpha=0.3)
-    ax2.legend(fontsize=7)
+    _finish(
+        None,
+        ax2,
+        path,
+        xlabel="bar frequency (cycles/pixel)",
+        ylabel="MTF",
+        title="Bar targets: MTF derived from the measured CTF",
+    )
     for i, b in enumerate(bars):
         c = f"C{i}"
         ax.plot(b["f_cy_per_px"], b["ctf_measured"], "o", color=c, label=f"{b['id']} measured CTF")
@@ -143,14 +160,14 @@ def _plot_bars(bars: list[dict], path: Path) -> None:
             color=c,
             label=f"{b['id']} paper's method",
         )
-    ax.axvline(0.5, color="gray", lw=1)
-    ax.set_xlabel("bar frequency (cycles/pixel)")
-    ax.set_ylabel("CTF")
-    ax.set_title("Bar targets: measured vs predicted square-wave response")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
+    _finish(
+        fig,
+        ax,
+        path,
+        xlabel="bar frequency (cycles/pixel)",
+        ylabel="CTF",
+        title="Bar targets: measured vs predicted square-wave response",
+    )
 
 
 def _plot_wedges(wedges: list[dict], path: Path) -> None:
@@ -167,13 +184,15 @@ def _plot_wedges(wedges: list[dict], path: Path) -> None:
         )
     if wedges:
         ax.axhline(wedges[0].get("threshold") or 0.15, color="k", ls="--", lw=1, label="threshold")
-    ax.set_xlabel("position along the wedge (m)")
-    ax.set_ylabel("contrast across the stripes")
-    ax.set_title("Hyperbolic wedges: the paper's contrast scan")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
+    _finish(
+        fig,
+        ax,
+        path,
+        xlabel="position along the wedge (m)",
+        ylabel="contrast across the stripes",
+        title="Hyperbolic wedges: the paper's contrast scan",
+        nyquist=False,
+    )
 
 
 def write_run_figures(ctx) -> None:
