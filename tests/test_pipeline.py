@@ -86,6 +86,11 @@ def test_run_outputs_complete(reduced_run):
         assert section in html
     assert html.count("<img") == len(images)
     assert 'src="http' not in html and "<script" not in html
+    from satchain.io import read_image
+
+    fp, meta = read_image(out / "images" / "focal_plane.tif")  # the coarse focal plane covers the scene
+    assert fp.shape[0] * meta["pixel_m"] == pytest.approx(140.0, abs=meta["pixel_m"])
+    assert fp.shape[1] * meta["pixel_m"] == pytest.approx(170.0, abs=meta["pixel_m"])
     on_disk = json.loads((out / "results.json").read_text())
     assert on_disk["gsd_m"] == pytest.approx(0.49)
     manifest = json.loads((out / "manifest.json").read_text())

@@ -98,7 +98,7 @@ def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
     ctx.sensor = sensor_from_system(ctx.system)
     ctx.image = sim.run(src, sensor=ctx.sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
-    ctx.focal_plane = sim.focal_plane(coarse)
+    ctx.focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
     s, d = ctx.system, ctx.out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
     dtype = np.uint16 if c.units == "dn" else np.float32

@@ -59,7 +59,11 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
     gt_ext = (win[1] * p, (win[1] + win[3]) * p, (win[0] + win[2]) * p, win[0] * p)
     fp, fp_ext = _crop(ctx.focal_plane, item["bbox_m"], p * ctx.simulator.D)
     det, det_ext = _crop(ctx.image, item["bbox_m"], ctx.system.gsd_act_m)
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
+    aspect = (x1 - x0) / max(y1 - y0, 1e-9)
+    if aspect > 2:  # long targets (a wedge along x): panels one above the other
+        fig, axes = plt.subplots(3, 1, figsize=(11, 3 * min(11 / aspect, 4) + 1.2))
+    else:
+        fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
     panels = (
         (gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"),
         (fp, fp_ext, f"(b) focal plane, {p * ctx.simulator.D * 100:g} cm samples"),
@@ -69,7 +73,8 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
         ax.imshow(im, cmap="gray", extent=ext, interpolation="nearest")
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("x (m)")
-    axes[0].set_ylabel("y (m)")
+    for ax in axes:
+        ax.set_ylabel("y (m)")
     fig.suptitle(f"{item['kind']} {item['id']}")
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
