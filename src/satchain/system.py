@@ -347,6 +347,20 @@ class Radiometry(_Frozen):
         return v
 
 
+class Atmosphere(_Frozen):
+    """Atmospheric blur (:mod:`satchain.tf.atmosphere`); off by default (the reference paper has none)."""
+
+    turbulence: bool = Field(default=False, description="include the turbulence OTF")
+    r0_m: float | None = Field(
+        default=None, gt=0, description="Fried parameter; default: Hufnagel-Valley, down-looking"
+    )
+    hv_wind_m_per_s: float = Field(default=21.0, ge=0, le=200)
+    hv_ground_cn2: float = Field(default=1.7e-14, ge=0, le=1e-10)
+    view_zenith_deg: float = Field(default=0.0, ge=0, le=80)
+    aerosol_scattered_fraction: float = Field(default=0.0, ge=0, lt=1)
+    aerosol_psf_scale_m: float = Field(default=200.0, gt=0, le=1e5)
+
+
 class Illumination(_Frozen):
     """Sun, surface and atmosphere for the radiometric budget (:mod:`satchain.radiometry`).
 
@@ -379,6 +393,7 @@ class ImagingSystem(_Frozen):
     motion: Motion = Field(default_factory=Motion)
     radiometry: Radiometry = Field(default_factory=Radiometry)
     illumination: Illumination = Field(default_factory=Illumination)
+    atmosphere: Atmosphere = Field(default_factory=Atmosphere)
     provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
     # ----------------------------------------------------------------- construction
@@ -554,7 +569,7 @@ class ImagingSystem(_Frozen):
         }
 
 
-_SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination")
+_SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination", "atmosphere")
 
 
 def _config_error(exc: ValidationError) -> ConfigError:

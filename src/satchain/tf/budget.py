@@ -13,6 +13,8 @@ The components of an :class:`~satchain.system.ImagingSystem`, in order:
     linear motion along-track (paper eq. 3) and across-track, when non-zero
 ``jitter``
     Gaussian line-of-sight jitter, when non-zero
+``turbulence``, ``aerosol``
+    atmospheric blur (:mod:`satchain.tf.atmosphere`), when the system's ``[atmosphere]`` enables them
 
 Examples
 --------
@@ -100,11 +102,35 @@ class SystemOTF:
             comps["smear"] = lambda fx, fy: _mot.smear_otf(
                 fx, fy, smear_alt_m=mot.smear_px * det.pitch_y_m, smear_act_m=mot.smear_act_px * det.pitch_x_m
             )
+        atm = s.atmosphere
+        if atm.turbulence:
+            from satchain.tf import atmosphere as _atm
+
+            lam = s.optics.effective_wavelength_m
+            r0 = atm.r0_m or _atm.fried_r0_m(
+                lam,
+                altitude_m=s.orbit.altitude_m,
+                zenith_deg=atm.view_zenith_deg,
+                cn2=lambda h: _atm.hufnagel_valley_cn2(
+                    h, wind_m_per_s=atm.hv_wind_m_per_s, ground_cn2=atm.hv_ground_cn2
+                ),
+            )
+            comps["turbulence"] = lambda fx, fy: _atm.turbulence_otf(
+                fx, fy, wavelength_m=lam, focal_length_m=s.focal_length_m, r0_m=r0
+            )
+        if atm.aerosol_scattered_fraction > 0:
+            from satchain import units as _u
+            from satchain.tf import atmosphere as _atm
+
+            comps["aerosol"] = lambda fx, fy: _atm.aerosol_otf(
+                _u.focal_to_ground_cy_per_m(np.hypot(fx, fy), focal_length_m=s.focal_length_m, range_m=s.orbit.range_m),
+                scattered_fraction=atm.aerosol_scattered_fraction,
+                psf_scale_m=atm.aerosol_psf_scale_m,
+            )
         if mot.jitter_rms_px > 0:
             comps["jitter"] = lambda fx, fy: _mot.jitter_otf(
                 fx, fy, rms_x_m=mot.jitter_rms_px * det.pitch_x_m, rms_y_m=mot.jitter_rms_px * det.pitch_y_m
             )
-        del s
         return comps
 
     @property
