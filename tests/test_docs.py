@@ -1,9 +1,9 @@
 """The README's examples stay true: its system file is valid and its commands exist."""
 
 import re
-import tomllib
 from pathlib import Path
 
+import tomllib
 from typer.testing import CliRunner
 
 from satchain import ImagingSystem
