@@ -156,3 +156,21 @@ def test_bad_config_is_named(tmp_path):
     assert r.exit_code == 2 and "scene.pixel_m = -3" in r.stderr
     assert not (tmp_path / "o").exists()
     assert np.isfinite(1.0)
+
+
+def test_run_refuses_rectangular_ground_pixels_before_any_work(tmp_path):
+    cfg = RunConfig.from_dict(
+        {
+            "system": {
+                "inline": {
+                    "orbit": {"altitude_m": 567e3, "off_nadir_deg": 20.0},
+                    "optics": {"aperture_diameter_m": 0.7, "f_number": 9.72, "wavelengths_m": [6.5e-7]},
+                    "detector": {"pitch_m": 5.88e-6},
+                },
+                "preset": None,
+            }
+        }
+    )
+    with pytest.raises(ValueError, match=r"ground pixels of 0\.\d+ m \(ACT\) x 0\.\d+ m \(ALT\)"):
+        run_pipeline(cfg, tmp_path / "o")
+    assert not (tmp_path / "o").exists()

@@ -74,7 +74,7 @@ def _print_budget(res: dict[str, Any]) -> None:
         cols = [
             res["frequencies_cy_per_mm"],
             res["frequencies_cy_per_px"][d],
-            res["frequencies_cy_per_m_ground"],
+            res["frequencies_cy_per_m_ground"][d],
             *[res["mtf"][d][c] for c in comps],
             res["ctf"][d]["coltman"],
             res["ctf"][d]["fourier_synthesis"],

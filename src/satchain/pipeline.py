@@ -61,6 +61,15 @@ def _stage_budget(ctx: RunContext, progress: Progress) -> None:
     from satchain.tf.budget import SystemOTF
 
     ctx.system = ctx.config.load_system()
+    s = ctx.system
+    if abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
+        from satchain.errors import ConfigError
+
+        raise ConfigError(
+            f"system {s.name!r}: ground pixels of {s.gsd_act_m:.4g} m (ACT) x {s.gsd_alt_m:.4g} m (ALT); satchain run "
+            "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
+            "for this system"
+        )
     ctx.otf = SystemOTF(ctx.system)
     ctx.budget = budget_results(ctx.system, otf=ctx.otf)
     write_budget_outputs(ctx.system, ctx.budget, ctx.out / "budget", otf=ctx.otf)

@@ -363,7 +363,8 @@ def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.00
     h_gm = math.sqrt(a["h"] * b["h"])
     g = noise_gain(kernel)
     snr = contrast_snr(system)
-    gsd_in = float(m_to_inches(system.gsd_m))
+    gsd_in = float(m_to_inches(system.gsd_los_m))  # the GIQE projects it to the ground by the elevation
+    elev = system.orbit.elevation_deg
     r5 = giqe5_rer(a["rer_raw"], b["rer_raw"])
     return QualityResult(
         gsd_m=system.gsd_m,
@@ -377,9 +378,9 @@ def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.00
         overshoot=h_gm,
         noise_gain=g,
         snr=snr,
-        giqe3=giqe3(gsd_in=gsd_in, rer=rer_gm, overshoot=h_gm, noise_gain=g, snr=snr),
-        giqe4=giqe4(gsd_in=gsd_in, rer=rer_gm, overshoot=h_gm, noise_gain=g, snr=snr),
-        giqe5=giqe5(gsd_in=gsd_in, rer=r5, snr=snr),
+        giqe3=giqe3(gsd_in=float(m_to_inches(system.gsd_m)), rer=rer_gm, overshoot=h_gm, noise_gain=g, snr=snr),
+        giqe4=giqe4(gsd_in=gsd_in, rer=rer_gm, overshoot=h_gm, noise_gain=g, snr=snr, elevation_deg=elev),
+        giqe5=giqe5(gsd_in=gsd_in, rer=r5, snr=snr, elevation_deg=elev),
         mtfa_act=a["mtfa"],
         mtfa_alt=b["mtfa"],
         otf_kind="mtf" if "mtf" in (a["kind"], b["kind"]) else "signed_otf",

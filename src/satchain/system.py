@@ -57,14 +57,45 @@ class _Frozen(BaseModel):
 
 
 class Orbit(_Frozen):
-    """Circular orbit; the camera looks at nadir from ``altitude_m``."""
+    """Circular orbit; the camera looks ``off_nadir_deg`` across-track (a roll) from ``altitude_m``.
+
+    Spherical Earth: the incidence angle at the ground is ``asin((R + h) / R * sin(eta))``, the slant range
+    ``(R + h) cos(eta) - sqrt(R^2 - (R + h)^2 sin^2(eta))`` (Wertz & Larson, *Space Mission Analysis and
+    Design*, sec. 5.3). Off nadir the along-track GSD grows with the range and the across-track GSD also by
+    the foreshortening ``1 / cos(incidence)``.
+    """
 
     altitude_m: float = Field(gt=0, le=1e8, description="height above the ground, m")
+    off_nadir_deg: float = Field(default=0.0, ge=0, lt=90, description="look angle across-track at the satellite")
+
+    @model_validator(mode="after")
+    def _below_horizon(self) -> Orbit:
+        limit = math.degrees(math.asin(EARTH_RADIUS_M / (EARTH_RADIUS_M + self.altitude_m)))
+        if self.off_nadir_deg >= limit - 1e-6:
+            raise ValueError(
+                f"orbit.off_nadir_deg = {self.off_nadir_deg!r}: must be below {limit:.2f} deg (the Earth's limb "
+                f"seen from {self.altitude_m:g} m)"
+            )
+        return self
+
+    @property
+    def incidence_deg(self) -> float:
+        """Angle between the line of sight and the local vertical at the ground."""
+        r, h = EARTH_RADIUS_M, self.altitude_m
+        return math.degrees(math.asin((r + h) / r * math.sin(math.radians(self.off_nadir_deg))))
+
+    @property
+    def elevation_deg(self) -> float:
+        """Elevation of the satellite seen from the ground target (90 at nadir; the GIQE's angle)."""
+        return 90.0 - self.incidence_deg
 
     @property
     def range_m(self) -> float:
-        """Camera-to-ground distance at nadir (m)."""
-        return self.altitude_m
+        """Camera-to-ground distance along the line of sight (m); the altitude at nadir."""
+        r, h, eta = EARTH_RADIUS_M, self.altitude_m, math.radians(self.off_nadir_deg)
+        if eta == 0:
+            return h
+        return (r + h) * math.cos(eta) - math.sqrt(r * r - ((r + h) * math.sin(eta)) ** 2)
 
     @property
     def orbital_speed_m_per_s(self) -> float:
@@ -461,14 +492,37 @@ class ImagingSystem(_Frozen):
         return self.detector.pitch_y_m / self.focal_length_m
 
     @property
+    def gsd_los_m(self) -> float:
+        """Geometric-mean GSD perpendicular to the line of sight, ``pitch * range / f`` (what the GIQE takes
+        together with the elevation angle)."""
+        p = math.sqrt(self.detector.pitch_x_m * self.detector.pitch_y_m)
+        return units.gsd_m(p, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+
+    @property
     def gsd_act_m(self) -> float:
-        """Ground sample distance across-track (x), m."""
-        return units.gsd_m(self.detector.pitch_x_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+        """Ground sample distance across-track (x), m, on the ground (foreshortened off nadir)."""
+        los = units.gsd_m(self.detector.pitch_x_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+        return los / math.cos(math.radians(self.orbit.incidence_deg))
 
     @property
     def gsd_alt_m(self) -> float:
         """Ground sample distance along-track (y), m."""
         return units.gsd_m(self.detector.pitch_y_m, focal_length_m=self.focal_length_m, range_m=self.orbit.range_m)
+
+    def focal_cy_per_mm_per_ground_cy_per_m(self, axis: str) -> float:
+        """Focal-plane cy/mm of one ground cy/m along ``axis`` ("alt" = y, "act" = x): ``gsd / pitch / 1000``.
+        Equals ``range / focal_length / 1000`` at nadir; across-track off nadir it includes the foreshortening.
+
+        Examples
+        --------
+        >>> round(load_preset("ankarasat3").focal_cy_per_mm_per_ground_cy_per_m("alt"), 3)
+        83.333
+        """
+        if axis == "alt":
+            return self.gsd_alt_m / self.detector.pitch_y_m / units.MM_PER_M
+        if axis == "act":
+            return self.gsd_act_m / self.detector.pitch_x_m / units.MM_PER_M
+        raise ConfigError(f"axis = {axis!r}: must be 'alt' or 'act'")
 
     @property
     def gsd_m(self) -> float:
@@ -551,6 +605,9 @@ class ImagingSystem(_Frozen):
             "gsd_act_m": self.gsd_act_m,
             "gsd_alt_m": self.gsd_alt_m,
             "gsd_m": self.gsd_m,
+            "off_nadir_deg": self.orbit.off_nadir_deg,
+            "range_m": self.orbit.range_m,
+            "elevation_deg": self.orbit.elevation_deg,
             "nyquist_cy_per_mm": self.nyquist_alt_cy_per_mm,
             "nyquist_act_cy_per_mm": self.nyquist_act_cy_per_mm,
             "nyquist_alt_cy_per_mm": self.nyquist_alt_cy_per_mm,

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from satchain import units
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
@@ -148,13 +147,9 @@ class Simulator:
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
-        self.to_cy_per_mm = (
-            float(
-                units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
-            )
-            / a
-        )  # cycles per input pixel -> focal-plane cy/mm
-        self.f_cut = self.otf.cutoff_cy_per_mm / self.to_cy_per_mm  # cycles per input pixel
+        # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
+        self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
+        self.f_cut = self.otf.cutoff_cy_per_mm / min(self.to_cy_per_mm)  # cycles per input pixel, the wider axis
         self._plan_decimation()
         self._plan_frame()
 
@@ -268,8 +263,8 @@ class Simulator:
         )
         del frame
         ny_f, nx_f = ly * D, lx * D  # frame length in input pixels
-        fy = spec.my / ny_f * self.to_cy_per_mm
-        fx = spec.mx / nx_f * self.to_cy_per_mm
+        fy = spec.my / ny_f * self.to_cy_per_mm[0]
+        fx = spec.mx / nx_f * self.to_cy_per_mm[1]
         vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
         c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
         vals = (
@@ -326,7 +321,7 @@ class Simulator:
         f = sfft.rfft2(coarse, workers=w)
         fy = np.fft.fftfreq(ny)[:, None] / D  # cycles per input pixel
         fx = np.fft.rfftfreq(nx)[None, :] / D
-        f *= self.otf(fx * self.to_cy_per_mm, fy * self.to_cy_per_mm, exclude=("detector",))
+        f *= self.otf(fx * self.to_cy_per_mm[1], fy * self.to_cy_per_mm[0], exclude=("detector",))
         cy, cx = self.coarse_ext
         if grid == "coarse" or D == 1:
             out = sfft.irfft2(f, s=(ny, nx), workers=w)

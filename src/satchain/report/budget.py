@@ -52,9 +52,9 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
     out["frequencies_cy_per_px"] = {
         d: units.cy_per_mm_to_cy_per_px(f, pitch_m=_pitch(system, d)).tolist() for d in DIRECTIONS
     }
-    out["frequencies_cy_per_m_ground"] = units.focal_to_ground_cy_per_m(
-        f, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m
-    ).tolist()
+    out["frequencies_cy_per_m_ground"] = {
+        d: (f / system.focal_cy_per_mm_per_ground_cy_per_m(d)).tolist() for d in DIRECTIONS
+    }
     out["ctf"] = {}
     out["mtfa"] = {}
     for d in DIRECTIONS:
@@ -85,9 +85,7 @@ def square_wave_figure_data(system: ImagingSystem, *, period_m: float = FIG3B_PE
     """Positions (ground m), input and ALT-degraded truncated square-wave series for Figure 3(b)."""
     otf = SystemOTF(system) if otf is None else otf
     x = np.linspace(0.0, 2.0 * period_m, 2001)
-    scale = float(
-        units.ground_to_focal_cy_per_mm(1.0, focal_length_m=system.focal_length_m, range_m=system.orbit.range_m)
-    )
+    scale = system.focal_cy_per_mm_per_ground_cy_per_m("alt")
     square = _ctf.square_wave_series(x, period_m)
     degraded = _ctf.square_wave_series(x, period_m, mtf=DirectionalMTF(otf, "alt"), f_unit_scale=scale)
     return x, np.asarray(square), np.asarray(degraded)
@@ -110,7 +108,7 @@ def _csv_text(results: dict[str, Any], d: str) -> str:
     cols = [
         results["frequencies_cy_per_mm"],
         results["frequencies_cy_per_px"][d],
-        results["frequencies_cy_per_m_ground"],
+        results["frequencies_cy_per_m_ground"][d],
         *[results["mtf"][d][c] for c in comps],
         results["ctf"][d]["coltman"],
         results["ctf"][d]["fourier_synthesis"],

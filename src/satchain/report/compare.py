@@ -156,9 +156,7 @@ def predicted_wedge_resolution_m(otf: SystemOTF, direction: str, *, threshold: f
     dm = DirectionalMTF(otf, direction.lower())
 
     def ctf_minus(w_m: float) -> float:
-        f_mm = units.ground_to_focal_cy_per_mm(
-            1.0 / (2.0 * w_m), focal_length_m=s.focal_length_m, range_m=s.orbit.range_m
-        )
+        f_mm = s.focal_cy_per_mm_per_ground_cy_per_m(direction.lower()) / (2.0 * w_m)
         return float(_ctf.coltman_ctf(np.atleast_1d(f_mm), dm)[0]) - threshold
 
     gsd = s.gsd_alt_m if direction.upper() == "ALT" else s.gsd_act_m

@@ -12,7 +12,6 @@ from markupsafe import Markup
 
 import satchain
 from satchain import ctf as _ctf
-from satchain import units
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
 
@@ -41,7 +40,7 @@ def table1_rows(ctx) -> tuple[list[dict], bool]:
     f = t.f_cy_per_mm
     col = _ctf.coltman_ctf(f, m)
     paper = _ctf.ctf_fourier_synthesis(f, m)
-    g = units.focal_to_ground_cy_per_m(f, focal_length_m=s.focal_length_m, range_m=s.orbit.range_m)
+    g = f / s.focal_cy_per_mm_per_ground_cy_per_m("alt")
     is_paper = s.name == "ankarasat3"
     rows = [
         {

@@ -119,11 +119,11 @@ class SystemOTF:
                 fx, fy, wavelength_m=lam, focal_length_m=s.focal_length_m, r0_m=r0
             )
         if atm.aerosol_scattered_fraction > 0:
-            from satchain import units as _u
             from satchain.tf import atmosphere as _atm
 
+            kx, ky = (s.focal_cy_per_mm_per_ground_cy_per_m(a) for a in ("act", "alt"))
             comps["aerosol"] = lambda fx, fy: _atm.aerosol_otf(
-                _u.focal_to_ground_cy_per_m(np.hypot(fx, fy), focal_length_m=s.focal_length_m, range_m=s.orbit.range_m),
+                np.hypot(fx / kx, fy / ky),  # ground cy/m (the adjacency PSF is isotropic on the ground)
                 scattered_fraction=atm.aerosol_scattered_fraction,
                 psf_scale_m=atm.aerosol_psf_scale_m,
             )
