@@ -56,8 +56,10 @@ def test_input_modulation_estimate_and_offcentre_roi():
     img = np.full((300, 320), 100.0)
     img[20:261, 50:291] = _star(0.5, 0.5)
     r = measure_star(img, cycles=N, roi=(50, 20, 291, 261), pixel_m=0.5)
-    # outer radius ~119 px: f = 0.064 cy/px, MTF there 0.98 -> the estimate is 0.4 * 0.98
-    assert r.input_modulation == pytest.approx(0.4 * np.exp(-2 * np.pi**2 * 0.25 * 0.064**2), rel=0.01)
+    # the star's own modulation is 0.4; the estimate extrapolates the outer radii (f >= 0.064 cy/px) linearly to
+    # f = 0. A Gaussian MTF is flat at 0, the worst case for a straight line: within 5 % (an optical MTF, linear
+    # near 0, does better: see test_auto and the README)
+    assert r.input_modulation == pytest.approx(0.4, rel=0.05)
     np.testing.assert_allclose(r.f_cy_per_m_ground, r.f_cy_per_px / 0.5)
     json.dumps(r.to_dict(), allow_nan=False)
 

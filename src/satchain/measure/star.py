@@ -48,6 +48,19 @@ class StarResult(ResultMixin):
     f_cy_per_m_ground: np.ndarray | None = None
 
 
+def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray) -> float:
+    """Modulation at zero frequency: a straight line through the lowest-frequency points (>= 3)."""
+    ok = np.isfinite(mod)
+    f, mod = f[ok], mod[ok]
+    if f.size < 3:
+        return float(np.median(mod)) if f.size else float("nan")
+    low = f <= 2.5 * f.min()
+    if np.count_nonzero(low) < 3:
+        low = np.argsort(f)[:3]
+    slope, intercept = np.polyfit(f[low], mod[low], 1)
+    return float(intercept) if slope <= 0 else float(np.median(mod[low]))
+
+
 def measure_star(
     image,
     *,
@@ -73,8 +86,10 @@ def measure_star(
         Outer radius used; the largest circle inside the region by default.
     roi : (x0, y0, x1, y1), optional
     input_modulation : float, optional
-        Modulation (max - min) / (max + min) of the star itself; estimated from the three outermost radii
-        (their frequency should be low: it divides every MTF value) when not given.
+        Modulation (max - min) / (max + min) of the star itself. When not given it is estimated by
+        extrapolating the all-direction modulation of the outer radii (the lowest frequencies, up to 2.5 times
+        the lowest) linearly to zero frequency -- the MTF of a band-limited system falls linearly there -- so
+        the blur at the outer radius does not inflate the whole curve.
     annulus_px : float
         Radial width of the annuli whose pixels are fitted together.
     f_max_cy_per_px : float
@@ -122,7 +137,7 @@ def measure_star(
             m = dist <= np.pi / 8
             mods[k][i] = _modulation(t[m], val[m], n) if np.count_nonzero(m) >= 8 else np.nan
     if input_modulation is None:
-        m0 = float(np.median(mods["all"][:3]))
+        m0 = _extrapolated_modulation(n / (2 * np.pi * radii), mods["all"])
     else:
         m0 = check_range("input_modulation", input_modulation, 0.0, None, lo_open=True)
     if not m0 > 1e-4:
