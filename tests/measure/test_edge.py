@@ -96,9 +96,9 @@ def test_pixel_edges_any_angle_size_noise(tilt, sign, alt, ny, nx, offset, inver
     # slope error of that times sqrt(12 / n^3) rad
     slope_sd = 10.0 / snr * np.sqrt(12.0 / n_lines**3)
     assert abs(r.angle_deg - angle) < 0.05 + 4 * np.degrees(slope_sd)
-    # an edge seen only by the pixel is not band-limited: its ESF has corners that the 1/4-px bins average and
-    # alias, worst on short ROIs (a 40 x 40, 9.5 deg case reads 0.015 off); band-limited edges (diffraction
-    # included, the accuracy target of the issue) are tested to 0.003 above (test_noise_free_mtf_at_nyquist_within_0_003)
+    # an edge seen only by the pixel is not band-limited: its ESF has corners that the 1/4-px bins average
+    # and alias, worst on short ROIs (a 40 x 40, 9.5 deg case reads 0.015 off); band-limited edges (diffraction
+    # included, the issue's accuracy target) are tested to 0.003 in test_noise_free_mtf_at_nyquist_within_0_003
     tol = 0.02 if not np.isfinite(snr) else 0.02 + 5 * r.mtf_at_nyquist_std
     assert abs(r.mtf_at_nyquist - _pixel_truth(angle)) < tol
     # contrast sign: + when the image rises along +x (ACT) or +y (ALT)
