@@ -174,3 +174,23 @@ def test_run_refuses_rectangular_ground_pixels_before_any_work(tmp_path):
     with pytest.raises(ValueError, match=r"ground pixels of 0\.\d+ m \(ACT\) x 0\.\d+ m \(ALT\)"):
         run_pipeline(cfg, tmp_path / "o")
     assert not (tmp_path / "o").exists()
+
+
+def test_saturating_camera_is_warned_and_clipped_edges_are_skipped_with_reason(reduced_run, tmp_path):
+    out, _, _ = reduced_run
+    system = {
+        "orbit": {"altitude_m": 500e3},
+        "optics": {"aperture_diameter_m": 0.3, "f_number": 10.0, "wavelengths_m": [6.5e-7]},
+        "detector": {"pitch_m": 6e-6, "tdi_stages": 64, "qe": 0.6, "full_well_e": 80000.0, "bit_depth": 12},
+    }
+    cfg = RunConfig.from_dict(
+        {
+            "system": {"inline": system, "preset": None},
+            "scene": {"layout": str(out.parent / "scene.toml"), "pixel_m": 0.1},
+        }
+    )
+    res = run_pipeline(cfg, tmp_path / "sat")
+    assert any("edge_act" in w and "saturated" in w for w in res["warnings"])
+    reasons = {s["id"]: s["reason"] for s in res["skipped"]}
+    assert "clipped" in reasons["edge_act"] or "saturat" in reasons["edge_act"]
+    assert not res["slanted_edges"]

@@ -291,8 +291,9 @@ def run(
 
     with bar:
         res = run_pipeline(cfg, out, progress=update)
-    n_pass = sum(r["pass"] for r in res["summary"])
-    t = Table(title=f"{res['system']}: measured vs predicted ({n_pass}/{len(res['summary'])} pass)")
+    n_pass = sum(r["pass"] is True for r in res["summary"])
+    n_checked = sum(r["pass"] is not None for r in res["summary"])
+    t = Table(title=f"{res['system']}: measured vs predicted ({n_pass}/{n_checked} pass)")
     for c in ("figure of merit", "measured", "predicted", "tolerance", "result"):
         t.add_column(c, justify="left" if c == "figure of merit" else "right")
     for r in res["summary"]:
@@ -301,9 +302,11 @@ def run(
             _fmt(r["measured"]),
             _fmt(r["predicted"]),
             r["tolerance"],
-            "[green]pass[/]" if r["pass"] else "[red]FAIL[/]",
+            "n/a" if r["pass"] is None else ("[green]pass[/]" if r["pass"] else "[red]FAIL[/]"),
         )
     console.print(t)
+    for w in res.get("warnings", []):
+        err_console.print(f"[bold yellow]warning:[/] {w}", highlight=False)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
 
 
