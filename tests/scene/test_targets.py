@@ -146,7 +146,7 @@ def test_clip_half_plane_area():
         (BarTarget, {"periods_m": (1.0, -2.0)}, "periods_m"),
         (BarTarget, {"n_bars": 0}, "n_bars"),
         (HyperbolicWedge, {"line_width_end_m": 2.0}, "line_width_end_m"),
-        (HyperbolicWedge, {"orientation": "diagonal"}, "orientation"),
+        (HyperbolicWedge, {"orientation": "oblique"}, "orientation"),
     ],
 )
 def test_bad_target_parameters(cls, kwargs, match):

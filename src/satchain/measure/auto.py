@@ -539,10 +539,34 @@ def _wedge_geometry(it: dict):
     return w0, x0, float(it["length_m"]), int(it["n_stripes"]), horizontal, tuple(it["local_origin_m"])
 
 
+def _diagonal_wedge_grid(refl: np.ndarray, it: dict, frame: _Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A diagonal wedge resampled onto its own (t, s) axes -- s at the pixel spacing, t at a quarter of it --
+    by cubic-spline interpolation (``scipy.ndimage.map_coordinates``): rows are t (across the stripes),
+    columns s. The contrast scan then reads line widths in metres from the wedge's own geometry."""
+    from scipy import ndimage
+
+    p = frame.pixel_m
+    w0, _, length, n, _, (lox, loy) = _wedge_geometry(it)
+    s_m = (np.arange(int(length / p)) + 0.5) * p
+    t_m = np.arange(0.5 * w0, (2 * n - 1.5) * w0 + 1e-9, p / 4)  # fine across the stripes: max/min found
+    r = np.sqrt(0.5)
+    x = lox + r * (s_m[None, :] - t_m[:, None])
+    y = loy + r * (s_m[None, :] + t_m[:, None])
+    cols, rows = (x - frame.origin_m[0]) / p - 0.5, (y - frame.origin_m[1]) / p - 0.5
+    if cols.min() < 0 or rows.min() < 0 or cols.max() > refl.shape[1] - 1 or rows.max() > refl.shape[0] - 1:
+        raise _Skip("outside the image")
+    ts = ndimage.map_coordinates(np.asarray(refl, float), [rows, cols], order=3, mode="nearest")
+    return ts, s_m, t_m
+
+
 def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> AutoItem:
-    """Hyperbolic wedge: the contrast scan over the stripes only (see the module docstring)."""
+    """Hyperbolic wedge: the contrast scan over the stripes only (see the module docstring). A diagonal wedge
+    is first resampled onto its own axes; its resolution is along the D135 diagonal."""
     p = frame.pixel_m
     w0, x0, length, n, horizontal, (lox, loy) = _wedge_geometry(it)
+    if str(it["orientation"]).lower() == "diagonal":
+        ts, s_m, t_m = _diagonal_wedge_grid(refl, it, frame)
+        return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, t_m[1] - t_m[0], threshold, "D135", None)
     if w0 / p < 1.0:
         raise _Skip(f"too small: the widest lines ({w0:g} m = {w0 / p:.2f} px) are finer than 1 px (Nyquist)")
     s_ax, t_ax = (0, 1) if horizontal else (1, 0)
@@ -555,6 +579,12 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
     ts = np.array(sub if horizontal else sub.T, dtype=float)  # rows = t (across the stripes), cols = s
     s_m = frame.origin_m[s_ax] + (np.arange(s0, s1) + 0.5) * p - s_org
     t_m = frame.origin_m[t_ax] + (np.arange(t0, t1) + 0.5) * p - t_org
+    return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, "ALT" if horizontal else "ACT", roi)
+
+
+def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> AutoItem:
+    """The contrast scan on a wedge laid out as rows = t (across the stripes, spacing ``p`` m), columns = s
+    (along it)."""
     w = w0 * x0 / (x0 + s_m)
     inside = (t_m[:, None] >= 0.5 * w[None, :]) & (t_m[:, None] <= (2 * n - 1.5) * w[None, :])
     count = inside.sum(axis=0)
@@ -566,11 +596,10 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
         raise InputError("image: the wedge region contains NaN/inf values")
     fill = np.array([np.median(ts[inside[:, j], j]) for j in range(stop)])
     ts = np.where(inside, ts, fill[None, :])
-    direction = "ALT" if horizontal else "ACT"
     r = measure_wedge(
-        ts if horizontal else ts.T,
+        ts if direction != "ACT" else ts.T,
         line_width_px=w / p,
-        direction=direction,
+        direction="ACT" if direction == "ACT" else "ALT",
         threshold=threshold,
         pixel_m=p,
     )
@@ -578,7 +607,7 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
         "id": it["id"],
         "orientation": it["orientation"],
         "direction": direction,
-        "roi_px": list(roi),
+        "roi_px": None if roi is None else list(roi),
         "threshold": r.threshold,
         "resolution_m": r.resolved_line_width_m,
         "resolved_line_width_px": r.resolved_line_width_px,

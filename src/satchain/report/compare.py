@@ -24,7 +24,6 @@ from scipy.optimize import brentq
 from satchain import ctf as _ctf
 from satchain import units
 from satchain.quality import giqe5, giqe5_rer
-from satchain.report.budget import DirectionalMTF
 from satchain.tf.budget import SystemOTF
 
 #: Bar groups finer than this (fewer than 5 px per period) are listed but not compared with Coltman's CTF:
@@ -151,29 +150,32 @@ def _bars(measured: dict, otf: SystemOTF, tol: Any) -> list[dict]:
 
 
 def predicted_wedge_resolution_m(otf: SystemOTF, direction: str, *, threshold: float) -> float:
-    """Predicted resolvable line width (ground m): where the predicted Coltman CTF across the stripes falls to
-    ``threshold``, but never finer than one GSD -- a line pair narrower than two samples is beyond Nyquist
-    and aliases (the paper's detector-limited argument: resolution = GSD when Q < 2)."""
+    """Predicted resolvable line width (ground m) across stripes along ``direction`` (ALT, ACT, D45, D135):
+    where the predicted Coltman CTF falls to ``threshold``, but never finer than the sampling allows -- a
+    line pair narrower than two samples along that direction aliases: one GSD along an axis (the paper's
+    detector-limited argument: resolution = GSD when Q < 2), GSD / sqrt(2) along a diagonal of a square grid
+    (its Nyquist frequency there is sqrt(2) / (2 GSD)). Square ground pixels are assumed for the diagonals."""
     s = otf.system
-    dm = DirectionalMTF(otf, direction.lower())
+    d = direction.upper()
+    m = AxisMTF(otf, _DIRECTIONS[d])
+    gsd = {"ALT": s.gsd_alt_m, "ACT": s.gsd_act_m}.get(d, s.gsd_m)
+    limit = gsd if d in ("ALT", "ACT") else gsd / math.sqrt(2.0)
 
-    def ctf_minus(w_m: float) -> float:
-        f_mm = s.focal_cy_per_mm_per_ground_cy_per_m(direction.lower()) / (2.0 * w_m)
-        return float(_ctf.coltman_ctf(np.atleast_1d(f_mm), dm)[0]) - threshold
+    def ctf_minus(w_m: float) -> float:  # ground line width -> cycles per pixel along the direction
+        return float(_ctf.coltman_ctf(np.atleast_1d(gsd / (2.0 * w_m)), m)[0]) - threshold
 
-    gsd = s.gsd_alt_m if direction.upper() == "ALT" else s.gsd_act_m
     lo, hi = 0.05 * gsd, 20.0 * gsd
     if ctf_minus(hi) < 0:
         return float("nan")
     w = lo if ctf_minus(lo) > 0 else float(brentq(ctf_minus, lo, hi, xtol=1e-6))
-    return max(w, gsd)
+    return max(w, limit)
 
 
 def _wedges(measured: dict, otf: SystemOTF, cfg: Any, system) -> list[dict]:
     out = []
     for w in measured.get("hyperbolic_wedge", []):
-        axis = "ALT" if w["orientation"] == "horizontal" else "ACT"
-        gsd = system.gsd_alt_m if axis == "ALT" else system.gsd_act_m
+        axis = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}[w["orientation"]]
+        gsd = {"ALT": system.gsd_alt_m, "ACT": system.gsd_act_m}.get(axis, system.gsd_m)
         pred = predicted_wedge_resolution_m(otf, axis, threshold=cfg.measurement.wedge_threshold)
         res = w.get("resolution_m")
         rel = None if res is None or not np.isfinite(pred) else res / pred - 1.0
@@ -189,7 +191,7 @@ def _wedges(measured: dict, otf: SystemOTF, cfg: Any, system) -> list[dict]:
                 "relative_error": rel,
                 "pass": rel is not None and abs(rel) <= cfg.tolerances.wedge_resolution_rel,
                 "threshold": w.get("threshold"),
-                "position_m": w.get("position_m"),
+                "position_m": w.get("position_m_along_wedge"),
                 "contrast": w.get("contrast"),
             }
         )

@@ -217,7 +217,8 @@ class HyperbolicWedge(Item):
     ``t_2k+1``, so every line (dark or bright) has width ``w(s) = w_start * x0 / (x0 + s)`` (from
     ``w_start`` at s = 0 to ``w_end`` at s = length). The bright plate extends ``w_start`` beyond the
     pattern on every side. ``orientation = "horizontal"``: s along +x, t along +y (lines run along x,
-    widths are measured along y: it resolves ALT); ``"vertical"``: s along +y, t along +x (resolves ACT).
+    widths are measured along y: it resolves ALT); ``"vertical"``: s along +y, t along +x (resolves ACT);
+    ``"diagonal"``: s along (1, 1)/sqrt2, t along (-1, 1)/sqrt2 (resolves the diagonal, the paper's future work).
     ``origin_m`` is the plate's top-left corner.
     """
 
@@ -233,7 +234,7 @@ class HyperbolicWedge(Item):
 
     def __post_init__(self):
         object.__setattr__(self, "origin_m", check_point("hyperbolic_wedge.origin_m", self.origin_m))
-        check_choice("hyperbolic_wedge.orientation", self.orientation, ("horizontal", "vertical"))
+        check_choice("hyperbolic_wedge.orientation", self.orientation, ("horizontal", "vertical", "diagonal"))
         check_positive("hyperbolic_wedge.length_m", self.length_m)
         check_positive("hyperbolic_wedge.line_width_start_m", self.line_width_start_m)
         check_range(
@@ -267,6 +268,9 @@ class HyperbolicWedge(Item):
         s, t = st[:, 0], st[:, 1]
         if self.orientation == "horizontal":
             return np.stack([ox + s, oy + t], axis=1)
+        if self.orientation == "diagonal":  # s along (1, 1)/sqrt2, t along (-1, 1)/sqrt2: resolves the diagonal
+            r = np.sqrt(0.5)
+            return np.stack([ox + r * (s - t), oy + r * (s + t)], axis=1)
         return np.stack([ox + t, oy + s], axis=1)
 
     def layers(self, pixel_m: float) -> list[Layer]:
@@ -287,7 +291,8 @@ class HyperbolicWedge(Item):
         return {
             "orientation": self.orientation,
             "local_origin_m": list(self._local_origin()),
-            "local_frame": "horizontal: x = ox + s, y = oy + t; vertical: x = ox + t, y = oy + s",
+            "local_frame": "horizontal: x = ox + s, y = oy + t; vertical: x = ox + t, y = oy + s; "
+            "diagonal: x = ox + (s - t)/sqrt2, y = oy + (s + t)/sqrt2",
             "length_m": self.length_m,
             "n_stripes": self.n_stripes,
             "line_width_start_m": w0,
