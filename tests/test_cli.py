@@ -64,8 +64,8 @@ def test_budget_from_system_file(tmp_path):
 @pytest.mark.parametrize(
     ("args", "msg"),
     [
-        (["budget", "--freqs", "10,abc"], "--freqs = '10,abc': must be a comma-separated list"),
-        (["budget", "--freqs", "-5"], "--freqs = '-5': must be one or more finite numbers >= 0"),
+        (["budget", "--freqs", "10,abc"], "--freqs = '10,abc': must be comma-separated numbers"),
+        (["budget", "--freqs", "-5"], "--freqs = '-5': must be comma-separated numbers >= 0"),
         (["budget", "--preset", "nosuch"], "preset = 'nosuch': must be one of"),
         (["budget", "--system", "/nonexistent/x.toml"], "not found"),
     ],

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.table import Table
 
-from satchain._cli_common import console, err_console, handle_errors
+from satchain._cli_common import console, err_console, handle_errors, parse_numbers
 from satchain.errors import ConfigError
 
 app = typer.Typer(
@@ -39,15 +38,7 @@ def _system(preset: str | None, system: Path | None):
 
 
 def _parse_floats(name: str, text: str | None) -> list[float] | None:
-    if text is None:
-        return None
-    try:
-        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
-    except ValueError:
-        raise ConfigError(f"{name} = {text!r}: must be a comma-separated list of numbers") from None
-    if not vals or any((not math.isfinite(v)) or v < 0 for v in vals):
-        raise ConfigError(f"{name} = {text!r}: must be one or more finite numbers >= 0")
-    return vals
+    return None if text is None else parse_numbers(name, text, minimum=0.0)
 
 
 def _fmt(v: Any) -> str:

@@ -10,7 +10,6 @@ Regions are ``X0,Y0,X1,Y1`` in pixels (x = column, y = row), half-open.  ``--jso
 from __future__ import annotations
 
 import json
-import math
 import shutil
 from pathlib import Path
 from typing import Annotated, Any
@@ -19,7 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from satchain._cli_common import handle_errors
+from satchain._cli_common import handle_errors, parse_numbers
 from satchain.errors import ConfigError, SatchainIOError
 
 __all__ = ["measure_app"]
@@ -50,16 +49,7 @@ def _console() -> Console:
 _handle_errors = handle_errors
 
 
-def _numbers(name: str, text: str, n: int | None = None) -> list[float]:
-    """Comma-separated finite numbers (exactly ``n`` when given)."""
-    try:
-        vals = [float(t) for t in str(text).replace(" ", "").split(",") if t != ""]
-    except ValueError:
-        vals = []
-    if not vals or (n is not None and len(vals) != n) or not all(math.isfinite(v) for v in vals):
-        what = f"{n} comma-separated numbers" if n else "comma-separated numbers"
-        raise ConfigError(f"{name} = {text!r}: must be {what}")
-    return vals
+_numbers = parse_numbers
 
 
 def _roi(name: str, text: str | None):

@@ -83,13 +83,6 @@ class AxisSampling:
         """Input-grid coordinates of the centres of output pixels ``i0 .. i1-1``."""
         return self.phase_px + (np.arange(i0, i1) + 0.5) * self.k
 
-    def input_span(self, i0: int, i1: int) -> tuple[int, int]:
-        """Input pixels ``[a, b)`` touched by the footprints of output pixels ``i0 .. i1-1``."""
-        c = self.centres(i0, i1)
-        a = int(math.floor(c[0] - self.width_px / 2 + 1e-9))
-        b = int(math.ceil(c[-1] + self.width_px / 2 - 1e-9))
-        return a, b
-
 
 def footprint_weights(centres: np.ndarray, width_px: float, n0: int) -> tuple[np.ndarray, np.ndarray]:
     """Overlap weights of each footprint with the input pixels, normalised to sum to 1.
