@@ -1,0 +1,115 @@
+"""``satchain measure find IMAGE``: ACT and ALT MTF from the slanted edges found in an image (no truth file).
+
+Registered on the ``measure`` sub-app (imported at the end of :mod:`satchain.cli_measure`).  Prints a table of
+the edges used, the combined MTF at Nyquist with its 1-sigma, the CEOS-style table (MTF at f / f_s = 0, 0.02,
+..., 0.5), flags and the rejected segments counted by reason; ``--json`` prints JSON, ``--csv`` the CEOS table
+as CSV; ``-o DIR`` writes ``find.json``, ``find_ceos.csv`` and ``find.png`` there (atomically).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from satchain.cli_measure import (
+    ImageArg,
+    JsonOpt,
+    OutOpt,
+    PixelOpt,
+    _console,
+    _emit,
+    _fmt,
+    _handle_errors,
+    _load,
+    measure_app,
+)
+
+__all__ = ["find"]
+
+
+def _edges_table(res, name: str) -> Table:
+    t = Table(title=f"slanted edges found: {name}")
+    for col in ("#", "dir", "centre x,y", "ROI", "angle", "length", "CNR", "MTF@Nyq", "+-1s", "MTF50"):
+        t.add_column(col, justify="right")
+    for k, e in enumerate(res.edges):
+        c = e.candidate
+        t.add_row(str(k), e.direction, f"{c.center_xy[0]:.0f},{c.center_xy[1]:.0f}", ",".join(map(str, c.roi)),
+                  f"{e.angle_deg:.2f}", f"{c.length_px:.0f}", f"{c.cnr:.0f}", f"{e.mtf_at_nyquist:.4f}",
+                  f"{e.mtf_at_nyquist_sigma:.4f}", _fmt(e.mtf50_cy_per_px))
+    return t
+
+
+def _combined_table(res, pixel_m) -> Table:
+    t = Table(title="combined MTF (inverse-variance mean of the edges)")
+    for col in ("direction", "edges", "MTF@Nyquist", "+-1 sigma", "scatter", "chi2/dof", "MTF50 cy/px",
+                *(["MTF50 cy/m"] if pixel_m else [])):
+        t.add_column(col, justify="right")
+    for d, c in res.combined.items():
+        m50 = c.mtf50_cy_per_px
+        t.add_row(d, str(c.n_edges), f"{c.mtf_at_nyquist:.4f}", f"{c.mtf_at_nyquist_sigma:.4f}",
+                  _fmt(c.scatter_at_nyquist), _fmt(c.chi2_reduced_at_nyquist), _fmt(m50),
+                  *([_fmt(None if m50 is None else m50 / pixel_m)] if pixel_m else []))
+    return t
+
+
+def _ceos_rich(tab: dict) -> Table:
+    t = Table(title="CEOS-style MTF at f / f_s (f_s = 1 cy/px; 0.5 = Nyquist)")
+    for col in ("f/fs", "ACT", "+-1s", "ALT", "+-1s"):
+        t.add_column(col, justify="right")
+    for i in range(tab["f_over_fs"].size):
+        cells = [tab[k][i] for k in ("mtf_act", "mtf_act_sigma", "mtf_alt", "mtf_alt_sigma")]
+        t.add_row(f"{tab['f_over_fs'][i]:.2f}", *("-" if v != v else f"{v:.4f}" for v in cells))
+    return t
+
+
+@measure_app.command()
+@_handle_errors
+def find(
+    image: ImageArg,
+    pixel_m: PixelOpt = None,
+    min_length: Annotated[float, typer.Option("--min-length", help="shortest usable edge (px)")] = 32.0,
+    max_edges: Annotated[int | None, typer.Option("--max-edges", help="use at most N edges (longest)")] = None,
+    min_cnr: Annotated[float, typer.Option("--min-cnr", help="smallest edge contrast / pixel noise")] = 10.0,
+    f_max: Annotated[
+        float, typer.Option("--f-max", help="last f/f_s of the CEOS table: 0.5 (Nyquist) up to 1.0")
+    ] = 0.5,
+    as_csv: Annotated[bool, typer.Option("--csv", help="print the CEOS table as CSV")] = False,
+    as_json: JsonOpt = False,
+    out: OutOpt = None,
+) -> None:
+    """ACT and ALT MTF (with 1-sigma) from every usable slanted edge found automatically (no truth file)."""
+    from satchain._validate import check_range
+    from satchain.measure.find_mtf import ceos_csv, ceos_table, measure_found_edges
+    from satchain.report.find_plots import plot_find
+
+    check_range("--f-max", f_max, 0.02, 1.0)
+    data, p, _ = _load(image, pixel_m)
+    res = measure_found_edges(data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr)
+    csv_text = ceos_csv(res, f_max=f_max, pixel_m=p)
+    payload = {"image": str(image), "pixel_m": p, **res.to_dict(), "ceos_csv": csv_text}
+
+    def plot(d: Path):
+        from satchain.report._save import write_text
+
+        write_text(d / "find_ceos.csv", csv_text)
+        plot_find(res, d / "find.png", image=data, title=image.name)
+        return [d / "find_ceos.csv", d / "find.png"]
+
+    def table():
+        c = _console()
+        if as_csv:
+            print(csv_text, end="")
+            return
+        c.print(_edges_table(res, image.name))
+        c.print(_combined_table(res, p))
+        c.print(_ceos_rich(ceos_table(res, f_max=f_max)))
+        for f in [*res.flags, *(fl for cm in res.combined.values() for fl in cm.flags)]:
+            c.print(f"[yellow]flag:[/] {f}", highlight=False)
+        counts = payload["rejection_counts"]
+        if counts:
+            c.print("rejected segments: " + ", ".join(f"{k} {v}" for k, v in counts.items()), highlight=False)
+
+    _emit(payload, as_json, out, "find", plot, table)

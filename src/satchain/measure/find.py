@@ -1,0 +1,426 @@
+"""Automatic detection of slanted edges usable for MTF measurement (no truth file), as MTF Mapper does.
+
+Algorithm
+---------
+1. **Noise.** Pixel noise ``sigma_n`` from the robust (MAD) response of Immerkaer's (1996) 3x3 Laplacian-
+   difference mask, which cancels plateaus and linear ramps.
+2. **Edge pixels**, in bands of ``band_rows`` rows (with an overlap, so memory stays O(band) in float32):
+   gradient of a Gaussian (sigma 1 px); a pixel is an *edge pixel* when the gradient magnitude exceeds
+   ``max(5 x its noise, 0.002 x the image's robust range)`` and the structure tensor (Gaussian window 1.5 px)
+   is coherent (> 0.85): that removes corners, junctions and texture, so the four sides of a square fall
+   apart into four separate components.  Only two full-size arrays are kept (a boolean mask and its labels).
+3. **Segments**: 8-connected components long enough to matter; a weighted (gradient magnitude squared)
+   principal-axis line fit gives the position, angle and length; collinear pieces of one edge are merged.
+   Straightness: the mean offset from the fitted line of each quarter of the segment stays below 1 px, and
+   the gradient directions agree (resultant length of the doubled angles > 0.98).
+4. **ROI**: an axis-aligned rectangle straddling the segment: the rows (ACT edge) or columns (ALT edge) of its
+   central part, trimmed at both ends so that a neighbouring side leaving a corner stays outside, and
+   ``half_width_px`` on each side of the edge along the other axis.  It must hold **only** this edge: no pixel
+   farther than ``guard_px`` from the edge line may have a gradient above 10 % of the edge's own peak (or
+   above the noise threshold), and each plateau must be flat to within noise.
+5. **Checks**: tilt from the nearest axis in [``min_tilt_deg``, ``max_tilt_deg``] (0 deg: no phase
+   diversity; 45 deg: ACT/ALT ambiguous), length >= ``min_length_px``, contrast-to-noise >= ``min_cnr``.
+
+Every rejected segment is kept with its reason, so a refusal can say why.  Angles follow
+:mod:`satchain.measure.edge`: ``angle_deg`` is the edge line's angle from the image y axis, in (-90, 90].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage as ndi
+
+from satchain._validate import as_float_array, check_positive, check_range
+from satchain.errors import InputError
+from satchain.measure._common import ResultMixin
+
+__all__ = ["EdgeCandidate", "EdgeSearch", "Rejection", "estimate_noise", "find_edges"]
+
+_GRAD_SIGMA = 1.0  # px, Gaussian of the gradient
+_TENSOR_SIGMA = 1.5  # px, structure-tensor window
+_COHERENCE_MIN = 0.85
+_K_NOISE = 5.0  # edge-pixel threshold in units of the gradient noise
+_REL_RANGE = 0.002  # ... and in units of the image's robust range
+_GRAD_NOISE_GAIN = 1.0 / np.sqrt(8 * np.pi * _GRAD_SIGMA**4)  # std of d/dx(G_sigma * noise) per unit noise
+_PAD = 12  # band overlap (px): covers the Gaussian supports (4 sigma)
+
+
+@dataclass(frozen=True)
+class EdgeCandidate(ResultMixin):
+    """A straight edge segment with an ROI that holds it alone.
+
+    ``center_xy`` is the segment's centre (x = column, y = row, px); ``roi`` = (x0, y0, x1, y1), half-open;
+    ``angle_deg`` the edge line's angle from the y axis (as :func:`~satchain.measure.edge.measure_edge`);
+    ``tilt_deg`` its angle from the nearest pixel axis; ``direction`` "ACT" (near-vertical edge, normal
+    along x) or "ALT"; ``contrast`` the step between the two plateaus (image units) and ``cnr`` that step
+    over the pixel noise.
+    """
+
+    center_xy: tuple[float, float]
+    roi: tuple[int, int, int, int]
+    angle_deg: float
+    tilt_deg: float
+    direction: str
+    length_px: float
+    contrast: float
+    cnr: float
+
+
+@dataclass(frozen=True)
+class Rejection(ResultMixin):
+    """A segment that was found but not kept, with the reason (one of :data:`EdgeSearch.REASONS`)."""
+
+    center_xy: tuple[float, float]
+    angle_deg: float
+    length_px: float
+    reason: str
+    detail: str = ""
+
+
+@dataclass(frozen=True)
+class EdgeSearch(ResultMixin):
+    """Result of :func:`find_edges`: usable candidates (longest first), rejected segments, pixel noise."""
+
+    candidates: tuple[EdgeCandidate, ...]
+    rejected: tuple[Rejection, ...]
+    noise_sigma: float
+    n_segments: int
+    warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    def __len__(self) -> int:
+        return len(self.candidates)
+
+    def __iter__(self):
+        return iter(self.candidates)
+
+    def rejection_counts(self) -> dict[str, int]:
+        """Number of rejected segments per reason."""
+        out: dict[str, int] = {}
+        for r in self.rejected:
+            out[r.reason] = out.get(r.reason, 0) + 1
+        return out
+
+
+def estimate_noise(image, *, band_rows: int = 512) -> float:
+    """Pixel noise standard deviation (image units) from Immerkaer's Laplacian-difference mask, robust (MAD).
+
+    Plateaus and linear ramps give zero response; edges are a small fraction of the pixels and do not move the
+    median.  Computed over bands of rows, so the memory stays O(band).
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(1).normal(10.0, 0.5, (256, 256))
+    >>> round(estimate_noise(img), 2)
+    0.5
+    """
+    a = np.asarray(image)
+    mask = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], dtype=np.float32)
+    meds = []
+    for y0 in range(0, max(a.shape[0] - 2, 1), band_rows):
+        band = np.asarray(a[y0 : y0 + band_rows + 2], dtype=np.float32)
+        if band.shape[0] < 3 or band.shape[1] < 3:
+            continue
+        r = ndi.correlate(band, mask, mode="nearest")[1:-1, 1:-1]
+        meds.append((np.median(np.abs(r)), r.size))
+    if not meds:
+        return 0.0
+    m = np.array(meds)
+    med = float(np.average(m[:, 0], weights=m[:, 1]))
+    return 1.482602218505602 * med / 6.0  # ||mask||_2 = 6
+
+
+def _robust_range(a: np.ndarray) -> float:
+    step = max(1, int(np.sqrt(a.size / 250_000)))
+    sub = np.asarray(a[::step, ::step], dtype=np.float32)
+    lo, hi = np.percentile(sub, [0.5, 99.5])
+    return float(hi - lo)
+
+
+def _gradient(band: np.ndarray):
+    """Gaussian-derivative gradient (gx, gy) of a float32 band."""
+    gx = ndi.gaussian_filter(band, _GRAD_SIGMA, order=(0, 1), mode="nearest")
+    gy = ndi.gaussian_filter(band, _GRAD_SIGMA, order=(1, 0), mode="nearest")
+    return gx, gy
+
+
+def _edge_mask(a: np.ndarray, threshold: float, band_rows: int) -> np.ndarray:
+    """Boolean mask of coherent strong-gradient pixels, computed band by band in float32."""
+    ny = a.shape[0]
+    mask = np.zeros(a.shape, dtype=bool)
+    for y0 in range(0, ny, band_rows):
+        lo, hi = max(0, y0 - _PAD), min(ny, y0 + band_rows + _PAD)
+        band = np.asarray(a[lo:hi], dtype=np.float32)
+        gx, gy = _gradient(band)
+        jxx = ndi.gaussian_filter(gx * gx, _TENSOR_SIGMA, mode="nearest")
+        jyy = ndi.gaussian_filter(gy * gy, _TENSOR_SIGMA, mode="nearest")
+        jxy = ndi.gaussian_filter(gx * gy, _TENSOR_SIGMA, mode="nearest")
+        tr = jxx + jyy
+        coh = np.sqrt((jxx - jyy) ** 2 + 4 * jxy**2) / np.maximum(tr, np.float32(1e-30))
+        strong = (gx * gx + gy * gy > np.float32(threshold**2)) & (coh > _COHERENCE_MIN)
+        mask[y0 : min(ny, y0 + band_rows)] = strong[y0 - lo : y0 - lo + min(band_rows, ny - y0)]
+    return mask
+
+
+@dataclass
+class _Segment:
+    xs: np.ndarray
+    ys: np.ndarray
+    w: np.ndarray
+    gang: np.ndarray  # gradient direction (rad)
+
+    def fit(self):
+        """Weighted principal-axis line: (centre x, y, unit direction (ux, uy) with uy >= 0, length)."""
+        sw = self.w.sum()
+        cx, cy = (self.w * self.xs).sum() / sw, (self.w * self.ys).sum() / sw
+        dx, dy = self.xs - cx, self.ys - cy
+        cov = np.array([[(self.w * dx * dx).sum(), (self.w * dx * dy).sum()],
+                        [(self.w * dx * dy).sum(), (self.w * dy * dy).sum()]]) / sw
+        evals, evecs = np.linalg.eigh(cov)
+        ux, uy = evecs[:, 1]
+        if uy < 0 or (uy == 0 and ux < 0):
+            ux, uy = -ux, -uy
+        t = dx * ux + dy * uy
+        return float(cx), float(cy), float(ux), float(uy), float(t.max() - t.min() + 1.0)
+
+
+def _segments(a: np.ndarray, mask: np.ndarray, min_length_px: float) -> list[_Segment]:
+    """Connected components of the edge mask that are long enough, with their gradient weights."""
+    labels, n = ndi.label(mask, structure=np.ones((3, 3), dtype=int))
+    out = []
+    for i, sl in enumerate(ndi.find_objects(labels), start=1):
+        if sl is None:
+            continue
+        h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
+        if np.hypot(h, w) < 0.7 * min_length_px:
+            continue
+        y0, y1 = max(0, sl[0].start - _PAD), min(a.shape[0], sl[0].stop + _PAD)
+        x0, x1 = max(0, sl[1].start - _PAD), min(a.shape[1], sl[1].stop + _PAD)
+        gx, gy = _gradient(np.asarray(a[y0:y1, x0:x1], dtype=np.float32))
+        yy, xx = np.nonzero(labels[y0:y1, x0:x1] == i)
+        gxs, gys = gx[yy, xx].astype(float), gy[yy, xx].astype(float)
+        out.append(_Segment(xx + float(x0), yy + float(y0), gxs**2 + gys**2, np.arctan2(gys, gxs)))
+    del labels
+    return out
+
+
+def _merge_collinear(segs: list[_Segment]) -> list[_Segment]:
+    """Merge pieces of one edge (same polarity, angle within 1.5 deg, centre within 2 px of the other line)."""
+    segs = sorted(segs, key=lambda s: -s.w.sum())
+    merged: list[_Segment] = []
+    for s in segs:
+        cx, cy, ux, uy, _ = s.fit()
+        pol = np.angle(np.sum(s.w * np.exp(1j * s.gang)))
+        for m in merged:
+            mx, my, vx, vy, _ = m.fit()
+            mpol = np.angle(np.sum(m.w * np.exp(1j * m.gang)))
+            same_dir = abs(ux * vx + uy * vy) > np.cos(np.deg2rad(1.5))
+            near = abs((cx - mx) * vy - (cy - my) * vx) < 2.0
+            if same_dir and near and np.cos(pol - mpol) > 0.9:
+                m.xs, m.ys = np.concatenate([m.xs, s.xs]), np.concatenate([m.ys, s.ys])
+                m.w, m.gang = np.concatenate([m.w, s.w]), np.concatenate([m.gang, s.gang])
+                break
+        else:
+            merged.append(s)
+    return merged
+
+
+def _straight(s: _Segment, cx, cy, ux, uy) -> str:
+    """'' when the segment is straight, else the reason detail."""
+    t = (s.xs - cx) * ux + (s.ys - cy) * uy
+    d = (s.xs - cx) * uy - (s.ys - cy) * ux
+    edges = np.quantile(t, [0.0, 0.25, 0.5, 0.75, 1.0])
+    offs = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        sel = (t >= a) & (t <= b)
+        if np.any(sel):
+            offs.append(float((s.w[sel] * d[sel]).sum() / s.w[sel].sum()))
+    dev = max(abs(o) for o in offs)
+    res = float(np.abs(np.sum(s.w * np.exp(2j * s.gang))) / s.w.sum())
+    if dev > 1.0:
+        return f"curved: quarter-segment offsets up to {dev:.2f} px from the fitted line"
+    if res < 0.98:
+        return f"gradient directions disagree (resultant {res:.3f} < 0.98)"
+    return ""
+
+
+def _angle_from_y(ux: float, uy: float) -> float:
+    ang = float(np.degrees(np.arctan2(ux, uy)))
+    return ang - 180.0 if ang > 90.0 else (ang + 180.0 if ang <= -90.0 else ang)
+
+
+def _roi_for(cx, cy, ux, uy, length, direction, half_w, shape):
+    """Axis-aligned ROI straddling the segment: trimmed central part along it, ``half_w`` across it."""
+    ny, nx = shape
+    # along-axis (a) and across-axis (c) unit components; ACT: along = y, across = x
+    ua, uc, ca, cc, n_a, n_c = (uy, ux, cy, cx, ny, nx) if direction == "ACT" else (ux, uy, cx, cy, nx, ny)
+    slope = uc / ua
+    trim = half_w * abs(slope) + 4.0
+    half_len_a = 0.5 * (length - 1.0) * abs(ua) - trim
+    if half_len_a < 4:
+        return None
+    a0, a1 = int(np.ceil(ca - half_len_a)), int(np.floor(ca + half_len_a)) + 1
+    a0, a1 = max(a0, 0), min(a1, n_a)
+    c_ends = (cc + (a0 - ca) * slope, cc + (a1 - 1 - ca) * slope)
+    c0 = max(int(np.floor(min(c_ends) - half_w)), 0)
+    c1 = min(int(np.ceil(max(c_ends) + half_w)) + 1, n_c)
+    return (c0, a0, c1, a1) if direction == "ACT" else (a0, c0, a1, c1)
+
+
+def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px):
+    """(contrast, detail): detail '' when the ROI holds only this edge on flat plateaus."""
+    x0, y0, x1, y1 = roi
+    crop = np.asarray(a[y0:y1, x0:x1], dtype=np.float32)
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    d = (xx - cx) * uy - (yy - cy) * ux  # signed distance from the edge line (px)
+    gx, gy = _gradient(crop)
+    mag = np.hypot(gx, gy)
+    peak = float(np.percentile(mag[np.abs(d) < 1.5], 90)) if np.any(np.abs(d) < 1.5) else 0.0
+    far = np.abs(d) > guard_px
+    # ignore the outermost pixel ring, where the 'nearest' border mode bends the gradient
+    inner = np.zeros(crop.shape, dtype=bool)
+    inner[2:-2, 2:-2] = True
+    stray = far & inner & (mag > max(threshold, 0.1 * peak))
+    if np.count_nonzero(stray) > max(2, 0.002 * crop.size):
+        return 0.0, f"{int(np.count_nonzero(stray))} pixels of other structure farther than {guard_px:g} px"
+    sides = [crop[d < -guard_px], crop[d > guard_px]]
+    if min(s.size for s in sides) < 16:
+        return 0.0, "plateaus too narrow"
+    contrast = float(np.median(sides[1]) - np.median(sides[0]))
+    for s, name in zip(sides, ("negative", "positive"), strict=True):
+        spread = float(np.std(s))
+        if spread > 3 * noise + 0.05 * abs(contrast):
+            return contrast, f"{name}-side plateau not flat (std {spread:.3g} vs noise {noise:.3g})"
+    return contrast, ""
+
+
+def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
+    """An EdgeCandidate, or a Rejection with its reason."""
+    cx, cy, ux, uy, length = s.fit()
+    ang = _angle_from_y(ux, uy)
+    direction = "ACT" if abs(ang) < 45.0 else "ALT"
+    tilt = abs(ang) if direction == "ACT" else 90.0 - abs(ang)
+
+    def rej(reason, detail=""):
+        return Rejection((cx, cy), ang, length, reason, detail)
+
+    if length < p["min_length_px"]:
+        return rej("short", f"{length:.0f} px < min_length_px = {p['min_length_px']:g}")
+    if tilt < p["min_tilt_deg"]:
+        return rej("axis-aligned", f"tilt {tilt:.2f} deg < {p['min_tilt_deg']:g} deg: no sub-pixel phase diversity")
+    if tilt > p["max_tilt_deg"]:
+        return rej("near 45 deg", f"tilt {tilt:.2f} deg > {p['max_tilt_deg']:g} deg: ACT/ALT ambiguous")
+    why = _straight(s, cx, cy, ux, uy)
+    if why:
+        return rej("not straight", why)
+    roi = _roi_for(cx, cy, ux, uy, length, direction, p["half_width_px"], a.shape)
+    if roi is None:
+        return rej("short", "too short once the corners are trimmed")
+    n_along = roi[3] - roi[1] if direction == "ACT" else roi[2] - roi[0]
+    if n_along < p["min_length_px"] * 0.5 or n_along < 12:
+        return rej("short", f"ROI holds {n_along} lines once trimmed")
+    contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"])
+    if why:
+        return rej("not isolated", why)
+    cnr = abs(contrast) / noise if noise > 0 else float("inf")
+    if cnr < p["min_cnr"]:
+        return rej("low contrast", f"contrast-to-noise {cnr:.1f} < min_cnr = {p['min_cnr']:g}")
+    return EdgeCandidate((cx, cy), roi, ang, tilt, direction, length, abs(contrast), cnr)
+
+
+def find_edges(
+    image,
+    *,
+    min_length_px: float = 32.0,
+    min_cnr: float = 10.0,
+    min_tilt_deg: float = 1.0,
+    max_tilt_deg: float = 44.0,
+    half_width_px: float = 16.0,
+    guard_px: float = 5.0,
+    max_edges: int | None = None,
+    band_rows: int = 512,
+) -> EdgeSearch:
+    """Find straight, isolated, slanted edges with enough contrast, each with an ROI for slanted-edge MTF.
+
+    Parameters
+    ----------
+    image : array_like, 2-D
+        The image (any real dtype; read band by band in float32, never copied whole as float64).
+    min_length_px : float
+        Shortest usable segment (px, along the edge).
+    min_cnr : float
+        Smallest step between the two plateaus, in units of the pixel noise.
+    min_tilt_deg, max_tilt_deg : float
+        Allowed angle between the edge and its nearest pixel axis (deg), within [0.5, 44.5].
+    half_width_px : float
+        ROI half-width across the edge (px); the ESF needs plateaus on both sides.
+    guard_px : float
+        Distance from the edge line (px) beyond which the ROI must be free of any other structure.
+    max_edges : int, optional
+        Keep at most this many candidates (longest first).
+    band_rows : int
+        Rows per processing band (memory: a few float32 arrays of ``band_rows`` x width).
+
+    Returns
+    -------
+    EdgeSearch
+        ``candidates`` (longest first) and ``rejected`` (with reasons).
+
+    Raises
+    ------
+    InputError
+        Not a 2-D image, NaN/inf values, or an image smaller than 32 px.
+
+    Examples
+    --------
+    >>> y, x = np.mgrid[0:160, 0:160]
+    >>> t = np.deg2rad(6.0)
+    >>> img = 0.2 + 0.6 / (1 + np.exp(-((x - 80.3) * np.cos(t) - (y - 80) * np.sin(t)) / 0.5))
+    >>> s = find_edges(img)
+    >>> len(s), s.candidates[0].direction, round(s.candidates[0].angle_deg, 1)
+    (1, 'ACT', 6.0)
+    """
+    a = as_float_array("image", image, ndim=2, finite=False) if not isinstance(image, np.ndarray) else image
+    if a.ndim != 2:
+        raise InputError(f"image: must be 2-D, got shape {a.shape}")
+    if min(a.shape) < 32:
+        raise InputError(f"image: shape {a.shape} is too small to search for edges; both sides must be >= 32 px")
+    p = {
+        "min_length_px": check_range("min_length_px", min_length_px, 12, None),
+        "min_cnr": check_positive("min_cnr", min_cnr),
+        "min_tilt_deg": check_range("min_tilt_deg", min_tilt_deg, 0.5, 44.5),
+        "max_tilt_deg": check_range("max_tilt_deg", max_tilt_deg, 0.5, 44.5),
+        "half_width_px": check_range("half_width_px", half_width_px, 8, 64),
+        "guard_px": check_range("guard_px", guard_px, 2, 32),
+    }
+    if p["min_tilt_deg"] >= p["max_tilt_deg"]:
+        raise InputError(f"min_tilt_deg = {min_tilt_deg:g}: must be < max_tilt_deg = {max_tilt_deg:g}")
+    if p["guard_px"] >= p["half_width_px"] - 2:
+        raise InputError(f"guard_px = {guard_px:g}: must be < half_width_px - 2 = {p['half_width_px'] - 2:g}")
+    band_rows = int(check_range("band_rows", band_rows, 64, None))
+    _check_finite(a, band_rows)
+    noise = estimate_noise(a, band_rows=band_rows)
+    threshold = max(_K_NOISE * _GRAD_NOISE_GAIN * noise, _REL_RANGE * _robust_range(a), 1e-12)
+    mask = _edge_mask(a, threshold, band_rows)
+    segs = _merge_collinear(_segments(a, mask, p["min_length_px"]))
+    del mask
+    found, rejected = [], []
+    for s in segs:
+        r = _evaluate(a, s, p, noise, threshold)
+        (found if isinstance(r, EdgeCandidate) else rejected).append(r)
+    found.sort(key=lambda c: -c.length_px)
+    warnings = []
+    if max_edges is not None:
+        max_edges = int(check_range("max_edges", max_edges, 1, None))
+        if len(found) > max_edges:
+            warnings.append(f"{len(found)} usable edges found; the {max_edges} longest kept (max_edges)")
+            found = found[:max_edges]
+    return EdgeSearch(tuple(found), tuple(rejected), float(noise), len(segs), tuple(warnings))
+
+
+def _check_finite(a: np.ndarray, band_rows: int) -> None:
+    for y0 in range(0, a.shape[0], band_rows):
+        band = a[y0 : y0 + band_rows]
+        if np.issubdtype(band.dtype, np.floating) and not np.all(np.isfinite(band)):
+            raise InputError("image: contains NaN/inf values; all values must be finite")
