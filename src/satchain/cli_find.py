@@ -36,22 +36,46 @@ def _edges_table(res, name: str) -> Table:
         t.add_column(col, justify="right")
     for k, e in enumerate(res.edges):
         c = e.candidate
-        t.add_row(str(k), e.direction, f"{c.center_xy[0]:.0f},{c.center_xy[1]:.0f}", ",".join(map(str, c.roi)),
-                  f"{e.angle_deg:.2f}", f"{c.length_px:.0f}", f"{c.cnr:.0f}", f"{e.mtf_at_nyquist:.4f}",
-                  f"{e.mtf_at_nyquist_sigma:.4f}", _fmt(e.mtf50_cy_per_px))
+        t.add_row(
+            str(k),
+            e.direction,
+            f"{c.center_xy[0]:.0f},{c.center_xy[1]:.0f}",
+            ",".join(map(str, c.roi)),
+            f"{e.angle_deg:.2f}",
+            f"{c.length_px:.0f}",
+            f"{c.cnr:.0f}",
+            f"{e.mtf_at_nyquist:.4f}",
+            f"{e.mtf_at_nyquist_sigma:.4f}",
+            _fmt(e.mtf50_cy_per_px),
+        )
     return t
 
 
 def _combined_table(res, pixel_m) -> Table:
     t = Table(title="combined MTF (inverse-variance mean of the edges)")
-    for col in ("direction", "edges", "MTF@Nyquist", "+-1 sigma", "scatter", "chi2/dof", "MTF50 cy/px",
-                *(["MTF50 cy/m"] if pixel_m else [])):
+    for col in (
+        "direction",
+        "edges",
+        "MTF@Nyquist",
+        "+-1 sigma",
+        "scatter",
+        "chi2/dof",
+        "MTF50 cy/px",
+        *(["MTF50 cy/m"] if pixel_m else []),
+    ):
         t.add_column(col, justify="right")
     for d, c in res.combined.items():
         m50 = c.mtf50_cy_per_px
-        t.add_row(d, str(c.n_edges), f"{c.mtf_at_nyquist:.4f}", f"{c.mtf_at_nyquist_sigma:.4f}",
-                  _fmt(c.scatter_at_nyquist), _fmt(c.chi2_reduced_at_nyquist), _fmt(m50),
-                  *([_fmt(None if m50 is None else m50 / pixel_m)] if pixel_m else []))
+        t.add_row(
+            d,
+            str(c.n_edges),
+            f"{c.mtf_at_nyquist:.4f}",
+            f"{c.mtf_at_nyquist_sigma:.4f}",
+            _fmt(c.scatter_at_nyquist),
+            _fmt(c.chi2_reduced_at_nyquist),
+            _fmt(m50),
+            *([_fmt(None if m50 is None else m50 / pixel_m)] if pixel_m else []),
+        )
     return t
 
 

@@ -175,8 +175,15 @@ class _Segment:
         sw = self.w.sum()
         cx, cy = (self.w * self.xs).sum() / sw, (self.w * self.ys).sum() / sw
         dx, dy = self.xs - cx, self.ys - cy
-        cov = np.array([[(self.w * dx * dx).sum(), (self.w * dx * dy).sum()],
-                        [(self.w * dx * dy).sum(), (self.w * dy * dy).sum()]]) / sw
+        cov = (
+            np.array(
+                [
+                    [(self.w * dx * dx).sum(), (self.w * dx * dy).sum()],
+                    [(self.w * dx * dy).sum(), (self.w * dy * dy).sum()],
+                ]
+            )
+            / sw
+        )
         evals, evecs = np.linalg.eigh(cov)
         ux, uy = evecs[:, 1]
         if uy < 0 or (uy == 0 and ux < 0):

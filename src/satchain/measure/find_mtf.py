@@ -37,8 +37,7 @@ from satchain.measure._common import ResultMixin, first_crossing
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
-__all__ = ["CombinedMTF", "FindResult", "FoundEdge", "SIGMA_FLOOR", "ceos_csv", "ceos_table",
-           "measure_found_edges"]
+__all__ = ["CombinedMTF", "FindResult", "FoundEdge", "SIGMA_FLOOR", "ceos_csv", "ceos_table", "measure_found_edges"]
 
 #: Systematic 1-sigma of the slanted-edge MTF (the method's accuracy on exact, noise-free edges), added in
 #: quadrature to the combined sigma (it is common to all edges, so averaging does not shrink it).
@@ -262,8 +261,11 @@ def measure_found_edges(
         s_nyq = getattr(r, "mtf_at_nyquist_sigma", None)
         s_nyq = float(np.hypot(r.mtf_at_nyquist_std if s_nyq is None else s_nyq, SIGMA_FLOOR))
         warn = tuple(r.warnings) + tuple(str(x) for x in getattr(r, "flags", ()) or ())
-        edges.append(FoundEdge(c, r.direction, r.angle_deg, r.mtf_at_nyquist, s_nyq, r.mtf50_cy_per_px,
-                               r.rer, r.noise_sigma, warn))
+        edges.append(
+            FoundEdge(
+                c, r.direction, r.angle_deg, r.mtf_at_nyquist, s_nyq, r.mtf50_cy_per_px, r.rer, r.noise_sigma, warn
+            )
+        )
         results.append(r)
     if not edges:
         raise _refusal(search, rejected)
@@ -278,8 +280,7 @@ def measure_found_edges(
         if d not in combined:
             flags.append(f"no usable {d} edge: only the {'ALT' if d == 'ACT' else 'ACT'} MTF is measured")
     shape = tuple(int(v) for v in np.shape(image))
-    return FindResult(tuple(edges), combined, tuple(rejected), search.noise_sigma, shape, tuple(flags),
-                      tuple(results))
+    return FindResult(tuple(edges), combined, tuple(rejected), search.noise_sigma, shape, tuple(flags), tuple(results))
 
 
 def ceos_table(result: FindResult, *, step: float = 0.02, f_max: float = 0.5) -> dict[str, np.ndarray]:
@@ -313,8 +314,14 @@ def ceos_csv(result: FindResult, *, step: float = 0.02, f_max: float = 0.5, pixe
     With ``pixel_m`` a column ``f_cy_per_m_ground`` = (f / f_s) / pixel_m is added.
     """
     t = ceos_table(result, step=step, f_max=f_max)
-    cols = ["f_over_fs", *(["f_cy_per_m_ground"] if pixel_m else []),
-            "mtf_act", "mtf_act_sigma", "mtf_alt", "mtf_alt_sigma"]
+    cols = [
+        "f_over_fs",
+        *(["f_cy_per_m_ground"] if pixel_m else []),
+        "mtf_act",
+        "mtf_act_sigma",
+        "mtf_alt",
+        "mtf_alt_sigma",
+    ]
     if pixel_m:
         t["f_cy_per_m_ground"] = t["f_over_fs"] / pixel_m
     lines = [",".join(cols)]

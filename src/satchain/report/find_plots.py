@@ -45,8 +45,16 @@ def _draw_image(ax, image, result) -> None:
     ax.imshow(thumb, cmap="gray", vmin=lo, vmax=hi if hi > lo else lo + 1, interpolation="nearest")
     for k, e in enumerate(result.edges):
         x0, y0, x1, y1 = e.candidate.roi
-        ax.add_patch(Rectangle((x0 / step - 0.5, y0 / step - 0.5), (x1 - x0) / step, (y1 - y0) / step,
-                               fill=False, color=_COLOR[e.direction], lw=1))
+        ax.add_patch(
+            Rectangle(
+                (x0 / step - 0.5, y0 / step - 0.5),
+                (x1 - x0) / step,
+                (y1 - y0) / step,
+                fill=False,
+                color=_COLOR[e.direction],
+                lw=1,
+            )
+        )
         ax.text(x0 / step, y0 / step - 1, str(k), color=_COLOR[e.direction], fontsize=7, va="bottom")
     for r in result.rejected:
         ax.plot(r.center_xy[0] / step, r.center_xy[1] / step, "x", color="orange", ms=4)
@@ -61,8 +69,13 @@ def _draw_mtf(ax, result) -> None:
     for d, c in result.combined.items():
         f, m, s = np.asarray(c.f_cy_per_px), np.asarray(c.mtf), np.asarray(c.sigma)
         ax.fill_between(f, m - 2 * s, m + 2 * s, color=_COLOR[d], alpha=0.25, lw=0)
-        ax.plot(f, m, color=_COLOR[d], lw=2,
-                label=f"{d}: {c.n_edges} edge(s), Nyquist {c.mtf_at_nyquist:.3f} +- {c.mtf_at_nyquist_sigma:.3f}")
+        ax.plot(
+            f,
+            m,
+            color=_COLOR[d],
+            lw=2,
+            label=f"{d}: {c.n_edges} edge(s), Nyquist {c.mtf_at_nyquist:.3f} +- {c.mtf_at_nyquist_sigma:.3f}",
+        )
     ax.axvline(0.5, color="gray", lw=1)
     ax.text(0.5, 1.08, " Nyquist", color="gray", va="top", fontsize=8)
     ax.set_xlim(0, 1.0)
