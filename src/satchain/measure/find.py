@@ -318,6 +318,9 @@ def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
         return rej("axis-aligned", f"tilt {tilt:.2f} deg < {p['min_tilt_deg']:g} deg: no sub-pixel phase diversity")
     if tilt > p["max_tilt_deg"]:
         return rej("near 45 deg", f"tilt {tilt:.2f} deg > {p['max_tilt_deg']:g} deg: ACT/ALT ambiguous")
+    polarity = float(np.abs(np.sum(s.w * np.exp(1j * s.gang))) / s.w.sum())
+    if polarity < 0.9:
+        return rej("not isolated", f"edges of both polarities in one segment (a thin line or bar; {polarity:.2f})")
     why = _straight(s, cx, cy, ux, uy)
     if why:
         return rej("not straight", why)
