@@ -95,7 +95,9 @@ def find(
     image: ImageArg,
     pixel_m: PixelOpt = None,
     min_length: Annotated[float, typer.Option("--min-length", help="shortest usable edge (px)")] = 32.0,
-    max_edges: Annotated[int | None, typer.Option("--max-edges", help="use at most N edges (longest)")] = None,
+    max_edges: Annotated[
+        int, typer.Option("--max-edges", help="measure at most N edges (the longest, ACT and ALT in turn)")
+    ] = 200,
     min_cnr: Annotated[float, typer.Option("--min-cnr", help="smallest edge contrast / pixel noise")] = 10.0,
     f_max: Annotated[
         float, typer.Option("--f-max", help="last f/f_s of the CEOS table: 0.5 (Nyquist) up to 1.0")

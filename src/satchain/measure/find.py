@@ -212,24 +212,40 @@ def _segments(a: np.ndarray, mask: np.ndarray, min_length_px: float) -> list[_Se
     return out
 
 
-def _merge_collinear(segs: list[_Segment]) -> list[_Segment]:
-    """Merge pieces of one edge (same polarity, angle within 1.5 deg, centre within 2 px of the other line)."""
+def _merge_collinear(segs: list[_Segment], max_gap_px: float = 15.0) -> list[_Segment]:
+    """Merge pieces of one edge: same polarity, angle within 1.5 deg, centre within 2 px of the other's line,
+    and ends less than ``max_gap_px`` apart along it."""
     segs = sorted(segs, key=lambda s: -s.w.sum())
     merged: list[_Segment] = []
-    for s in segs:
+    params: list[tuple] = []  # (cx, cy, ux, uy, polarity angle, t_min, t_max) of each merged segment
+    cos_tol = np.cos(np.deg2rad(1.5))
+
+    def describe(s):
         cx, cy, ux, uy, _ = s.fit()
-        pol = np.angle(np.sum(s.w * np.exp(1j * s.gang)))
-        for m in merged:
-            mx, my, vx, vy, _ = m.fit()
-            mpol = np.angle(np.sum(m.w * np.exp(1j * m.gang)))
-            same_dir = abs(ux * vx + uy * vy) > np.cos(np.deg2rad(1.5))
-            near = abs((cx - mx) * vy - (cy - my) * vx) < 2.0
-            if same_dir and near and np.cos(pol - mpol) > 0.9:
-                m.xs, m.ys = np.concatenate([m.xs, s.xs]), np.concatenate([m.ys, s.ys])
-                m.w, m.gang = np.concatenate([m.w, s.w]), np.concatenate([m.gang, s.gang])
-                break
-        else:
+        t = (s.xs - cx) * ux + (s.ys - cy) * uy
+        return (cx, cy, ux, uy, np.angle(np.sum(s.w * np.exp(1j * s.gang))), t.min(), t.max())
+
+    for s in segs:
+        p = describe(s)
+        target = None
+        if params:
+            q = np.array(params)
+            same_dir = np.abs(p[2] * q[:, 2] + p[3] * q[:, 3]) > cos_tol
+            near = np.abs((p[0] - q[:, 0]) * q[:, 3] - (p[1] - q[:, 1]) * q[:, 2]) < 2.0
+            pol = np.cos(p[4] - q[:, 4]) > 0.9
+            tc = (p[0] - q[:, 0]) * q[:, 2] + (p[1] - q[:, 1]) * q[:, 3]  # p's centre along q's line
+            half = 0.5 * (p[6] - p[5])
+            gap = np.maximum(tc - half - q[:, 6], q[:, 5] - (tc + half))
+            ok = np.nonzero(same_dir & near & pol & (gap < max_gap_px))[0]
+            target = int(ok[0]) if ok.size else None
+        if target is None:
             merged.append(s)
+            params.append(p)
+            continue
+        m = merged[target]
+        m.xs, m.ys = np.concatenate([m.xs, s.xs]), np.concatenate([m.ys, s.ys])
+        m.w, m.gang = np.concatenate([m.w, s.w]), np.concatenate([m.gang, s.gang])
+        params[target] = describe(m)
     return merged
 
 
@@ -368,7 +384,8 @@ def find_edges(
     guard_px : float
         Distance from the edge line (px) beyond which the ROI must be free of any other structure.
     max_edges : int, optional
-        Keep at most this many candidates (longest first).
+        Keep at most this many candidates: the longest, taken from ACT and ALT in turn (so that both
+        directions stay represented).
     band_rows : int
         Rows per processing band (memory: a few float32 arrays of ``band_rows`` x width).
 
@@ -424,8 +441,10 @@ def find_edges(
     if max_edges is not None:
         max_edges = int(check_range("max_edges", max_edges, 1, None))
         if len(found) > max_edges:
-            warnings.append(f"{len(found)} usable edges found; the {max_edges} longest kept (max_edges)")
-            found = found[:max_edges]
+            warnings.append(
+                f"{len(found)} usable edges found; {max_edges} kept (max_edges: the longest, ACT and ALT in turn)"
+            )
+            found = _balanced(found, max_edges)
     return EdgeSearch(tuple(found), tuple(rejected), float(noise), len(segs), tuple(warnings))
 
 
@@ -434,3 +453,15 @@ def _check_finite(a: np.ndarray, band_rows: int) -> None:
         band = a[y0 : y0 + band_rows]
         if np.issubdtype(band.dtype, np.floating) and not np.all(np.isfinite(band)):
             raise InputError("image: contains NaN/inf values; all values must be finite")
+
+
+def _balanced(found: list[EdgeCandidate], n: int) -> list[EdgeCandidate]:
+    """The ``n`` longest candidates taken from the ACT and ALT lists in turn, longest first."""
+    lists = [[c for c in found if c.direction == d] for d in ("ACT", "ALT")]
+    out: list[EdgeCandidate] = []
+    k = 0
+    while len(out) < n and any(lists):
+        if lists[k % 2]:
+            out.append(lists[k % 2].pop(0))
+        k += 1
+    return sorted(out, key=lambda c: -c.length_px)
