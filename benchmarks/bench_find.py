@@ -135,7 +135,8 @@ def throughput(tile: np.ndarray, size: int, rng) -> None:
     print(f"  reference full-frame float64 Sobel magnitude: {t_ref:.2f} s wall, {c_ref:.2f} s CPU")
     print(
         f"  find_edges: {t_find:.2f} s wall, {c_find:.2f} s CPU ({mpx / t_find:.1f} Mpx/s wall; "
-        f"CPU {c_find / c_ref:.2f} x the Sobel reference), {len(s)} edges, peak traced memory {peak_find / 2**20:.0f} MiB = {peak_find / big.nbytes:.2f} x the image"
+        f"CPU {c_find / c_ref:.2f} x the Sobel reference), {len(s)} edges,"
+        f" peak traced memory {peak_find / 2**20:.0f} MiB = {peak_find / big.nbytes:.2f} x the image"
     )
     print(
         f"  measuring the 200 longest edges (max_edges=200, the CLI default) + combining: {t_meas:.2f} s "
