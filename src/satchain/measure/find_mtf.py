@@ -48,7 +48,11 @@ _BIN_PX = 0.25
 
 @dataclass(frozen=True)
 class FoundEdge(ResultMixin):
-    """One measured edge: the candidate found and the summary of its slanted-edge measurement."""
+    """One measured edge: the candidate found and the summary of its slanted-edge measurement.
+
+    ``mtf_at_nyquist_sigma`` = the edge's noise sigma and :data:`SIGMA_FLOOR` in quadrature; ``warnings`` and
+    ``flags`` are those of the edge measurement (``flags`` empty where the edge module has none).
+    """
 
     candidate: EdgeCandidate
     direction: str
@@ -59,6 +63,7 @@ class FoundEdge(ResultMixin):
     rer: float
     noise_sigma: float
     warnings: tuple[str, ...]
+    flags: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -109,18 +114,22 @@ def rejection_counts(rejected) -> dict[str, int]:
     return out
 
 
+def _nyquist_sigma(r: EdgeResult) -> float:
+    """The edge's statistical 1-sigma at Nyquist (``mtf_at_nyquist_sigma`` where set, else ``_std``)."""
+    s = getattr(r, "mtf_at_nyquist_sigma", None)
+    return float(r.mtf_at_nyquist_std if s is None or not np.isfinite(s) else s)
+
+
 def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
     """Per-frequency 1-sigma of an edge's MTF (see the module docstring)."""
     f = np.asarray(r.f_cy_per_px, dtype=float)
-    for name in ("mtf_sigma", "mtf_std"):
-        s = getattr(r, name, None)
-        if s is not None and np.shape(s) == f.shape:
-            return np.maximum(np.asarray(s, dtype=float), SIGMA_FLOOR)
-    s_nyq = getattr(r, "mtf_at_nyquist_sigma", None)
-    s_nyq = r.mtf_at_nyquist_std if s_nyq is None else s_nyq
-    shape = np.abs(np.sin(2 * np.pi * f * _BIN_PX)) / np.sin(np.pi * _BIN_PX)
+    s = getattr(r, "mtf_sigma", None)
+    if s is not None and np.shape(s) == f.shape and np.all(np.isfinite(s)):
+        return np.maximum(np.asarray(s, dtype=float), SIGMA_FLOOR)
+    w = float(getattr(r, "bin_width_px", _BIN_PX) or _BIN_PX)
+    shape = np.abs(np.sin(2 * np.pi * f * w)) / np.sin(np.pi * w)
     shape = np.where(f > 0.5, np.maximum(shape, 1.0) * f / 0.5, shape)  # keep growing past Nyquist
-    return np.maximum(float(s_nyq) * shape, SIGMA_FLOOR)
+    return np.maximum(_nyquist_sigma(r) * shape, SIGMA_FLOOR)
 
 
 def _measure_one(image, c: EdgeCandidate, pixel_m):
@@ -258,12 +267,20 @@ def measure_found_edges(
         if r is None:
             rejected.append(Rejection(c.center_xy, c.angle_deg, c.length_px, "measurement refused", why))
             continue
-        s_nyq = getattr(r, "mtf_at_nyquist_sigma", None)
-        s_nyq = float(np.hypot(r.mtf_at_nyquist_std if s_nyq is None else s_nyq, SIGMA_FLOOR))
-        warn = tuple(r.warnings) + tuple(str(x) for x in getattr(r, "flags", ()) or ())
+        s_nyq = float(np.hypot(_nyquist_sigma(r), SIGMA_FLOOR))
+        flags = tuple(str(x) for x in getattr(r, "flags", ()) or ())
         edges.append(
             FoundEdge(
-                c, r.direction, r.angle_deg, r.mtf_at_nyquist, s_nyq, r.mtf50_cy_per_px, r.rer, r.noise_sigma, warn
+                c,
+                r.direction,
+                r.angle_deg,
+                r.mtf_at_nyquist,
+                s_nyq,
+                r.mtf50_cy_per_px,
+                r.rer,
+                r.noise_sigma,
+                tuple(r.warnings),
+                flags,
             )
         )
         results.append(r)
