@@ -202,3 +202,14 @@ def test_cli_find_refuses_blank_image_with_exit_2(tmp_path):
     r = CliRunner().invoke(app, ["measure", "find", str(tmp_path / "blank.npy")])
     assert r.exit_code == 2
     assert "no usable slanted edge" in r.output
+
+
+def test_integer_image_and_saturated_edges():
+    img = render_chart((300, 300), [(150.2, 150.1, 140, 6.0)], sx=0.5, sy=0.5, noise=0.003)
+    truth = float(true_mtf(0.5, 0.5))
+    res = measure_found_edges(np.round(img * 40000).astype(np.uint16))
+    for d in ("ACT", "ALT"):
+        assert abs(res.combined[d].mtf_at_nyquist - truth) < 0.02
+    clipped = np.clip(np.round(img * 1.3 * 65535), 0, 65535).astype(np.uint16)  # bright side saturated
+    with pytest.raises(InputError, match="measurement refused: 4.*saturat"):
+        measure_found_edges(clipped)

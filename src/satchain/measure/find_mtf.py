@@ -212,8 +212,10 @@ def _refusal(search: EdgeSearch, rejected: list[Rejection]) -> InputError:
     if not counts:
         why = "no straight high-contrast edge segment at all (blank, noise-only or smooth image)"
     else:
-        why = ", ".join(f"{k}: {v}" for k, v in sorted(counts.items(), key=lambda kv: -kv[1]))
-        why = f"{sum(counts.values())} segment(s) rejected ({why})"
+        ranked = sorted(counts.items(), key=lambda kv: -kv[1])
+        why = ", ".join(f"{k}: {v}" for k, v in ranked)
+        example = next(r.detail for r in rejected if r.reason == ranked[0][0])
+        why = f"{sum(counts.values())} segment(s) rejected ({why}); e.g. {ranked[0][0]}: {example}"
     return InputError(f"image: no usable slanted edge found; {why}")
 
 
