@@ -134,6 +134,9 @@ def find(
         c.print(_ceos_rich(ceos_table(res, f_max=f_max)))
         for f in [*res.flags, *(fl for cm in res.combined.values() for fl in cm.flags)]:
             c.print(f"[yellow]flag:[/] {f}", highlight=False)
+        for k, e in enumerate(res.edges):
+            for w in e.warnings:
+                c.print(f"[yellow]edge {k}:[/] {w}", highlight=False)
         counts = payload["rejection_counts"]
         if counts:
             c.print("rejected segments: " + ", ".join(f"{k} {v}" for k, v in counts.items()), highlight=False)
