@@ -213,3 +213,17 @@ def test_integer_image_and_saturated_edges():
     clipped = np.clip(np.round(img * 1.3 * 65535), 0, 65535).astype(np.uint16)  # bright side saturated
     with pytest.raises(InputError, match="measurement refused: 4.*saturat"):
         measure_found_edges(clipped)
+
+
+@pytest.mark.parametrize("gap_px, n_found", [(14, 6), (20, 8), (40, 8)])
+def test_close_neighbours_narrow_the_roi_or_reject(gap_px, n_found):
+    # two squares whose facing ACT sides are gap_px apart: a 16 px half-width ROI would hold both edges
+    sq = [(80, 120, 100, 5.0), (180 + gap_px, 120, 100, 5.0)]
+    img = render_chart((240, 320), sq, sx=0.5, sy=0.5, noise=0.003, rng=np.random.default_rng(5))
+    s = find_edges(img)
+    assert len(s) == n_found
+    assert s.rejection_counts().get("not isolated", 0) == 8 - n_found
+    res = measure_found_edges(img, search=s)
+    truth = float(true_mtf(0.5, 0.5))
+    for c in res.combined.values():
+        assert abs(c.mtf_at_nyquist - truth) < 0.02

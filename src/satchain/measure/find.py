@@ -15,7 +15,8 @@ Algorithm
    the gradient directions agree (resultant length of the doubled angles > 0.98).
 4. **ROI**: an axis-aligned rectangle straddling the segment: the rows (ACT edge) or columns (ALT edge) of its
    central part, trimmed at both ends so that a neighbouring side leaving a corner stays outside, and
-   ``half_width_px`` on each side of the edge along the other axis.  It must hold **only** this edge: no pixel
+   ``half_width_px`` on each side of the edge along the other axis (narrowed down to 0.625 x where a
+   neighbour intrudes).  It must hold **only** this edge: no pixel
    farther than ``guard_px`` from the edge line may have a gradient above 10 % of the edge's own peak (or
    above the noise threshold), and each plateau must be flat to within noise.
 5. **Checks**: tilt from the nearest axis in [``min_tilt_deg``, ``max_tilt_deg``] (0 deg: no phase
@@ -340,13 +341,18 @@ def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
     why = _straight(s, cx, cy, ux, uy)
     if why:
         return rej("not straight", why)
-    roi = _roi_for(cx, cy, ux, uy, length, direction, p["half_width_px"], a.shape)
-    if roi is None:
-        return rej("short", "too short once the corners are trimmed")
-    n_along = roi[3] - roi[1] if direction == "ACT" else roi[2] - roi[0]
-    if n_along < p["min_length_px"] * 0.5 or n_along < 12:
-        return rej("short", f"ROI holds {n_along} lines once trimmed")
-    contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"])
+    hw0 = p["half_width_px"]
+    widths = sorted({hw0, *(w for w in (0.75 * hw0, 0.625 * hw0) if w >= max(10.0, p["guard_px"] + 4))})[::-1]
+    for hw in widths:  # narrower ROIs when a neighbour intrudes
+        roi = _roi_for(cx, cy, ux, uy, length, direction, hw, a.shape)
+        if roi is None:
+            return rej("short", "too short once the corners are trimmed")
+        n_along = roi[3] - roi[1] if direction == "ACT" else roi[2] - roi[0]
+        if n_along < p["min_length_px"] * 0.5 or n_along < 12:
+            return rej("short", f"ROI holds {n_along} lines once trimmed")
+        contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"])
+        if not why:
+            break
     if why:
         return rej("not isolated", why)
     cnr = abs(contrast) / noise if noise > 0 else float("inf")
@@ -380,7 +386,8 @@ def find_edges(
     min_tilt_deg, max_tilt_deg : float
         Allowed angle between the edge and its nearest pixel axis (deg), within [0.5, 44.5].
     half_width_px : float
-        ROI half-width across the edge (px); the ESF needs plateaus on both sides.
+        ROI half-width across the edge (px); the ESF needs plateaus on both sides.  Where another structure
+        intrudes, 0.75 and 0.625 of it are tried (not below 10 px nor ``guard_px + 4``).
     guard_px : float
         Distance from the edge line (px) beyond which the ROI must be free of any other structure.
     max_edges : int, optional
