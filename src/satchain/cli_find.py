@@ -107,11 +107,14 @@ def find(
     out: OutOpt = None,
 ) -> None:
     """ACT and ALT MTF (with 1-sigma) from every usable slanted edge found automatically (no truth file)."""
-    from satchain._validate import check_range
+    from satchain._validate import check_positive, check_range
     from satchain.measure.find_mtf import ceos_csv, ceos_table, measure_found_edges
     from satchain.report.find_plots import plot_find
 
     check_range("--f-max", f_max, 0.02, 1.0)
+    check_range("--min-length", min_length, 12, None)
+    check_range("--max-edges", max_edges, 1, None)
+    check_positive("--min-cnr", min_cnr)
     data, p, _ = _load(image, pixel_m)
     res = measure_found_edges(data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr)
     csv_text = ceos_csv(res, f_max=f_max, pixel_m=p)

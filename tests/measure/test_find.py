@@ -227,3 +227,15 @@ def test_close_neighbours_narrow_the_roi_or_reject(gap_px, n_found):
     truth = float(true_mtf(0.5, 0.5))
     for c in res.combined.values():
         assert abs(c.mtf_at_nyquist - truth) < 0.02
+
+
+@pytest.mark.parametrize("opt, val", [("--min-length", "5"), ("--max-edges", "0"), ("--f-max", "1.5")])
+def test_cli_find_bad_options_exit_2(tmp_path, opt, val):
+    from typer.testing import CliRunner
+
+    from satchain.cli import app
+
+    np.save(tmp_path / "x.npy", np.zeros((64, 64)))
+    r = CliRunner().invoke(app, ["measure", "find", str(tmp_path / "x.npy"), opt, val])
+    assert r.exit_code == 2
+    assert opt in r.output

@@ -135,7 +135,8 @@ def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
 def _measure_one(image, c: EdgeCandidate, pixel_m):
     """(EdgeResult, None) or (None, reason detail)."""
     try:
-        r = measure_edge(image, roi=c.roi, pixel_m=pixel_m)
+        x0, y0, x1, y1 = c.roi  # crop first: measure_edge would convert the whole image to float64 per call
+        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m)
     except InputError as exc:
         return None, str(exc)
     if r.direction != c.direction:
