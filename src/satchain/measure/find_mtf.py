@@ -203,6 +203,7 @@ def _add_tilt_systematic(combined: dict, edges: list[FoundEdge]) -> dict:
     for d, c in combined.items():
         s2 = float(np.mean([np.sin(np.deg2rad(e.candidate.tilt_deg)) ** 2 for e in edges if e.direction == d]))
         sig = np.sqrt(c.sigma**2 + (s2 * diff) ** 2)
+        sig[0] = 0.0  # MTF(0) = 1 by normalisation
         i_nyq = int(np.argmin(np.abs(c.f_cy_per_px - 0.5)))
         out[d] = dataclasses.replace(c, sigma=sig, mtf_at_nyquist_sigma=float(sig[i_nyq]))
     return out
