@@ -86,6 +86,7 @@ def test_ceos_table_steps_and_values(chart_result):
     assert np.all(np.abs(t["mtf_act"] - true_mtf(t["f_over_fs"], SX)) < 0.03)
     assert np.all(np.abs(t["mtf_alt"] - true_mtf(t["f_over_fs"], SY)) < 0.03)
     assert np.all(t["mtf_act_sigma"][1:] > 0) and np.all(t["mtf_alt_sigma"][1:] > 0)
+    assert t["mtf_act_sigma"][0] == 0 and t["mtf_alt_sigma"][0] == 0  # MTF(0) = 1 by normalisation
     t1 = ceos_table(chart_result, f_max=1.0)
     assert t1["f_over_fs"].size == 51
 
