@@ -240,3 +240,12 @@ def test_cli_find_bad_options_exit_2(tmp_path, opt, val):
     r = CliRunner().invoke(app, ["measure", "find", str(tmp_path / "x.npy"), opt, val])
     assert r.exit_code == 2
     assert opt in r.output
+
+
+def test_mtf_near_zero_at_nyquist_is_flagged_as_upper_bound():
+    sq = [(100, 100, 100, 5.0), (100, 300, 100, 7.0)]
+    img = render_chart((400, 200), sq, sx=1.5, sy=1.5, noise=0.01, rng=np.random.default_rng(4))
+    res = measure_found_edges(img)
+    for c in res.combined.values():
+        assert any("upper bound" in f for f in c.flags)
+        assert c.mtf_at_nyquist >= 0

@@ -176,6 +176,11 @@ def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
         flags.append(f"{direction}: a single edge; no cross-check between edges")
     sig = np.sqrt(sig**2 + SIGMA_FLOOR**2)
     sig[0] = 0.0  # MTF(0) = 1 by normalisation
+    if mean[i_nyq] < 3 * sig[i_nyq]:
+        flags.append(
+            f"{direction}: MTF at Nyquist {mean[i_nyq]:.3f} is within 3 sigma of 0; the noise biases a modulus "
+            "upwards there, so read it as an upper bound"
+        )
     if np.any(mean > MTF_VALID_MAX):
         flags.append(f"{direction}: combined MTF exceeds {MTF_VALID_MAX} somewhere; those values are withheld")
     return CombinedMTF(
