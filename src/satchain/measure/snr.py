@@ -1,0 +1,116 @@
+"""The GIQE contrast SNR measured on an image alone, with the scene's truth record saying where things are.
+
+The radiometric gain (image units per unit reflectance) is the step between the slanted edges' plateaus
+(medians >= 4 px from the edge) over their truth reflectance step; the noise is the robust sigma of the
+flattest background patch, from horizontal pixel differences (so scene texture and shading cancel, and
+the sigma of one pixel is that of the differences over sqrt(2)); the median over all target-free 16 x 16 px
+patches (the minimum, used before, is biased low by ~15 % with ~15 patches). SNR = gain (0.15 - 0.07) / noise: GIQE's
+contrast between reflectances 0.15 and 0.07, with the noise measured at the background reflectance rather
+than at 0.15 (a <= 5 % difference for shot-noise-limited pixels).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from satchain._validate import as_float_array, check_positive
+from satchain.measure._common import ResultMixin, robust_sigma
+
+__all__ = ["GIQE_CONTRAST", "SnrResult", "measure_snr"]
+
+#: The reflectance difference GIQE's SNR is defined for (0.15 - 0.07).
+GIQE_CONTRAST = 0.15 - 0.07
+_PATCH_PX = 16
+_PLATEAU_PX = 4.0
+_MIN_PLATEAU_SAMPLES = 20
+
+
+@dataclass(frozen=True)
+class SnrResult(ResultMixin):
+    """``snr``: GIQE contrast SNR (NaN when not measurable, ``reason`` says why); ``noise_dn``: noise sigma of one
+    pixel (image units); ``gain_dn_per_reflectance``: image units per unit reflectance; ``n_edges``: edges the
+    gain came from."""
+
+    snr: float
+    noise_dn: float | None
+    gain_dn_per_reflectance: float | None
+    n_edges: int
+    reason: str | None = None
+
+
+def _edge_gain(image: np.ndarray, it: Mapping[str, Any], pixel_m: float) -> float | None:
+    x0, y0, x1, y1 = it["bbox_m"]
+    r0, r1 = max(int(np.ceil(y0 / pixel_m)) + 2, 0), min(int(y1 / pixel_m) - 2, image.shape[0])
+    c0, c1 = max(int(np.ceil(x0 / pixel_m)) + 2, 0), min(int(x1 / pixel_m) - 2, image.shape[1])
+    if r1 - r0 < 8 or c1 - c0 < 8:
+        return None
+    yy, xx = np.mgrid[r0:r1, c0:c1]
+    (px, py), (nx, ny) = it["edge_point_m"], it["normal_to_bright"]
+    d = ((xx + 0.5) * pixel_m - px) * nx + ((yy + 0.5) * pixel_m - py) * ny
+    block = image[r0:r1, c0:c1]
+    far = _PLATEAU_PX * pixel_m
+    if (d > far).sum() <= _MIN_PLATEAU_SAMPLES or (d < -far).sum() <= _MIN_PLATEAU_SAMPLES:
+        return None
+    return float((np.median(block[d > far]) - np.median(block[d < -far])) / (it["bright"] - it["dark"]))
+
+
+def _background_noise(image: np.ndarray, items, pixel_m: float) -> float | None:
+    occupied = np.zeros(image.shape, bool)
+    for it in items:
+        x0, y0, x1, y1 = it["bbox_m"]
+        occupied[
+            max(int(y0 / pixel_m) - 2, 0) : int(y1 / pixel_m) + 3,
+            max(int(x0 / pixel_m) - 2, 0) : int(x1 / pixel_m) + 3,
+        ] = True
+    n, sigmas = _PATCH_PX, []
+    for r in range(0, image.shape[0] - n + 1, n):
+        for c in range(0, image.shape[1] - n + 1, n):
+            if not occupied[r : r + n, c : c + n].any():
+                sigmas.append(robust_sigma(np.diff(image[r : r + n, c : c + n], axis=1).ravel()) / math.sqrt(2))
+    return float(np.median(sigmas)) if sigmas else None
+
+
+def measure_snr(image, truth: Mapping[str, Any], *, pixel_m: float) -> SnrResult:
+    """GIQE contrast SNR of ``image`` (see the module docstring).
+
+    Parameters
+    ----------
+    image : array_like, 2-D
+        The image (any linear unit: DN, electrons, ...), its top-left pixel at the scene origin.
+    truth : mapping
+        The scene's truth record (``items`` with ``bbox_m``; slanted edges with ``edge_point_m``,
+        ``normal_to_bright``, ``bright``, ``dark``).
+    pixel_m : float
+        Ground size of the image's pixels, m.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> truth = {"items": [{"kind": "slanted_edge", "bbox_m": [0, 0, 40, 40], "edge_point_m": [20, 20],
+    ...                     "normal_to_bright": [1.0, 0.0], "bright": 0.6, "dark": 0.1}]}
+    >>> img = 100 + 1000 * np.where(np.arange(40) >= 20, 0.6, 0.1) * np.ones((96, 1))
+    >>> img = np.hstack([img, np.full((96, 56), 300.0)]) + rng.normal(0, 2.0, (96, 96))
+    >>> r = measure_snr(img, truth, pixel_m=1.0)
+    >>> abs(r.snr / (1000 * 0.08 / 2.0) - 1) < 0.1
+    True
+    """
+    a = as_float_array("image", image, ndim=2)
+    pixel_m = check_positive("pixel_m", pixel_m)
+    items = list(truth.get("items", []))
+    gains = [g for it in items if it.get("kind") == "slanted_edge" for g in [_edge_gain(a, it, pixel_m)] if g]
+    noise = _background_noise(a, items, pixel_m)
+    if not gains:
+        reason = "no slanted edge with plateaus on both sides inside the image (the gain needs one)"
+    elif noise is None:
+        reason = f"no {_PATCH_PX}x{_PATCH_PX} px background patch free of targets (the noise needs one)"
+    elif noise <= 0:
+        reason = "the background has no measurable noise (noise-free image?)"
+    else:
+        gain = float(np.median(gains))
+        return SnrResult(gain * GIQE_CONTRAST / noise, noise, gain, len(gains))
+    return SnrResult(float("nan"), noise, float(np.median(gains)) if gains else None, len(gains), reason)
