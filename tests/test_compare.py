@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from satchain import units
-from satchain.compare import BAR_COMPARE_MAX_CY_PER_PX, compare
+from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX, compare
 from satchain.ctf import band_limited, wedge_resolution_m
-from satchain.predict import predict, predict_from_mtf, saturation_warnings
+from satchain.prediction import predict, predict_from_mtf, saturation_warnings
 from satchain.quality import giqe5, giqe5_rer
 from satchain.runconfig import Tolerances
 

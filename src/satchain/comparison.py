@@ -1,7 +1,7 @@
 """Measured vs predicted: the one place where measurement meets prediction, as a pure function.
 
 :func:`compare` takes the measurements (:func:`satchain.measure.auto.measure_auto`'s result, plus the SNR of
-:func:`satchain.measure.snr.measure_snr`), the predictions (:func:`satchain.predict.predict`) and the
+:func:`satchain.measure.snr.measure_snr`), the predictions (:func:`satchain.prediction.predict`) and the
 tolerances, and returns a :class:`Comparison`: one :class:`CheckRow` per check, and the per-target detail
 the report plots. No I/O, no system object. The checks:
 
@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from satchain import ctf as _ctf
-from satchain.predict import NYQUIST_CY_PER_PX, WEDGE_AXES, Predictions
+from satchain.prediction import NYQUIST_CY_PER_PX, WEDGE_AXES, Predictions
 
 __all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "STAR_F_MIN_CY_PER_PX", "CheckRow", "Comparison", "compare"]
 
@@ -338,7 +338,7 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
         ``hyperbolic_wedge``); an optional ``"snr"`` entry (``measure_snr(...).to_dict()``) feeds the NIIRS
         check.
     predicted : Predictions
-        From :func:`satchain.predict.predict` (or :func:`~satchain.predict.predict_from_mtf`).
+        From :func:`satchain.prediction.predict` (or :func:`~satchain.prediction.predict_from_mtf`).
     tolerances : Tolerances
         Any object with ``edge_mtf_at_nyquist``, ``edge_angle_deg``, ``star_mtf``, ``bar_ctf``,
         ``wedge_resolution_rel`` and ``niirs`` (see :class:`satchain.runconfig.Tolerances`).

@@ -2,7 +2,7 @@
 
 Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF and the wedge resolution
 (:mod:`satchain.ctf`) and GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the
-targets of a truth record and returns a frozen :class:`Predictions`; :func:`satchain.compare.compare` then
+targets of a truth record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then
 puts measurements beside them without needing the system.
 
 Frequencies are in cycles per pixel (cy/px) along a direction ``(ux, uy)`` of the image plane: x = ACT
@@ -130,7 +130,7 @@ class WedgePrediction:
 
 @dataclass(frozen=True)
 class Predictions:
-    """Everything :func:`satchain.compare.compare` needs from the prediction side (no system object).
+    """Everything :func:`satchain.comparison.compare` needs from the prediction side (no system object).
 
     Attributes
     ----------
