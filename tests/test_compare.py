@@ -206,6 +206,9 @@ def test_wedge_resolution_closed_form_per_axis_including_the_sampling_limit():
 def test_wedge_resolution_of_a_perfect_system_is_the_sampling_limit_and_hopeless_is_nan():
     one = band_limited(lambda f: np.ones_like(f), cutoff=100.0)
     assert wedge_resolution_m(one, gsd_m=2.0, threshold=0.15) == 2.0
+    sharp = predict_from_mtf(lambda fx, fy: np.clip(1.0 - np.hypot(fx, fy) / 2.0, 0, None), WEDGES, gsd_m=2.0)
+    assert sharp.wedges["ALT"].resolution_m == sharp.wedges["ACT"].resolution_m == 2.0  # one GSD along an axis
+    assert sharp.wedges["D135"].resolution_m == pytest.approx(2.0 / math.sqrt(2), rel=1e-12)  # GSD/sqrt2 diagonally
     tiny = band_limited(lambda f: 0.01 * (1.0 - f / 5.0), cutoff=5.0)
     assert math.isnan(wedge_resolution_m(tiny, gsd_m=2.0, threshold=0.15))
 
