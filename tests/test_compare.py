@@ -31,7 +31,13 @@ def edge_truth(eid, angle_deg):
 
 
 def edge_meas(eid, direction, mtf_nyq, **kw):
-    return {"id": eid, "direction": direction, "mtf_at_nyquist": mtf_nyq, "f_cy_per_px": [0.25, 0.5], "mtf": [1, 1]} | kw
+    return {
+        "id": eid,
+        "direction": direction,
+        "mtf_at_nyquist": mtf_nyq,
+        "f_cy_per_px": [0.25, 0.5],
+        "mtf": [1, 1],
+    } | kw
 
 
 def rows_of(comp, kind):
@@ -180,9 +186,7 @@ def triangle(fx, fy):  # cutoff 1 cy/px along x (ACT), 0.4 cy/px along y (ALT)
 
 
 WEDGES = {
-    "items": [
-        {"kind": "hyperbolic_wedge", "id": o, "orientation": o} for o in ("horizontal", "vertical", "diagonal")
-    ]
+    "items": [{"kind": "hyperbolic_wedge", "id": o, "orientation": o} for o in ("horizontal", "vertical", "diagonal")]
 }
 
 
@@ -276,6 +280,8 @@ def test_saturation_warning_names_the_target_and_its_electrons():
     class Sensor:
         full_well_e, offset_e, dark_e, electrons_per_unit = 1000.0, 10.0, 0.0, 1500.0
 
-    truth = {"items": [{"id": "hot", "bright": 0.7}, {"id": "ok", "bright": 0.6}, {"id": "s", "mean": 0.4, "amplitude": 0.3}]}
+    truth = {
+        "items": [{"id": "hot", "bright": 0.7}, {"id": "ok", "bright": 0.6}, {"id": "s", "mean": 0.4, "amplitude": 0.3}]
+    }
     w = saturation_warnings(Sensor(), truth)
     assert len(w) == 2 and w[0].startswith("hot: reflectance 0.7 gives 1060 e-") and w[1].startswith("s:")

@@ -95,20 +95,20 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
-    from satchain.api import RunResult, run
-    from satchain.comparison import CheckRow, Comparison, compare
-    from satchain.ctf import coltman_ctf, mtf_from_ctf
-    from satchain.engine.simulate import simulate
-    from satchain.geometry import Rect
-    from satchain.measure.auto import measure_auto
-    from satchain.measure.bars import measure_bars
-    from satchain.measure.edge import measure_edge
-    from satchain.measure.snr import measure_snr
-    from satchain.measure.star import measure_star
-    from satchain.measure.wedge import measure_wedge
-    from satchain.prediction import Predictions, predict
-    from satchain.quality import predict_quality
-    from satchain.runconfig import RunConfig, Tolerances, load_run_config
-    from satchain.scene import load_layout
-    from satchain.scene.truth import Truth, read_truth
-    from satchain.tf.budget import SystemOTF
+    from satchain.api import RunResult, run  # noqa: F401
+    from satchain.comparison import CheckRow, Comparison, compare  # noqa: F401
+    from satchain.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
+    from satchain.engine.simulate import simulate  # noqa: F401
+    from satchain.geometry import Rect  # noqa: F401
+    from satchain.measure.auto import measure_auto  # noqa: F401
+    from satchain.measure.bars import measure_bars  # noqa: F401
+    from satchain.measure.edge import measure_edge  # noqa: F401
+    from satchain.measure.snr import measure_snr  # noqa: F401
+    from satchain.measure.star import measure_star  # noqa: F401
+    from satchain.measure.wedge import measure_wedge  # noqa: F401
+    from satchain.prediction import Predictions, predict  # noqa: F401
+    from satchain.quality import predict_quality  # noqa: F401
+    from satchain.runconfig import RunConfig, Tolerances, load_run_config  # noqa: F401
+    from satchain.scene import load_layout  # noqa: F401
+    from satchain.scene.truth import Truth, read_truth  # noqa: F401
+    from satchain.tf.budget import SystemOTF  # noqa: F401

@@ -164,7 +164,9 @@ class RunResult:
             "gsd_alt_m": s.gsd_alt_m,
             "mtf_at_nyquist": b["mtf_at_nyquist"],
             "mtfa": b["mtfa"],
-            "radiometry": {k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")},
+            "radiometry": {
+                k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")
+            },
             "quality_predicted": b["quality"],
         }
         out.update(c.to_dict())

@@ -308,7 +308,8 @@ def run(
     _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
     if result.passed is False and not exit_zero:
-        err_console.print(f"[bold red]{result.comparison.n_failed} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
+        n = result.comparison.n_failed
+        err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
         raise typer.Exit(1)
 
 

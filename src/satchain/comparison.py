@@ -324,7 +324,9 @@ def _niirs_check(edges: list[dict], snr: Mapping[str, Any], pred: Predictions, t
         "pass": _within(err, tol.niirs),
         "reason": why,
     }
-    row = CheckRow("NIIRS (GIQE 5)", "niirs", None, niirs_m, pr, err, tol.niirs, f"±{tol.niirs}", _within(err, tol.niirs), why)
+    row = CheckRow(
+        "NIIRS (GIQE 5)", "niirs", None, niirs_m, pr, err, tol.niirs, f"±{tol.niirs}", _within(err, tol.niirs), why
+    )
     return detail, row
 
 

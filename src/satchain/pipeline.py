@@ -70,7 +70,9 @@ def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
     return result
 
 
-def _stage_simulate(config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress) -> SimulationResult:
+def _stage_simulate(
+    config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress
+) -> SimulationResult:
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
