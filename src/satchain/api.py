@@ -69,6 +69,13 @@ class SceneResult:
     truth: Mapping[str, Any] = field(repr=False)
     pixel_m: float
 
+    @property
+    def typed_truth(self):
+        """The truth record as a typed :class:`satchain.scene.truth.Truth`."""
+        from satchain.scene.truth import read_truth
+
+        return read_truth(self.truth)
+
 
 @dataclass(frozen=True)
 class SimulationResult:

@@ -247,8 +247,9 @@ def predict(
     ----------
     system : ImagingSystem
         With square ground pixels (``gsd_act_m == gsd_alt_m``).
-    truth : mapping
-        The scene's truth record (``Scene.truth()``, or a :class:`satchain.scene.truth.Truth` as dict).
+    truth : mapping or Truth
+        The scene's truth record (``Scene.truth()``, a ``*.truth.json``'s content, or a
+        :class:`satchain.scene.truth.Truth`).
     otf : SystemOTF, optional
         The system OTF (built from ``system`` when not given).
     quality : mapping, optional
@@ -261,6 +262,7 @@ def predict(
     from satchain.quality import predict_quality
     from satchain.tf.budget import SystemOTF
 
+    truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     otf = SystemOTF(system) if otf is None else otf
     quality = predict_quality(system, otf=otf).to_dict() if quality is None else quality
     return predict_from_mtf(

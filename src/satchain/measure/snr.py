@@ -82,7 +82,7 @@ def measure_snr(image, truth: Mapping[str, Any], *, pixel_m: float) -> SnrResult
     ----------
     image : array_like, 2-D
         The image (any linear unit: DN, electrons, ...), its top-left pixel at the scene origin.
-    truth : mapping
+    truth : mapping or Truth
         The scene's truth record (``items`` with ``bbox_m``; slanted edges with ``edge_point_m``,
         ``normal_to_bright``, ``bright``, ``dark``).
     pixel_m : float
@@ -101,6 +101,7 @@ def measure_snr(image, truth: Mapping[str, Any], *, pixel_m: float) -> SnrResult
     """
     a = as_float_array("image", image, ndim=2)
     pixel_m = check_positive("pixel_m", pixel_m)
+    truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     items = list(truth.get("items", []))
     gains = [g for it in items if it.get("kind") == "slanted_edge" for g in [_edge_gain(a, it, pixel_m)] if g]
     noise = _background_noise(a, items, pixel_m)
