@@ -4,11 +4,11 @@ matplotlib backend switch anywhere."""
 import json
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+import tomllib
 from typer.testing import CliRunner
 
 import satchain
