@@ -21,6 +21,7 @@ def strict_loads(text: str):
 
     return json.loads(text, parse_constant=reject)
 
+
 SCENE_TOML = """
 [scene]
 width_m = 170.0
