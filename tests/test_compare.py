@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from satchain import units
 from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX, compare
@@ -285,3 +287,27 @@ def test_saturation_warning_names_the_target_and_its_electrons():
     }
     w = saturation_warnings(Sensor(), truth)
     assert len(w) == 2 and w[0].startswith("hot: reflectance 0.7 gives 1060 e-") and w[1].startswith("s:")
+
+
+# ---------------------------------------------------------------------------------------------- property
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    a=st.floats(0.2, 3.0),
+    b=st.floats(0.2, 3.0),
+    angle=st.floats(-45.0, 45.0),
+    offset=st.floats(-0.05, 0.05).filter(lambda o: abs(abs(o) - 0.02) > 1e-9),
+)
+def test_edge_check_for_any_anisotropic_gaussian_and_any_edge_angle(a, b, angle, offset):
+    """Prediction = exp(-(f/2)^2 (a^2 nx^2 + b^2 ny^2)) at Nyquist along the normal; pass iff |offset| <= tol."""
+    t = math.radians(angle)
+    nx, ny = math.cos(t), math.sin(t)
+    p = predict_from_mtf(
+        lambda fx, fy: np.exp(-((a * fx) ** 2) - (b * fy) ** 2), {"items": [edge_truth("e", angle)]}, gsd_m=1.0
+    )
+    exact = math.exp(-0.25 * ((a * nx) ** 2 + (b * ny) ** 2))
+    assert p.edges["e"].mtf_at_nyquist == pytest.approx(exact, rel=1e-12, abs=1e-15)
+    (row,) = rows_of(compare({"slanted_edges": [edge_meas("e", "ACT", exact + offset)]}, p, TOL), "edge_mtf_at_nyquist")
+    assert row.error == pytest.approx(offset, abs=1e-12)
+    assert row.passed is (abs(offset) <= TOL.edge_mtf_at_nyquist)
