@@ -152,6 +152,8 @@ def test_every_summary_row_passes_at_the_products_tolerances(reduced_run):
         else:
             assert abs(r.measured - r.predicted) <= limit[r.kind], r
     assert result.passed is True
+    n = len(rows)
+    assert repr(result).startswith(f"RunResult(system='ankarasat3', passed=True, checks={n}/{n} pass (0 n/a), image=")
     on_disk = strict_loads((out / "results.json").read_text())
     assert on_disk["format_version"] == 2 and on_disk["pass"] is True
     assert on_disk["n_checked"] == len(rows) and on_disk["n_failed"] == 0

@@ -142,6 +142,14 @@ class RunResult:
     comparison: Comparison
     timings_s: Mapping[str, float] = field(default_factory=dict)
 
+    def __repr__(self) -> str:  # short: the full objects are a click away in a notebook
+        c, img = self.comparison, self.simulation.image
+        return (
+            f"RunResult(system={self.system.name!r}, passed={self.passed}, checks={c.n_checked - c.n_failed}/"
+            f"{c.n_checked} pass ({len(c.rows) - c.n_checked} n/a), image={img.shape[0]}x{img.shape[1]} px "
+            f"{self.simulation.units})"
+        )
+
     @property
     def system(self):
         return self.budget.system

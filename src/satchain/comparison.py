@@ -104,6 +104,21 @@ class Comparison:
             return False
         return True if self.n_checked else None
 
+    def __str__(self) -> str:
+        """The checks as a plain-text table (figure, measured, predicted, tolerance, result)."""
+
+        def num(v) -> str:
+            return "-" if v is None else f"{v:.4g}"
+
+        width = max([len(r.figure) for r in self.rows] + [15])
+        lines = [f"{'figure of merit':{width}}  {'measured':>10}  {'predicted':>10}  {'tolerance':>9}  result"]
+        for r in self.rows:
+            verdict = "n/a" if r.passed is None else ("pass" if r.passed else "FAIL")
+            lines.append(
+                f"{r.figure:{width}}  {num(r.measured):>10}  {num(r.predicted):>10}  {r.tolerance_text:>9}  {verdict}"
+            )
+        return "\n".join(lines)
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "slanted_edges": list(self.slanted_edges),
