@@ -85,6 +85,23 @@ def test_edge_without_truth_uses_its_measured_axis():
     assert rows_of(c, "edge_mtf_at_nyquist")[0].passed is True
 
 
+def test_skipped_targets_are_na_rows_with_their_reason_and_objects_are_not_checks():
+    p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
+    skipped = [
+        {"id": "e", "kind": "slanted_edge", "reason": "clipped at the full well"},
+        {"id": "w", "kind": "hyperbolic_wedge", "reason": "outside the image"},
+        {"id": "car_1", "kind": "car", "reason": "no measurement defined"},
+    ]
+    c = compare({"skipped": skipped}, p, TOL)
+    na = [r for r in c.rows if r.kind != "niirs"]
+    assert [(r.id, r.kind, r.passed) for r in na] == [
+        ("e", "edge_mtf_at_nyquist", None),
+        ("w", "wedge_resolution", None),
+    ]
+    assert "clipped at the full well" in na[0].reason and na[1].tolerance == TOL.wedge_resolution_rel
+    assert c.passed is None and c.n_failed == 0
+
+
 def test_comparison_prints_as_a_table_with_every_verdict():
     p = predict_from_mtf(gauss, {"items": [edge_truth("e", 8.0)]}, gsd_m=1.0)
     m = {"slanted_edges": [edge_meas("e", "ACT", 0.9, angle_deg=8.0, angle_deg_truth=8.0)]}

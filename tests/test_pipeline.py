@@ -259,6 +259,8 @@ def test_saturating_camera_is_warned_and_clipped_edges_are_skipped_with_reason(r
     assert not res["slanted_edges"]
     # NIIRS cannot be measured without edges: n/a with the reason, never FAIL; results.json stays strict
     on_disk = strict_loads((tmp_path / "sat" / "results.json").read_text())
+    (edge,) = [r for r in on_disk["summary"] if r["id"] == "edge_act"]  # skipped: an n/a row with the reason
+    assert edge["pass"] is None and edge["reason"] == "not measured: " + reasons["edge_act"]
     (niirs,) = [r for r in on_disk["summary"] if r["kind"] == "niirs"]
     assert niirs["pass"] is None and niirs["measured"] is None and "RER" in niirs["reason"]
     assert on_disk["niirs"]["giqe5_measured"] is None and math.isfinite(on_disk["niirs"]["giqe5_predicted"])

@@ -14,8 +14,9 @@ the report plots. No I/O, no system object. The checks:
 * hyperbolic wedge -- resolvable line width: ``|measured / predicted - 1| <= wedge_resolution_rel``;
 * NIIRS -- GIQE 5 from the measured edge RERs and image SNR vs the predicted GIQE 5: ``<= niirs``.
 
-Every limit is inclusive. A check whose measurement is missing (the target could not be measured, or
-nothing lies in the compared range) is **n/a** (``passed = None``, with ``reason``), never a failure.
+Every limit is inclusive. A check whose measurement is missing (the target could not be measured -- it is
+in the measurement's ``skipped`` list -- or nothing lies in the compared range) is **n/a** (``passed =
+None``, with ``reason``), never a failure.
 """
 
 from __future__ import annotations
@@ -345,6 +346,28 @@ def _niirs_check(edges: list[dict], snr: Mapping[str, Any], pred: Predictions, t
     return detail, row
 
 
+#: The check a target of each scene kind would have had: (figure label, row kind, tolerance attribute, text).
+_SKIPPED_CHECKS = {
+    "slanted_edge": ("edge {} MTF@Nyquist", "edge_mtf_at_nyquist", "edge_mtf_at_nyquist", "±{}"),
+    "siemens_star": ("star {} max |MTF error| to Nyquist", "star_mtf", "star_mtf", "≤{}"),
+    "bar_target": ("bars {} max |CTF error| (Coltman)", "bar_ctf", "bar_ctf", "≤{}"),
+    "hyperbolic_wedge": ("wedge {} resolution (m)", "wedge_resolution", "wedge_resolution_rel", "±{:.0%}"),
+}
+
+
+def _skipped_rows(measured: dict, tol: Any) -> list[CheckRow]:
+    """An n/a row for every target the measurement had to skip (real-world objects have no check)."""
+    rows = []
+    for sk in measured.get("skipped", []):
+        if sk.get("kind") not in _SKIPPED_CHECKS:
+            continue
+        label, kind, attr, text = _SKIPPED_CHECKS[sk["kind"]]
+        t = getattr(tol, attr)
+        reason = f"not measured: {sk.get('reason', 'no reason given')}"
+        rows.append(CheckRow(label.format(sk["id"]), kind, sk["id"], None, None, None, t, text.format(t), None, reason))
+    return rows
+
+
 def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Comparison:
     """Put measurements beside predictions and check each against its tolerance (pure; no I/O).
 
@@ -352,8 +375,8 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
     ----------
     measured : AutoResult, Measurements or dict
         ``measure_auto(...)`` or its ``to_dict()`` (``slanted_edges``, ``siemens_star``, ``bar_targets``,
-        ``hyperbolic_wedge``); an optional ``"snr"`` entry (``measure_snr(...).to_dict()``) feeds the NIIRS
-        check.
+        ``hyperbolic_wedge``, ``skipped``: each skipped target gets an n/a row); an optional ``"snr"``
+        entry (``measure_snr(...).to_dict()``) feeds the NIIRS check.
     predicted : Predictions
         From :func:`satchain.prediction.predict` (or :func:`~satchain.prediction.predict_from_mtf`).
     tolerances : Tolerances
@@ -375,6 +398,7 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
     wedges, r = _wedge_checks(m, predicted, tolerances)
     rows += r
     snr = dict(m.get("snr") or {})
+    rows += _skipped_rows(m, tolerances)
     niirs, row = _niirs_check(edges, snr, predicted, tolerances)
     rows.append(row)
     return Comparison(tuple(rows), tuple(edges), tuple(stars), tuple(bars), tuple(wedges), niirs, snr)
