@@ -69,7 +69,7 @@ def test_edge_check_error_sign_curve_and_pass():
     c = compare(m, p, TOL)
     (mtf_row,) = rows_of(c, "edge_mtf_at_nyquist")
     assert mtf_row.error == pytest.approx(-0.015, abs=1e-12) and mtf_row.passed is True
-    assert c.slanted_edges[0]["mtf_predicted"] == pytest.approx(gauss_along(np.array([0.25, 0.5]), *u), rel=1e-12)
+    assert c.slanted_edges[0].mtf_predicted == pytest.approx(gauss_along(np.array([0.25, 0.5]), *u), rel=1e-12)
     (angle_row,) = rows_of(c, "edge_angle")
     assert angle_row.error == pytest.approx(0.1, abs=1e-12) and angle_row.passed is True
     m = {"slanted_edges": [edge_meas("e", "ACT", exact - 0.03, angle_deg=8.3, angle_deg_truth=8.0)]}
@@ -81,7 +81,7 @@ def test_edge_check_error_sign_curve_and_pass():
 def test_edge_without_truth_uses_its_measured_axis():
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
     c = compare({"slanted_edges": [edge_meas("x", "ALT", math.exp(-1.0))]}, p, TOL)
-    assert c.slanted_edges[0]["mtf_at_nyquist_predicted"] == pytest.approx(math.exp(-(B**2) * 0.25), rel=1e-12)
+    assert c.slanted_edges[0].mtf_at_nyquist_predicted == pytest.approx(math.exp(-(B**2) * 0.25), rel=1e-12)
     assert rows_of(c, "edge_mtf_at_nyquist")[0].passed is True
 
 
@@ -150,7 +150,7 @@ def test_star_exact_measurement_has_zero_error_per_direction():
     c = compare(star_meas(), p, TOL)
     (row,) = rows_of(c, "star_mtf")
     assert row.measured == pytest.approx(0.0, abs=1e-12) and row.passed is True
-    for d, v in c.siemens_star[0]["directions"].items():
+    for d, v in c.siemens_star[0].directions.items():
         assert v["max_abs_error_to_nyquist"] == pytest.approx(0.0, abs=1e-12), d
 
 
@@ -194,7 +194,7 @@ def test_bars_compare_with_coltman_along_the_modulation_axis(direction, b):
     c = compare(m, p, TOL)
     (row,) = rows_of(c, "bar_ctf")
     assert row.measured == pytest.approx(0.05, abs=1e-9) and row.passed is True
-    assert c.bar_targets[0]["ctf_coltman_predicted"] == pytest.approx(coltman_gauss(f, b), abs=1e-12)
+    assert c.bar_targets[0].ctf_coltman_predicted == pytest.approx(coltman_gauss(f, b), abs=1e-12)
 
 
 def test_bars_only_fine_groups_is_na():
@@ -278,7 +278,7 @@ def test_niirs_from_measured_rer_and_snr():
     assert row.measured == pytest.approx(expected, rel=1e-12) and row.predicted == 4.0
     assert row.error == pytest.approx(expected - 4.0, rel=1e-12)
     assert row.passed is (abs(expected - 4.0) <= TOL.niirs)
-    assert c.niirs["rer_measured"] == pytest.approx(giqe5_rer(0.62, 0.45))
+    assert c.niirs.rer_measured == pytest.approx(giqe5_rer(0.62, 0.45))
 
 
 def test_niirs_without_snr_or_without_an_alt_edge_is_na():

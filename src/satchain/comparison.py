@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -31,7 +31,18 @@ import numpy as np
 from satchain import ctf as _ctf
 from satchain.prediction import NYQUIST_CY_PER_PX, WEDGE_AXES, Predictions
 
-__all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "STAR_F_MIN_CY_PER_PX", "CheckRow", "Comparison", "compare"]
+__all__ = [
+    "BAR_COMPARE_MAX_CY_PER_PX",
+    "STAR_F_MIN_CY_PER_PX",
+    "BarCheck",
+    "CheckRow",
+    "Comparison",
+    "EdgeCheck",
+    "NiirsCheck",
+    "StarCheck",
+    "WedgeCheck",
+    "compare",
+]
 
 #: Bar groups finer than this (fewer than 5 px per period) are listed but not compared with Coltman's CTF:
 #: a sampled 3-bar group's (max - min) then depends on its phase to the pixel grid and on the group's finite
@@ -78,16 +89,114 @@ class CheckRow:
         }
 
 
+class _Detail:
+    """Per-target detail: ``to_dict()`` gives the results.json entry (``passed`` is written ``pass``)."""
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]):
+        return cls(**{("passed" if k == "pass" else k): v for k, v in d.items()})
+
+    def to_dict(self) -> dict[str, Any]:
+        return {("pass" if f.name == "passed" else f.name): getattr(self, f.name) for f in fields(self)}
+
+
+@dataclass(frozen=True)
+class EdgeCheck(_Detail):
+    """A slanted edge: the measured and predicted MTF along its ``normal`` (x = ACT, y = ALT) at the measured
+    frequencies ``f_cy_per_px``, the MTF at Nyquist (0.5 cy/px) both ways and its error, the angle (deg)
+    measured and true, the measured RER and MTF50 (cy/px)."""
+
+    id: str
+    direction: str
+    normal: list
+    angle_deg: float | None
+    angle_deg_truth: float | None
+    mtf_at_nyquist_measured: float | None
+    mtf_at_nyquist_predicted: float
+    mtf_at_nyquist_error: float | None
+    passed: bool | None
+    rer_measured: float | None
+    mtf50_cy_per_px: float | None
+    f_cy_per_px: list
+    mtf_measured: list
+    mtf_predicted: list
+
+
+@dataclass(frozen=True)
+class StarCheck(_Detail):
+    """A Siemens star: per direction (ACT, ALT, D45, D135) the predicted MTF at ``f_cy_per_px`` and the largest
+    absolute error over 0.05..0.5 cy/px (``directions``); the worst of them; the measured curves."""
+
+    id: str
+    directions: dict
+    max_abs_error_to_nyquist: float | None
+    passed: bool | None
+    f_cy_per_px: list
+    mtf_measured: dict
+
+
+@dataclass(frozen=True)
+class BarCheck(_Detail):
+    """A bar target: measured CTF vs Coltman's (and the paper's Fourier-synthesis CTF) at the groups'
+    frequencies (cy/px), compared up to ``compared_up_to_cy_per_px``; the MTF from the measured CTF vs the
+    predicted MTF."""
+
+    id: str
+    compared_up_to_cy_per_px: float
+    direction: str | None
+    f_cy_per_px: list
+    ctf_measured: list
+    ctf_coltman_predicted: list
+    ctf_fourier_synthesis_predicted: list
+    mtf_from_ctf_measured: list
+    mtf_predicted: list
+    max_abs_error: float | None
+    passed: bool | None
+
+
+@dataclass(frozen=True)
+class WedgeCheck(_Detail):
+    """A hyperbolic wedge: resolvable line width (ground m) measured and predicted across the stripes along
+    ``axis``, the GSD (m), their ratios, and the measured contrast scan (``position_m``, ``contrast``)."""
+
+    id: str
+    orientation: str
+    axis: str
+    resolution_m: float | None
+    resolution_predicted_m: float | None
+    gsd_m: float | None
+    resolution_over_gsd: float | None
+    relative_error: float | None
+    passed: bool | None
+    threshold: float | None
+    position_m: list | None
+    contrast: list | None
+
+
+@dataclass(frozen=True)
+class NiirsCheck(_Detail):
+    """GIQE 5 NIIRS predicted and measured, with the RER and contrast SNR each comes from."""
+
+    giqe5_predicted: float | None = None
+    giqe5_measured: float | None = None
+    rer_predicted: float | None = None
+    rer_measured: float | None = None
+    snr_predicted: float | None = None
+    snr_measured: float | None = None
+    passed: bool | None = None
+    reason: str | None = None
+
+
 @dataclass(frozen=True)
 class Comparison:
     """The result of :func:`compare`: the checks and, per target kind, the detail the report plots."""
 
     rows: tuple[CheckRow, ...]
-    slanted_edges: tuple[dict, ...] = ()
-    siemens_star: tuple[dict, ...] = ()
-    bar_targets: tuple[dict, ...] = ()
-    hyperbolic_wedge: tuple[dict, ...] = ()
-    niirs: dict = field(default_factory=dict)
+    slanted_edges: tuple[EdgeCheck, ...] = ()
+    siemens_star: tuple[StarCheck, ...] = ()
+    bar_targets: tuple[BarCheck, ...] = ()
+    hyperbolic_wedge: tuple[WedgeCheck, ...] = ()
+    niirs: NiirsCheck = field(default_factory=NiirsCheck)
     snr_measurement: dict = field(default_factory=dict)
 
     @property
@@ -122,11 +231,11 @@ class Comparison:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "slanted_edges": list(self.slanted_edges),
-            "siemens_star": list(self.siemens_star),
-            "bar_targets": list(self.bar_targets),
-            "hyperbolic_wedge": list(self.hyperbolic_wedge),
-            "niirs": self.niirs,
+            "slanted_edges": [d.to_dict() for d in self.slanted_edges],
+            "siemens_star": [d.to_dict() for d in self.siemens_star],
+            "bar_targets": [d.to_dict() for d in self.bar_targets],
+            "hyperbolic_wedge": [d.to_dict() for d in self.hyperbolic_wedge],
+            "niirs": self.niirs.to_dict(),
             "snr_measurement": self.snr_measurement,
             "summary": [r.to_dict() for r in self.rows],
         }
@@ -155,7 +264,7 @@ def _measured_dict(measured: Any) -> dict[str, Any]:
     return dict(measured.to_dict())
 
 
-def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict], list[CheckRow]]:
+def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[EdgeCheck], list[CheckRow]]:
     details, rows = [], []
     for e in measured.get("slanted_edges", []):
         p = pred.edge(e["id"], e["direction"])
@@ -197,10 +306,10 @@ def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict
                 f"±{tol.edge_angle_deg}", _within(a_err, tol.edge_angle_deg), why,
             )
         )  # fmt: skip
-    return details, rows
+    return [EdgeCheck.from_dict(d) for d in details], rows
 
 
-def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict], list[CheckRow]]:
+def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[StarCheck], list[CheckRow]]:
     details, rows = [], []
     for st in measured.get("siemens_star", []):
         f = np.asarray(st["f_cy_per_px"], float)
@@ -231,10 +340,10 @@ def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict
                 tol.star_mtf, f"≤{tol.star_mtf}", _within(worst, tol.star_mtf), why,
             )
         )  # fmt: skip
-    return details, rows
+    return [StarCheck.from_dict(d) for d in details], rows
 
 
-def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict], list[CheckRow]]:
+def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCheck], list[CheckRow]]:
     details, rows = [], []
     for b in measured.get("bar_targets", []):
         m = pred.mtf_along["ALT" if str(b.get("direction", "ACT")).upper() == "ALT" else "ACT"]
@@ -265,10 +374,10 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict]
                 f"≤{tol.bar_ctf}", _within(err, tol.bar_ctf), why,
             )
         )  # fmt: skip
-    return details, rows
+    return [BarCheck.from_dict(d) for d in details], rows
 
 
-def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dict], list[CheckRow]]:
+def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[WedgeCheck], list[CheckRow]]:
     details, rows = [], []
     for w in measured.get("hyperbolic_wedge", []):
         axis = WEDGE_AXES[w["orientation"]]
@@ -305,15 +414,15 @@ def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[dic
                 why,
             )
         )  # fmt: skip
-    return details, rows
+    return [WedgeCheck.from_dict(d) for d in details], rows
 
 
-def _mean_rer(edges: list[dict], direction: str) -> float | None:
-    v = [e["rer_measured"] for e in edges if e["direction"] == direction and e["rer_measured"] is not None]
+def _mean_rer(edges: list[EdgeCheck], direction: str) -> float | None:
+    v = [e.rer_measured for e in edges if e.direction == direction and e.rer_measured is not None]
     return float(np.mean(v)) if v else None
 
 
-def _niirs_check(edges: list[dict], snr: Mapping[str, Any], pred: Predictions, tol: Any) -> tuple[dict, CheckRow]:
+def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictions, tol: Any):
     from satchain import units
     from satchain.quality import giqe5, giqe5_rer
 
@@ -343,7 +452,7 @@ def _niirs_check(edges: list[dict], snr: Mapping[str, Any], pred: Predictions, t
     row = CheckRow(
         "NIIRS (GIQE 5)", "niirs", None, niirs_m, pr, err, tol.niirs, f"±{tol.niirs}", _within(err, tol.niirs), why
     )
-    return detail, row
+    return NiirsCheck.from_dict(detail), row
 
 
 #: The check a target of each scene kind would have had: (figure label, row kind, tolerance attribute, text).
