@@ -8,7 +8,7 @@ import pytest
 from satchain.engine.sensor import sensor_from_system
 from satchain.engine.simulate import simulate
 from satchain.measure.auto import measure_auto
-from satchain.report.compare import predicted_wedge_resolution_m
+from satchain.prediction import predict
 from satchain.scene import Scene
 from satchain.scene.targets import HyperbolicWedge
 from satchain.tf.budget import SystemOTF
@@ -39,7 +39,8 @@ def measured(ankarasat3):
 
 
 def test_diagonal_resolution_against_prediction_and_sampling(ankarasat3, measured):
-    pred = predicted_wedge_resolution_m(SystemOTF(ankarasat3), "D135", threshold=0.15)
+    truth = {"items": [{"kind": "hyperbolic_wedge", "id": "wd", "orientation": "diagonal"}]}
+    pred = predict(ankarasat3, truth, otf=SystemOTF(ankarasat3), quality={}).wedges["D135"].resolution_m
     d, h = measured["wd"], measured["wh"]
     assert d["direction"] == "D135" and h["direction"] == "ALT"
     # a square grid samples the diagonal sqrt(2) finer: the sampling limit there is GSD / sqrt(2)

@@ -36,3 +36,19 @@ def test_every_command_in_the_tour_exists():
     assert {"run", "budget", "scene", "simulate", "measure"} <= commands
     for cmd in sorted(commands):
         assert CliRunner().invoke(app, [cmd, "--help"]).exit_code == 0, cmd
+
+
+TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial.md"
+
+
+def test_tutorial_runs_end_to_end(monkeypatch, tmp_path, capsys):
+    """Every python block of docs/tutorial.md, in order, in one namespace (as a notebook would)."""
+    blocks = re.findall(r"```python\n(.*?)```", TUTORIAL.read_text(), re.S)
+    assert len(blocks) >= 6
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "tutorial"}
+    for i, code in enumerate(blocks):
+        exec(compile(code, f"{TUTORIAL.name}[block {i}]", "exec"), namespace)  # noqa: S102
+    assert namespace["result"].passed is not False
+    assert not list(tmp_path.iterdir())  # satchain.run without out_dir writes nothing
+    assert "MTF@Nyquist" in capsys.readouterr().out

@@ -3,7 +3,29 @@
 The chain follows one line (see ARCHITECTURE): scene -> optics -> detector + motion -> sampled image,
 with the same transfer functions used for prediction (``satchain.tf``) and simulation, and
 independent measurement (``satchain.measure``) to check them.
+
+The public API (imported lazily, so ``import satchain`` stays fast and never touches matplotlib's backend):
+
+* design: :class:`ImagingSystem`, :func:`load_preset`, :func:`load_system`, :class:`SystemOTF`,
+  :func:`coltman_ctf`, :func:`predict_quality`;
+* a whole run: :func:`run` (:class:`RunConfig` -> :class:`RunResult`), :func:`predict`, :func:`compare`;
+* images: :func:`simulate`, :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
+* measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
+  :func:`measure_auto`, :func:`measure_snr`;
+* errors: :class:`SatchainError` and its subclasses.
+
+Examples
+--------
+>>> import satchain
+>>> s = satchain.load_preset("ankarasat3")
+>>> round(s.gsd_m, 3)
+0.49
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from satchain.errors import (
     ConfigError,
@@ -16,6 +38,35 @@ from satchain.system import ImagingSystem, load_preset, load_system
 
 __version__ = "0.1.0"
 
+#: public name -> module it lives in (imported on first use, PEP 562).
+_LAZY = {
+    "run": "satchain.api",
+    "RunResult": "satchain.api",
+    "RunConfig": "satchain.runconfig",
+    "Tolerances": "satchain.runconfig",
+    "load_run_config": "satchain.runconfig",
+    "predict": "satchain.prediction",
+    "Predictions": "satchain.prediction",
+    "compare": "satchain.comparison",
+    "Comparison": "satchain.comparison",
+    "CheckRow": "satchain.comparison",
+    "SystemOTF": "satchain.tf.budget",
+    "coltman_ctf": "satchain.ctf",
+    "mtf_from_ctf": "satchain.ctf",
+    "predict_quality": "satchain.quality",
+    "simulate": "satchain.engine.simulate",
+    "load_layout": "satchain.scene",
+    "read_truth": "satchain.scene.truth",
+    "Truth": "satchain.scene.truth",
+    "Rect": "satchain.geometry",
+    "measure_edge": "satchain.measure.edge",
+    "measure_star": "satchain.measure.star",
+    "measure_bars": "satchain.measure.bars",
+    "measure_wedge": "satchain.measure.wedge",
+    "measure_auto": "satchain.measure.auto",
+    "measure_snr": "satchain.measure.snr",
+}
+
 __all__ = [
     "ConfigError",
     "ImagingSystem",
@@ -26,4 +77,38 @@ __all__ = [
     "__version__",
     "load_preset",
     "load_system",
+    *sorted(_LAZY),
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'satchain' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
+    from satchain.api import RunResult, run  # noqa: F401
+    from satchain.comparison import CheckRow, Comparison, compare  # noqa: F401
+    from satchain.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
+    from satchain.engine.simulate import simulate  # noqa: F401
+    from satchain.geometry import Rect  # noqa: F401
+    from satchain.measure.auto import measure_auto  # noqa: F401
+    from satchain.measure.bars import measure_bars  # noqa: F401
+    from satchain.measure.edge import measure_edge  # noqa: F401
+    from satchain.measure.snr import measure_snr  # noqa: F401
+    from satchain.measure.star import measure_star  # noqa: F401
+    from satchain.measure.wedge import measure_wedge  # noqa: F401
+    from satchain.prediction import Predictions, predict  # noqa: F401
+    from satchain.quality import predict_quality  # noqa: F401
+    from satchain.runconfig import RunConfig, Tolerances, load_run_config  # noqa: F401
+    from satchain.scene import load_layout  # noqa: F401
+    from satchain.scene.truth import Truth, read_truth  # noqa: F401
+    from satchain.tf.budget import SystemOTF  # noqa: F401

@@ -243,6 +243,22 @@ def simulate(
         console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)")
 
 
+def _print_run(result) -> None:
+    c = result.comparison
+    t = Table(title=f"{result.system.name}: measured vs predicted ({c.n_checked - c.n_failed}/{c.n_checked} pass)")
+    for col in ("figure of merit", "measured", "predicted", "tolerance", "result"):
+        t.add_column(col, justify="left" if col == "figure of merit" else "right")
+    for r in c.rows:
+        verdict = "n/a" if r.passed is None else ("[green]pass[/]" if r.passed else "[red]FAIL[/]")
+        t.add_row(r.figure, _fmt(r.measured), _fmt(r.predicted), r.tolerance_text, verdict)
+    console.print(t)
+    for r in c.rows:
+        if r.passed is None and r.reason:
+            err_console.print(f"[bold]n/a:[/] {r.figure}: {r.reason}", highlight=False)
+    for w in result.warnings:
+        err_console.print(f"[bold yellow]warning:[/] {w}", highlight=False)
+
+
 @app.command()
 @_handle_errors
 def run(
@@ -254,11 +270,18 @@ def run(
     print_config: Annotated[
         bool, typer.Option("--print-config", help="print the default configuration and exit")
     ] = False,
+    exit_zero: Annotated[
+        bool, typer.Option("--exit-zero", help="exit 0 even when a check fails (default: exit 1, to gate CI)")
+    ] = False,
 ) -> None:
-    """The main job: predict, simulate, measure, compare and report (report.html, results.json)."""
+    """The main job: predict, simulate, measure, compare and report (report.html, results.json).
+
+    Exit status: 0 when every check passes or is n/a, 1 when a check fails (unless --exit-zero), 2 on an error.
+    """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from satchain.pipeline import STAGES, run_pipeline
+    import satchain
+    from satchain.pipeline import STAGES
     from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
 
     if print_config:
@@ -281,24 +304,13 @@ def run(
         bar.update(tasks[stage], completed=done, total=total)
 
     with bar:
-        res = run_pipeline(cfg, out, progress=update)
-    n_pass = sum(r["pass"] is True for r in res["summary"])
-    n_checked = sum(r["pass"] is not None for r in res["summary"])
-    t = Table(title=f"{res['system']}: measured vs predicted ({n_pass}/{n_checked} pass)")
-    for c in ("figure of merit", "measured", "predicted", "tolerance", "result"):
-        t.add_column(c, justify="left" if c == "figure of merit" else "right")
-    for r in res["summary"]:
-        t.add_row(
-            r["figure"],
-            _fmt(r["measured"]),
-            _fmt(r["predicted"]),
-            r["tolerance"],
-            "n/a" if r["pass"] is None else ("[green]pass[/]" if r["pass"] else "[red]FAIL[/]"),
-        )
-    console.print(t)
-    for w in res.get("warnings", []):
-        err_console.print(f"[bold yellow]warning:[/] {w}", highlight=False)
+        result = satchain.run(cfg, out_dir=out, progress=update)
+    _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
+    if result.passed is False and not exit_zero:
+        n = result.comparison.n_failed
+        err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
+        raise typer.Exit(1)
 
 
 from satchain.cli_measure import measure_app  # noqa: E402

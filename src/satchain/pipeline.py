@@ -1,8 +1,9 @@
-"""``satchain run``: predict, simulate, measure, compare and report, in one command.
+"""The stages of ``satchain run`` / :func:`satchain.run`: predict, simulate, measure, compare and report.
 
-Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth file) -> simulation
-(the satellite image and the focal-plane image) -> measurement of every target -> comparison of measured
-and predicted figures of merit -> report (``report.html``, ``results.json``, images, ``manifest.json``).
+Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth record) -> simulation
+(the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
+of each measured figure and comparison -> report (``report.html``, ``results.json``, images, ``manifest.json``).
+Each stage is a function of the typed results before it (:mod:`satchain.api`); only the report writes files.
 
 Everything is written into a staging directory beside ``out_dir`` and swapped in only when the run has
 succeeded, so an existing ``out_dir`` is never left holding a mix of old and new results, and a failed
@@ -12,6 +13,7 @@ run leaves the previous results untouched.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
 import platform
@@ -25,10 +27,13 @@ from typing import Any
 
 import numpy as np
 
+from satchain.api import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
+from satchain.comparison import Comparison
 from satchain.errors import SatchainIOError
+from satchain.prediction import Predictions
 from satchain.runconfig import RunConfig
 
-__all__ = ["STAGES", "RunContext", "run_pipeline"]
+__all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
 #: The stages, in order, as the progress display names them.
 STAGES = ("budget", "scene", "simulate", "measure", "compare", "report")
@@ -36,32 +41,11 @@ Progress = Callable[[str, int, int], None]
 MANIFEST = "manifest.json"
 
 
-@dataclass
-class RunContext:
-    """What the stages hand each other (internal to one run)."""
-
-    config: RunConfig
-    out: Path
-    system: Any = None
-    otf: Any = None
-    budget: dict | None = None
-    scene: Any = None
-    truth: dict | None = None
-    simulator: Any = None
-    image: np.ndarray | None = None
-    focal_plane: np.ndarray | None = None
-    sensor: Any = None
-    measured: dict | None = None
-    comparison: dict | None = None
-    timings_s: dict | None = None
-
-
-def _stage_budget(ctx: RunContext, progress: Progress) -> None:
-    from satchain.report.budget import budget_results, write_budget_outputs
+def _stage_budget(config: RunConfig, progress: Progress) -> BudgetResult:
+    from satchain.report.budget import budget_results
     from satchain.tf.budget import SystemOTF
 
-    ctx.system = ctx.config.load_system()
-    s = ctx.system
+    s = config.load_system()
     if abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
         from satchain.errors import ConfigError
 
@@ -70,84 +54,162 @@ def _stage_budget(ctx: RunContext, progress: Progress) -> None:
             "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
             "for this system"
         )
-    ctx.otf = SystemOTF(ctx.system)
-    ctx.budget = budget_results(ctx.system, otf=ctx.otf)
-    write_budget_outputs(ctx.system, ctx.budget, ctx.out / "budget", otf=ctx.otf)
+    otf = SystemOTF(s)
+    result = BudgetResult(s, otf, budget_results(s, otf=otf))
     progress("budget", 1, 1)
+    return result
 
 
-def _stage_scene(ctx: RunContext, progress: Progress) -> None:
-    from satchain.report import run_figures
+def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
     from satchain.scene import load_layout
 
-    sc = ctx.config.scene
-    ctx.scene = load_layout(ctx.config.layout_source())
-    ctx.truth = ctx.scene.truth(pixel_m=sc.pixel_m)
-    (ctx.out / "images").mkdir(parents=True, exist_ok=True)
-    from satchain.report._save import write_text
-
-    write_text(ctx.out / "images" / "scene.truth.json", json.dumps(ctx.truth, indent=1))
-    overview = ctx.scene.render(pixel_m=sc.overview_pixel_m)
-    run_figures.plot_scene_overview(overview, ctx.truth, sc.overview_pixel_m, ctx.out / "figures" / "fig1_scene.png")
+    sc = config.scene
+    scene = load_layout(config.layout_source())
+    result = SceneResult(scene, scene.truth(pixel_m=sc.pixel_m), sc.pixel_m)
     progress("scene", 1, 1)
+    return result
 
 
-def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
-    from satchain import io
+def _stage_simulate(
+    config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress
+) -> SimulationResult:
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
 
-    c = ctx.config.simulation
-    src = SceneSource(ctx.scene, pixel_m=ctx.config.scene.pixel_m)
+    c = config.simulation
+    src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
-    ctx.simulator = sim = Simulator(
-        ctx.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=ctx.otf
-    )
+    sim = Simulator(budget.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=budget.otf)
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
-    ctx.sensor = sensor_from_system(ctx.system)
-    ctx.image = sim.run(src, sensor=ctx.sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
-    ctx.focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
-    s, d = ctx.system, ctx.out / "images"
+    sensor = sensor_from_system(budget.system)
+    image = sim.run(src, sensor=sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
+    focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
+    progress("simulate", len(sim.tiles) + 1, len(sim.tiles) + 1)
+    return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim)
+
+
+def _stage_measure(system, scene: SceneResult, sim: SimulationResult, progress: Progress) -> Measurements:
+    from satchain.measure.auto import measure_auto
+    from satchain.measure.snr import measure_snr
+
+    auto = measure_auto(sim.image, scene.truth, pixel_m=system.gsd_act_m)
+    snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m)
+    progress("measure", 1, 1)
+    return Measurements(auto, snr)
+
+
+def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult, measured,
+                   progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
+    from satchain.comparison import compare
+    from satchain.prediction import predict
+
+    predicted = predict(
+        budget.system,
+        scene.truth,
+        otf=budget.otf,
+        quality=budget.budget["quality"],
+        sensor=sim.sensor,
+        wedge_threshold=config.measurement.wedge_threshold,
+    )
+    comparison = compare(measured, predicted, config.tolerances)
+    progress("compare", 1, 1)
+    return predicted, comparison
+
+
+def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> RunResult:
+    """Every stage but the report, in memory (see :func:`satchain.run`)."""
+    report = progress or (lambda stage, done, total: None)
+    timings: dict[str, float] = {}
+
+    def timed(name, fn, *args):
+        t0 = time.perf_counter()
+        out = fn(*args, report)
+        timings[name] = round(time.perf_counter() - t0, 3)
+        return out
+
+    budget = timed("budget", _stage_budget, config)
+    scene = timed("scene", _stage_scene, config)
+    sim = timed("simulate", _stage_simulate, config, budget, scene)
+    measured = timed("measure", _stage_measure, budget.system, scene, sim)
+    predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
+    return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """The read-only view of a run that the report code (report/html.py, report/run_figures.py) reads:
+    ``out`` (the directory being written), ``config``, ``system``, ``otf``, ``budget`` (dict), ``scene``,
+    ``truth`` (dict), ``simulator``, ``image``, ``focal_plane``, ``sensor``, ``measured`` (dict),
+    ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
+
+    result: RunResult
+    out: Path
+    results: dict[str, Any]
+
+    config = property(lambda self: self.result.config)
+    system = property(lambda self: self.result.budget.system)
+    otf = property(lambda self: self.result.budget.otf)
+    budget = property(lambda self: self.result.budget.budget)
+    scene = property(lambda self: self.result.scene.scene)
+    truth = property(lambda self: self.result.scene.truth)
+    simulator = property(lambda self: self.result.simulation.simulator)
+    image = property(lambda self: self.result.simulation.image)
+    focal_plane = property(lambda self: self.result.simulation.focal_plane)
+    sensor = property(lambda self: self.result.simulation.sensor)
+    measured = property(lambda self: self.result.measurements.to_dict())
+    comparison = property(lambda self: {"results": self.results})
+    timings_s = property(lambda self: self.result.timings_s)
+
+
+def _write_budget_and_scene(result: RunResult, out: Path) -> None:
+    from satchain.report import run_figures
+    from satchain.report._save import write_text
+    from satchain.report.budget import write_budget_outputs
+
+    b, sc = result.budget, result.scene
+    write_budget_outputs(b.system, dict(b.budget), out / "budget", otf=b.otf)
+    (out / "images").mkdir(parents=True, exist_ok=True)
+    write_text(out / "images" / "scene.truth.json", json.dumps(sc.truth, indent=1))
+    p = result.config.scene.overview_pixel_m
+    overview = sc.scene.render(pixel_m=p)
+    run_figures.plot_scene_overview(overview, sc.truth, p, out / "figures" / "fig1_scene.png")
+
+
+def _write_images(result: RunResult, out: Path) -> None:
+    from satchain import io
+
+    c, s, sim = result.config.simulation, result.system, result.simulation
+    d = out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
     dtype = np.uint16 if c.units == "dn" else np.float32
-    io.write_tiff(d / "simulated.tif", ctx.image.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
-    io.write_png(d / "simulated.png", io.preview_uint8(ctx.image), pixel_m=s.gsd_act_m)
-    fp_pixel = src.pixel_m * sim.D
+    io.write_tiff(d / "simulated.tif", sim.image.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
+    io.write_png(d / "simulated.png", io.preview_uint8(sim.image), pixel_m=s.gsd_act_m)
     io.write_tiff(
         d / "focal_plane.tif",
-        ctx.focal_plane.astype(np.float32),
-        pixel_m=fp_pixel,
+        sim.focal_plane.astype(np.float32),
+        pixel_m=sim.focal_plane_pixel_m,
         metadata={"units": "scene reflectance filtered by the optics and motion", "system": s.name},
     )
-    io.write_png(d / "focal_plane.png", io.preview_uint8(ctx.focal_plane), pixel_m=fp_pixel)
-    progress("simulate", len(sim.tiles) + 1, len(sim.tiles) + 1)
+    io.write_png(d / "focal_plane.png", io.preview_uint8(sim.focal_plane), pixel_m=sim.focal_plane_pixel_m)
 
 
-def _stage_measure(ctx: RunContext, progress: Progress) -> None:
-    from satchain.measure.auto import measure_auto
-
-    s = ctx.system
-    ctx.measured = measure_auto(ctx.image, ctx.truth, pixel_m=s.gsd_act_m).to_dict()
-    progress("measure", 1, 1)
-
-
-def _stage_compare(ctx: RunContext, progress: Progress) -> None:
-    from satchain.report.compare import compare_all
-
-    ctx.comparison = compare_all(ctx)
-    progress("compare", 1, 1)
-
-
-def _stage_report(ctx: RunContext, progress: Progress) -> None:
+def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None) -> None:
+    """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
     from satchain.report import html, run_figures
     from satchain.report._save import write_text
+    from satchain.runconfig import config_to_toml
 
-    run_figures.write_run_figures(ctx)
-    results = ctx.comparison["results"]
-    write_text(ctx.out / "results.json", json.dumps(results, indent=1, default=_json_default))
-    html.write_report(ctx, ctx.out / "report.html")
-    progress("report", 1, 1)
+    report = progress or (lambda stage, done, total: None)
+    results = result.to_json_dict()
+    _write_budget_and_scene(result, out)
+    _write_images(result, out)
+    view = ReportInputs(result, out, results)
+    run_figures.write_run_figures(view)
+    write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
+    html.write_report(view, out / "report.html")
+    report("report", 1, 1)
+    write_text(out / "config.toml", config_to_toml(result.config))
 
 
 def _json_default(o):
@@ -158,7 +220,7 @@ def _json_default(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
-def _manifest(ctx: RunContext) -> dict[str, Any]:
+def _manifest(result: RunResult) -> dict[str, Any]:
     import matplotlib
     import scipy
 
@@ -166,9 +228,9 @@ def _manifest(ctx: RunContext) -> dict[str, Any]:
 
     return {
         "satchain_version": satchain.__version__,
-        "config": ctx.config.to_dict(),
-        "system": ctx.system.to_dict() if ctx.system is not None else None,
-        "seed": ctx.config.simulation.seed,
+        "config": result.config.to_dict(),
+        "system": result.system.to_dict(),
+        "seed": result.config.simulation.seed,
         "versions": {
             "python": platform.python_version(),
             "numpy": np.__version__,
@@ -176,7 +238,7 @@ def _manifest(ctx: RunContext) -> dict[str, Any]:
             "matplotlib": matplotlib.__version__,
         },
         "platform": platform.platform(),
-        "timings_s": ctx.timings_s,
+        "timings_s": dict(result.timings_s),
         "reproduce": "satchain run --config config.toml -o DIR  (config.toml is beside this manifest)",
     }
 
@@ -189,30 +251,32 @@ def _check_out_dir(out: Path) -> None:
         )
 
 
-def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
-    """Run every stage into ``out_dir`` (atomically replaced); return ``results.json``'s content."""
+def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> RunResult:
+    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result."""
     out = Path(out_dir).resolve()
     _check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
-    report = progress or (lambda stage, done, total: None)
-    ctx = RunContext(config=config, out=staging, timings_s={})
     try:
-        stages = (_stage_budget, _stage_scene, _stage_simulate, _stage_measure, _stage_compare, _stage_report)
-        for name, fn in zip(STAGES, stages, strict=True):
-            t0 = time.perf_counter()
-            fn(ctx, report)
-            ctx.timings_s[name] = round(time.perf_counter() - t0, 3)
+        result = run_in_memory(config, progress=progress)
+        t0 = time.perf_counter()
+        timings = dict(result.timings_s)
+        write_run_directory(result, staging, progress=progress)
+        timings["report"] = round(time.perf_counter() - t0, 3)
+        result = dataclasses.replace(result, timings_s=timings)
         from satchain.report._save import write_text
-        from satchain.runconfig import config_to_toml
 
-        write_text(staging / "config.toml", config_to_toml(config))
-        write_text(staging / MANIFEST, json.dumps(_manifest(ctx), indent=1, default=_json_default))
+        write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
         _swap_in(staging, out)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    return ctx.comparison["results"]
+    return result
+
+
+def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+    """Run every stage into ``out_dir`` (atomically replaced); return ``results.json``'s content."""
+    return run_to_directory(config, out_dir, progress=progress).to_json_dict()
 
 
 def _swap_in(staging: Path, out: Path) -> None:

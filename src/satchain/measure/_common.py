@@ -14,7 +14,8 @@ __all__ = ["crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_cros
 
 
 def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarray:
-    """Return the float64 region ``image[y0:y1, x0:x1]`` for ``roi = (x0, y0, x1, y1)`` (half-open, pixels).
+    """Return the float64 region ``image[y0:y1, x0:x1]`` for ``roi = (x0, y0, x1, y1)`` (half-open, pixels)
+    or a :class:`satchain.geometry.Rect`.
 
     Refuses non-2-D input, NaN/inf, and regions smaller than ``min_size`` in either direction.
 
@@ -24,6 +25,8 @@ def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarra
     (10, 20)
     """
     a = as_float_array(name, image, ndim=2, finite=False)
+    if hasattr(roi, "to_roi"):  # a satchain.geometry.Rect
+        roi = roi.to_roi()
     if roi is not None:
         try:
             x0, y0, x1, y1 = (int(v) for v in roi)

@@ -18,12 +18,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from satchain.report._save import figure_api as plt  # no pyplot: no backend switch at import
 from satchain.report._save import save_figure  # noqa: E402
 
 __all__ = ["plot_bars", "plot_edge", "plot_star", "plot_wedge"]

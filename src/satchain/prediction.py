@@ -1,0 +1,277 @@
+"""Predicted figures of merit, evaluated the way each measurement sees them (the prediction half of a run).
+
+Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF and the wedge resolution
+(:mod:`satchain.ctf`) and GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the
+targets of a truth record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then
+puts measurements beside them without needing the system.
+
+Frequencies are in cycles per pixel (cy/px) along a direction ``(ux, uy)`` of the image plane: x = ACT
+(columns), y = ALT (rows). Square detector pixels are assumed for the cy/mm <-> cy/px conversion
+(``satchain run`` refuses other systems).
+
+Examples
+--------
+>>> gauss = lambda fx, fy: np.exp(-(fx**2) - 4 * fy**2)  # a 2-D MTF in cy/px, worse along y (ALT)
+>>> p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
+>>> round(float(p.mtf_along["ACT"](0.5)), 6), round(float(p.mtf_along["ALT"](0.5)), 6)
+(0.778801, 0.367879)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from satchain.ctf import wedge_resolution_m
+from satchain.errors import InputError
+
+__all__ = [
+    "DIRECTIONS",
+    "NYQUIST_CY_PER_PX",
+    "WEDGE_AXES",
+    "AxisMTF",
+    "EdgePrediction",
+    "Predictions",
+    "WedgePrediction",
+    "predict",
+    "predict_from_mtf",
+    "system_mtf_cy_per_px",
+]
+
+#: Unit directions ``(ux, uy)`` (x = ACT, y = ALT) of the measured axes.
+DIRECTIONS: dict[str, tuple[float, float]] = {
+    "ACT": (1.0, 0.0),
+    "ALT": (0.0, 1.0),
+    "D45": (math.sqrt(0.5), math.sqrt(0.5)),
+    "D135": (math.sqrt(0.5), -math.sqrt(0.5)),
+}
+#: The Nyquist frequency of a sampled image along any axis of its pixel grid, cy/px.
+NYQUIST_CY_PER_PX = 0.5
+#: The axis across a wedge's stripes for each wedge orientation of the scene.
+WEDGE_AXES = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}
+
+MTF2D = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+class AxisMTF:
+    """A 2-D MTF (a callable of ``(fx, fy)`` in cy/px) along the unit direction ``(ux, uy)``, as a callable of
+    cy/px along that direction (the magnitude of a complex OTF is taken). ``cutoff`` (cy/px) is copied from
+    ``mtf2d.cutoff`` when it has one, which makes Coltman's series a finite sum.
+
+    Examples
+    --------
+    >>> m = AxisMTF(lambda fx, fy: 1.0 - np.hypot(fx, 2 * fy), (0.0, 1.0))
+    >>> float(m(0.25))
+    0.5
+    """
+
+    def __init__(self, mtf2d: MTF2D, direction: tuple[float, float]):
+        n = math.hypot(*direction)
+        if not n > 0:
+            raise InputError(f"direction = {direction!r}: must be a non-zero (ux, uy) vector")
+        self._mtf2d = mtf2d
+        self.ux, self.uy = float(direction[0]) / n, float(direction[1]) / n
+        cutoff = getattr(mtf2d, "cutoff", None)
+        if cutoff is not None:
+            self.cutoff = float(cutoff)
+
+    def __call__(self, f_cy_per_px) -> np.ndarray:
+        f = np.asarray(f_cy_per_px, dtype=float)
+        return np.abs(np.asarray(self._mtf2d(f * self.ux, f * self.uy)))
+
+
+class _SystemMTF:
+    """A SystemOTF as a callable of cy/px (square pixels of pitch sqrt(px py)), with its cutoff in cy/px."""
+
+    def __init__(self, otf: Any):
+        from satchain import units
+
+        d = otf.system.detector
+        self._otf = otf
+        self.pitch_m = math.sqrt(d.pitch_x_m * d.pitch_y_m)
+        self._to_mm = float(units.cy_per_px_to_cy_per_mm(1.0, pitch_m=self.pitch_m))
+        self.cutoff = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=self.pitch_m))
+
+    def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
+        return np.abs(self._otf(np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * self._to_mm))
+
+
+def system_mtf_cy_per_px(otf: Any) -> MTF2D:
+    """The system MTF of a :class:`~satchain.tf.budget.SystemOTF` as a callable of ``(fx, fy)`` in cy/px."""
+    return _SystemMTF(otf)
+
+
+@dataclass(frozen=True)
+class EdgePrediction:
+    """A slanted edge's prediction: the system MTF along its normal (the e-SFR's axis).
+
+    ``normal`` is the unit vector ``(nx, ny)`` towards the bright side (x = ACT, y = ALT); ``mtf_at_nyquist``
+    the MTF at 0.5 cy/px along it; ``mtf`` the MTF along it as a callable of cy/px.
+    """
+
+    id: str
+    normal: tuple[float, float]
+    mtf_at_nyquist: float
+    mtf: Callable[[Any], np.ndarray] = field(repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class WedgePrediction:
+    """A wedge axis' predicted resolvable line width (ground m) and the GSD along it (m)."""
+
+    axis: str
+    resolution_m: float
+    gsd_m: float
+
+
+@dataclass(frozen=True)
+class Predictions:
+    """Everything :func:`satchain.comparison.compare` needs from the prediction side (no system object).
+
+    Attributes
+    ----------
+    mtf_along : mapping
+        ``"ACT" | "ALT" | "D45" | "D135"`` -> MTF along that axis, a callable of cy/px.
+    edges : mapping
+        Truth id -> :class:`EdgePrediction` for every slanted edge of the truth record.
+    wedges : mapping
+        Axis -> :class:`WedgePrediction` (ALT, ACT, D135) for the axes of the truth's wedges.
+    giqe5, rer, snr : float
+        Predicted NIIRS (GIQE 5), its RER (GIQE 5 combination of the axes) and contrast SNR.
+    gsd_los_m, elevation_deg : float
+        Line-of-sight GSD (m) and elevation (degrees) with which a measured RER and SNR give a measured NIIRS.
+    wedge_threshold : float
+        Contrast at which a wedge stops resolving.
+    warnings : tuple of str
+        Predicted problems (saturated targets).
+    """
+
+    mtf_along: Mapping[str, Callable[[Any], np.ndarray]] = field(repr=False)
+    edges: Mapping[str, EdgePrediction]
+    wedges: Mapping[str, WedgePrediction]
+    giqe5: float = float("nan")
+    rer: float = float("nan")
+    snr: float = float("nan")
+    gsd_los_m: float = float("nan")
+    elevation_deg: float = 90.0
+    wedge_threshold: float = 0.15
+    warnings: tuple[str, ...] = ()
+    mtf2d: MTF2D | None = field(default=None, repr=False, compare=False)
+
+    def edge(self, edge_id: str, direction: str) -> EdgePrediction:
+        """The prediction of edge ``edge_id``; an edge the truth does not list gets its axis ``direction``."""
+        if edge_id in self.edges:
+            return self.edges[edge_id]
+        m = self.mtf_along[direction.upper()]
+        return EdgePrediction(edge_id, DIRECTIONS[direction.upper()], float(m(NYQUIST_CY_PER_PX)), m)
+
+
+def predict_from_mtf(
+    mtf2d: MTF2D,
+    truth: Mapping[str, Any],
+    *,
+    gsd_m: float,
+    wedge_threshold: float = 0.15,
+    quality: Mapping[str, float] | None = None,
+    gsd_los_m: float | None = None,
+    elevation_deg: float = 90.0,
+    warnings: tuple[str, ...] = (),
+) -> Predictions:
+    """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres).
+
+    ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as :func:`satchain.quality.predict_quality`
+    gives them); without it the NIIRS figures are NaN.
+    """
+    along = {d: AxisMTF(mtf2d, u) for d, u in DIRECTIONS.items()}
+    edges = {}
+    for it in truth.get("items", []):
+        if it.get("kind") != "slanted_edge":
+            continue
+        nx, ny = (float(v) for v in it["normal_to_bright"])
+        m = AxisMTF(mtf2d, (nx, ny))
+        edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
+    wedges = {}
+    axes = {WEDGE_AXES[it["orientation"]] for it in truth.get("items", []) if it.get("kind") == "hyperbolic_wedge"}
+    for axis in sorted(axes):
+        limit = gsd_m if axis in ("ALT", "ACT") else gsd_m / math.sqrt(2.0)
+        res = wedge_resolution_m(along[axis], gsd_m=gsd_m, threshold=wedge_threshold, sampling_limit_m=limit)
+        wedges[axis] = WedgePrediction(axis, res, gsd_m)
+    q = quality or {}
+    return Predictions(
+        mtf_along=along,
+        edges=edges,
+        wedges=wedges,
+        giqe5=float(q.get("giqe5", float("nan"))),
+        rer=float(q.get("rer_giqe5", float("nan"))),
+        snr=float(q.get("snr", float("nan"))),
+        gsd_los_m=float(gsd_m if gsd_los_m is None else gsd_los_m),
+        elevation_deg=float(elevation_deg),
+        wedge_threshold=float(wedge_threshold),
+        warnings=tuple(warnings),
+        mtf2d=mtf2d,
+    )
+
+
+def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...]:
+    """Targets whose brightest reflectance reaches the full well (they will be clipped): say so."""
+    if sensor is None or not np.isfinite(sensor.full_well_e):
+        return ()
+    out = []
+    for it in truth.get("items", []):
+        top = it.get("bright", it.get("mean", 0.0) + it.get("amplitude", 0.0))
+        e = sensor.offset_e + sensor.dark_e + top * sensor.electrons_per_unit
+        if e >= sensor.full_well_e:
+            out.append(
+                f"{it['id']}: reflectance {top:g} gives {e:.0f} e- >= full well {sensor.full_well_e:.0f} e- "
+                f"(saturated; fewer TDI stages or a shorter integration would keep it measurable)"
+            )
+    return tuple(out)
+
+
+def predict(
+    system: Any,
+    truth: Mapping[str, Any],
+    *,
+    otf: Any = None,
+    quality: Mapping[str, float] | None = None,
+    sensor: Any = None,
+    wedge_threshold: float = 0.15,
+) -> Predictions:
+    """Predict every figure a run compares, for the targets of ``truth``.
+
+    Parameters
+    ----------
+    system : ImagingSystem
+        With square ground pixels (``gsd_act_m == gsd_alt_m``).
+    truth : mapping or Truth
+        The scene's truth record (``Scene.truth()``, a ``*.truth.json``'s content, or a
+        :class:`satchain.scene.truth.Truth`).
+    otf : SystemOTF, optional
+        The system OTF (built from ``system`` when not given).
+    quality : mapping, optional
+        :func:`satchain.quality.predict_quality` ``.to_dict()`` (computed when not given).
+    sensor : SensorModel, optional
+        For saturation warnings.
+    wedge_threshold : float
+        Contrast at which a wedge stops resolving (the paper's 0.15).
+    """
+    from satchain.quality import predict_quality
+    from satchain.tf.budget import SystemOTF
+
+    truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
+    otf = SystemOTF(system) if otf is None else otf
+    quality = predict_quality(system, otf=otf).to_dict() if quality is None else quality
+    return predict_from_mtf(
+        system_mtf_cy_per_px(otf),
+        dict(truth),
+        gsd_m=system.gsd_m,
+        wedge_threshold=wedge_threshold,
+        quality=quality,
+        gsd_los_m=system.gsd_los_m,
+        elevation_deg=system.orbit.elevation_deg,
+        warnings=saturation_warnings(sensor, truth),
+    )
