@@ -140,10 +140,10 @@ def _stage_compare(ctx: RunContext, progress: Progress) -> None:
 
 
 def _stage_report(ctx: RunContext, progress: Progress) -> None:
-    from satchain.report import html, run_figures
+    from satchain.report import curves, html, run_figures
     from satchain.report._save import write_text
 
-    run_figures.write_run_figures(ctx)
+    curves.write_curves(run_figures.write_run_figures(ctx), ctx.out / "curves")
     results = ctx.comparison["results"]
     write_text(ctx.out / "results.json", json.dumps(results, indent=1, default=_json_default))
     html.write_report(ctx, ctx.out / "report.html")

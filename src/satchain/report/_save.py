@@ -17,12 +17,16 @@ def write_text(path: str | Path, text: str) -> None:
 
 
 def save_figure(fig, path: str | Path, **kwargs) -> None:
-    """Atomically save a matplotlib figure (format from the suffix) and close it."""
-    import matplotlib.pyplot as plt
+    """Atomically save a matplotlib figure (format from the suffix) and close it.
 
+    ``fig`` may be a :class:`matplotlib.figure.Figure` made without pyplot (then nothing global is touched)
+    or one made by pyplot (then it is closed there)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     try:
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format=Path(path).suffix.lstrip(".") or "png", **kwargs)
     finally:
-        plt.close(fig)
+        if getattr(fig.canvas, "manager", None) is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(fig)
