@@ -127,10 +127,21 @@ def _vline(ax, x, color, ls, label=None):
         ax.axvline(x, color=color, ls=ls, lw=1, label=label)
 
 
+def _edge_figure() -> tuple[Figure, list, list]:
+    """ESF | LSF above, the MTF full width below, each with its residual panel underneath."""
+    fig = Figure(figsize=(PRINT_WIDTH_IN, 9.0), dpi=DPI, layout="constrained")
+    gs = fig.add_gridspec(4, 2, height_ratios=(3, 1.1, 3.4, 1.3))
+    top = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[2, :])]
+    bot = [fig.add_subplot(gs[1, i], sharex=top[i]) for i in range(2)] + [fig.add_subplot(gs[3, :], sharex=top[2])]
+    for ax in top + bot:
+        ax.grid(alpha=0.3)
+    return fig, top, bot
+
+
 def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
     """ESF, LSF and MTF of one edge, measured vs predicted, with residuals (measured - predicted) below."""
-    with matplotlib.rc_context(rc_for(9.6)):
-        fig, top, bot = _figure(9.6, 6.0, 3)
+    with matplotlib.rc_context(rc_for(PRINT_WIDTH_IN)):
+        fig, top, bot = _edge_figure()
         x, near = c["x_px"], np.abs(c["x_px"]) <= 6
         for ax, r, key, lab in (
             (top[0], bot[0], "esf", "ESF (normalised)"),
@@ -149,7 +160,7 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         ax.plot(f, mm, color=MEAS, lw=1.4, label="measured (e-SFR)")
         ax.plot(f, mp, color=PRED, ls="--", lw=1.4, label="predicted")
         ax.axvline(0.5, color="gray", lw=1)
-        _mark(ax, 0.5, "Nyquist", 0.3)
+        _mark(ax, 0.5, "Nyquist", 0.72)
         nm, npred = c["nyquist"]
         for (fm, fp), lvl, mk, name in (
             (c["mtf50"], 0.5, "o", "MTF50"),
@@ -170,7 +181,7 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         r.plot(f[ok], (mm - mp)[ok], color=MEAS, lw=1)
         _band(r, tol, label="tol. at Nyquist")
         r.axvline(0.5, color="gray", lw=1)
-        r.set_xlabel("frequency (cy/px)")
+        r.set_xlabel("frequency along the edge normal (cy/px)")
         r.set_ylabel("meas. - pred.")
         r.legend(loc="lower left")
         for ax, t in zip(top, ("edge spread function", "line spread function", "MTF along the normal"), strict=True):

@@ -31,7 +31,7 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
     {"coltman": [...], "fourier_synthesis": [...]} on the same frequencies.
     """
     f = budget.f_cy_per_mm
-    fig = Figure(figsize=(9.6, 4.8))
+    fig = Figure(figsize=(9.6, 5.8), layout="constrained")
     axes = fig.subplots(1, 2, sharey=True)
     for ax, d in zip(axes, ("alt", "act"), strict=True):
         for name, m in getattr(budget, d).items():
@@ -43,18 +43,21 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
             ax.plot(f, ctf[d]["fourier_synthesis"], ":", color="tab:blue", label="CTF (paper's synthesis)")
         ny = budget.nyquist_cy_per_mm[d]
         ax.axvline(ny, color="gray", lw=1)
-        ax.text(ny, 1.02, f" Nyquist {ny:.1f}", color="gray", va="bottom")
+        ax.text(ny, 0.72, f"Nyquist {ny:.1f} ", color="0.35", rotation=90, ha="right", va="center")
         ax.set_xlim(0, f[-1])
         ax.set_ylim(0, 1.08)
         ax.set_xlabel("focal-plane spatial frequency (cycles/mm)")
         ax.set_title(f"{d.upper()} ({'along-track, f_y' if d == 'alt' else 'across-track, f_x'})")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("modulation")
-    axes[0].legend(loc="upper right")
-    axes[1].legend(loc="upper right")
+    handles, labels = {}, {}
+    for ax in axes:  # one legend for both panels, below them (the ACT panel lacks the smear)
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    labels = list(handles)
+    fig.legend([handles[k] for k in labels], labels, loc="outside lower center", ncol=3)
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
     save_figure(fig, path, dpi=100)
 
 
@@ -69,7 +72,7 @@ def plot_square_wave(
     note: str = "",
 ) -> None:
     """The paper's Figure 3(b): truncated Fourier series of a bar pattern and its MTF-degraded version."""
-    fig = Figure(figsize=(8, 4))
+    fig = Figure(figsize=(8, 4.6), layout="constrained")
     ax = fig.subplots()
     ax.plot(x_m, square, "k-", label="input square wave (truncated Fourier series)")
     ax.plot(x_m, degraded, "b--", label="degraded by the system MTF")
@@ -77,6 +80,5 @@ def plot_square_wave(
     ax.set_ylabel("relative reflectance")
     ax.set_title(f"Square wave of ground period {period_m:g} m{(' - ' + note) if note else ''}")
     ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
+    fig.legend(loc="outside lower center", ncol=2)
     save_figure(fig, path, dpi=100)

@@ -87,7 +87,7 @@ def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
     return Markup(
         '<details class="zoom"><summary title="click to zoom; click again to close">'
         '<img class="thumb" src="{}" alt="{}" width="{}" height="{}" style="--tw: {:.0f}px; --zw: {}px">'
-        '</summary><p class="zoomnote">{} — {} × {} px of {} cm; click the image to close</p></details>'
+        '</summary><p class="zoomnote">{} — {} × {} px of {} cm, shown ×{}; click the image to close</p></details>'
     ).format(
         Markup(_data_uri(panel["png"])),
         alt,
@@ -99,6 +99,7 @@ def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
         panel["width"],
         panel["height"],
         f"{panel['pixel_m'] * 100:.3g}",
+        k,
     )
 
 
