@@ -221,51 +221,8 @@ def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
         _stack(e, ["id", "direction"], ["f_cy_per_px", "mtf_measured", "mtf_predicted"]),
         "slanted edges: e-SFR (measured) and system MTF along the edge normal (predicted); Nyquist = 0.5 cy/px",
     )
-    rows: list[list] = [[], [], [], [], []]
-    for st in curves["stars"]:
-        f = list(st.get("f_cy_per_px", []))
-        for dname, curve in (st.get("mtf_measured") or {}).items():
-            pred = (st.get("directions") or {}).get(dname, {}).get("mtf_predicted", _rep(None, len(f)))
-            for c, v in zip(
-                rows, (_rep(st["id"], len(f)), _rep(dname, len(f)), f, list(curve), list(pred)), strict=True
-            ):
-                c.extend(v)
-    cols["star_mtf.csv"] = (
-        ["star_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_predicted"],
-        rows,
-        "Siemens star: MTF per direction (ACT, ALT, diagonals), measured and predicted",
-    )
-    rows = [[] for _ in range(8)]
-    for br in curves["bars"]:
-        f = list(br.get("f_cy_per_px", []))
-        lim = br.get("compared_up_to_cy_per_px", 0.2)
-        n = len(f)
-        vals = (
-            _rep(br["id"], n),
-            _rep(br.get("direction"), n),
-            f,
-            br.get("ctf_measured", _rep(None, n)),
-            br.get("ctf_coltman_predicted", _rep(None, n)),
-            br.get("ctf_fourier_synthesis_predicted", _rep(None, n)),
-            br.get("mtf_from_ctf_measured", _rep(None, n)),
-            ["yes" if fi <= lim else "no" for fi in f],
-        )
-        for c, v in zip(rows, vals, strict=True):
-            c.extend(v)
-    cols["bars_ctf.csv"] = (
-        [
-            "bars_id",
-            "direction",
-            "f_cy_per_px",
-            "ctf_measured",
-            "ctf_coltman_predicted",
-            "ctf_paper_method_predicted",
-            "mtf_from_ctf_measured",
-            "compared",
-        ],
-        rows,
-        "bar targets: CTF per bar group; compared = whether the group enters the pass/fail check",
-    )
+    cols["star_mtf.csv"] = _star_columns(curves["stars"])
+    cols["bars_ctf.csv"] = _bars_columns(curves["bars"])
     cols["wedge_contrast.csv"] = (
         ["wedge_id", "axis", "position_m", "line_width_m", "contrast_measured", "ctf_coltman_predicted"],
         _stack(
@@ -282,6 +239,57 @@ def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
         _csv(d / name, header, columns, comment)
         written.append(d / name)
     return written
+
+
+def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
+    rows: list[list] = [[], [], [], [], []]
+    for st in stars:
+        f = list(st.get("f_cy_per_px", []))
+        for dname, curve in (st.get("mtf_measured") or {}).items():
+            pred = (st.get("directions") or {}).get(dname, {}).get("mtf_predicted", _rep(None, len(f)))
+            for c, v in zip(
+                rows, (_rep(st["id"], len(f)), _rep(dname, len(f)), f, list(curve), list(pred)), strict=True
+            ):
+                c.extend(v)
+    return (
+        ["star_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_predicted"],
+        rows,
+        "Siemens star: MTF per direction (ACT, ALT, diagonals), measured and predicted",
+    )
+
+
+def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
+    rows = [[] for _ in range(8)]
+    for br in bars:
+        f = list(br.get("f_cy_per_px", []))
+        lim = br.get("compared_up_to_cy_per_px", 0.2)
+        n = len(f)
+        vals = (
+            _rep(br["id"], n),
+            _rep(br.get("direction"), n),
+            f,
+            br.get("ctf_measured", _rep(None, n)),
+            br.get("ctf_coltman_predicted", _rep(None, n)),
+            br.get("ctf_fourier_synthesis_predicted", _rep(None, n)),
+            br.get("mtf_from_ctf_measured", _rep(None, n)),
+            ["yes" if fi <= lim else "no" for fi in f],
+        )
+        for c, v in zip(rows, vals, strict=True):
+            c.extend(v)
+    return (
+        [
+            "bars_id",
+            "direction",
+            "f_cy_per_px",
+            "ctf_measured",
+            "ctf_coltman_predicted",
+            "ctf_paper_method_predicted",
+            "mtf_from_ctf_measured",
+            "compared",
+        ],
+        rows,
+        "bar targets: CTF per bar group; compared = whether the group enters the pass/fail check",
+    )
 
 
 def _stack(items: list[dict], labels: list[str], arrays: list[str]) -> list[list]:

@@ -117,9 +117,8 @@ def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=T
     }
 
 
-def summary_rows(res: dict) -> list[dict]:
-    """Measured vs predicted in words: one row per check, a signed difference, fixed precision."""
-    tol = res.get("tolerances") or {}
+def _mtf_rows(res: dict, tol: dict) -> list[dict]:
+    """Rows of the edges, stars and bars."""
     rows = []
     for e in res.get("slanted_edges", []):
         m, p = e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")
@@ -163,6 +162,12 @@ def summary_rows(res: dict) -> list[dict]:
                 signed=False,
             )
         )
+    return rows
+
+
+def _resolution_rows(res: dict, tol: dict) -> list[dict]:
+    """Rows of the wedges and NIIRS."""
+    rows = []
     for w in res.get("hyperbolic_wedge", []):
         m, p = w.get("resolution_m"), w.get("resolution_predicted_m")
         m_cm = None if m is None else 100 * m
@@ -199,6 +204,12 @@ def summary_rows(res: dict) -> list[dict]:
             )
         )
     return rows
+
+
+def summary_rows(res: dict) -> list[dict]:
+    """Measured vs predicted in words: one row per check, a signed difference, fixed precision."""
+    tol = res.get("tolerances") or {}
+    return _mtf_rows(res, tol) + _resolution_rows(res, tol)
 
 
 def camera_rows(system) -> list[tuple[str, str]]:
