@@ -261,3 +261,43 @@ def test_crossing_of_a_line():
 def test_no_pyplot_state():
     for mod in FIGURE_MODULES:
         assert not hasattr(mod, "plt"), mod.__name__
+
+
+def test_tables_tolerate_na_and_the_overall_flag():
+    """results.json may carry "n/a" for unmeasurable checks and an overall ``passed`` flag: shown, not crashed on."""
+    from satchain.report import tables
+
+    res = {
+        "passed": False,
+        "tolerances": {"edge_mtf_at_nyquist": 0.02, "wedge_resolution_rel": 0.15, "niirs": 0.2},
+        "slanted_edges": [
+            {
+                "id": "e1",
+                "direction": "ACT",
+                "mtf_at_nyquist_measured": 0.21,
+                "mtf_at_nyquist_predicted": 0.2,
+                "pass": True,
+            },
+            {
+                "id": "e2",
+                "direction": "ALT",
+                "mtf_at_nyquist_measured": "n/a",
+                "mtf_at_nyquist_predicted": 0.12,
+                "pass": "n/a",
+            },
+        ],
+        "hyperbolic_wedge": [
+            {"id": "w", "axis": "ALT", "resolution_m": None, "resolution_predicted_m": 0.49, "pass": "n/a"}
+        ],
+        "niirs": {"giqe5_measured": float("nan"), "giqe5_predicted": 5.2, "pass": "n/a"},
+        "summary": [{"pass": True}, {"pass": "n/a"}, {"pass": None}],
+    }
+    rows = tables.summary_rows(res)
+    assert [r["status"] for r in rows] == ["pass", "n/a", "n/a", "n/a"]
+    assert rows[0]["difference"] == "+0.010" and rows[1]["difference"] == "–"
+    assert rows[2]["predicted"] == "49.0 cm" and rows[2]["measured"] == "–"
+    v = tables.verdict(res)
+    assert v["passed"] is False and (v["n_pass"], v["n_fail"], v["n_na"]) == (1, 0, 2)
+    del res["passed"]
+    assert tables.verdict(res)["passed"] is True  # no check failed and one passed
+    assert tables.key_figures(res, {})[2]["measured"] == "–"  # the only ALT edge is n/a

@@ -58,8 +58,24 @@ def _status(p) -> str:
     return "n/a"
 
 
+def _num(v) -> float | None:
+    """A finite float, or None for anything else (None, NaN, "n/a", ...)."""
+    if isinstance(v, bool):
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _diff(m, p) -> float | None:
+    m, p = _num(m), _num(p)
+    return None if m is None or p is None else m - p
+
+
 def _mean(vals) -> float | None:
-    v = [float(x) for x in vals if x is not None and np.isfinite(float(x))]
+    v = [x for x in (_num(x) for x in vals) if x is not None]
     return float(np.mean(v)) if v else None
 
 
@@ -122,7 +138,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
     rows = []
     for e in res.get("slanted_edges", []):
         m, p = e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")
-        d = None if m is None or p is None else m - p
+        d = _diff(m, p)
         rows.append(
             _row(
                 f"MTF at Nyquist, {_DIR_WORDS.get(e.get('direction'), e.get('direction'))}",
@@ -169,10 +185,10 @@ def _resolution_rows(res: dict, tol: dict) -> list[dict]:
     """Rows of the wedges and NIIRS."""
     rows = []
     for w in res.get("hyperbolic_wedge", []):
-        m, p = w.get("resolution_m"), w.get("resolution_predicted_m")
+        m, p = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
         m_cm = None if m is None else 100 * m
-        p_cm = None if p is None or not np.isfinite(p) else 100 * p
-        d = None if m_cm is None or p_cm is None else m_cm - p_cm
+        p_cm = None if p is None else 100 * p
+        d = _diff(m_cm, p_cm)
         rt = tol.get("wedge_resolution_rel")
         rows.append(
             _row(
@@ -190,7 +206,7 @@ def _resolution_rows(res: dict, tol: dict) -> list[dict]:
     n = res.get("niirs") or {}
     if n:
         m, p = n.get("giqe5_measured"), n.get("giqe5_predicted")
-        d = None if m is None or p is None else m - p
+        d = _diff(m, p)
         rows.append(
             _row(
                 "NIIRS (GIQE 5)",
@@ -296,13 +312,13 @@ def radiometry_rows(rad: dict) -> list[tuple[str, str]]:
 
 def paper_rows(res: dict) -> list[dict]:
     """The paper's own results beside satchain's prediction and measurement."""
-    mtf_n = (res.get("mtf_at_nyquist") or {}).get("alt")
+    mtf_n = _num((res.get("mtf_at_nyquist") or {}).get("alt"))
     alt_edges = _mean(
         e.get("mtf_at_nyquist_measured") for e in res.get("slanted_edges", []) if e.get("direction") == "ALT"
     )
     wedges = [w for w in res.get("hyperbolic_wedge", []) if w.get("axis") == "ALT"] or res.get("hyperbolic_wedge", [])
     w = wedges[0] if wedges else {}
-    wm, wp = w.get("resolution_m"), w.get("resolution_predicted_m")
+    wm, wp = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
     return [
         {
             "quantity": "system MTF at Nyquist, along-track",
