@@ -72,12 +72,16 @@ def _data_uri(png: bytes) -> str:
 
 
 def _figure_html(path: Path, caption: str, *, cls: str = "") -> Markup:
-    """A figure file as an embedded <figure> (nothing when the file is missing)."""
+    """A figure file as an embedded <figure> (nothing when the file is missing); a click opens it at its
+    native size (for phones, where the page shrinks it)."""
     if not path.exists():
         return Markup("")
-    return Markup('<figure class="{}"><img src="{}" alt="{}"><figcaption>{}</figcaption></figure>').format(
-        cls, Markup(_data_uri(path.read_bytes())), caption, caption
-    )
+    png = path.read_bytes()
+    width = int.from_bytes(png[16:20], "big") if png[:8] == b"\x89PNG\r\n\x1a\n" else 0
+    return Markup(
+        '<figure class="{}"><details class="zoom fig"><summary title="click to enlarge; click again to close">'
+        '<img src="{}" alt="{}" style="--zw: {}px"></summary></details><figcaption>{}</figcaption></figure>'
+    ).format(cls, Markup(_data_uri(png)), caption, width or 1000, caption)
 
 
 def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
