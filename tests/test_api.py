@@ -80,9 +80,12 @@ def test_import_is_light_and_never_switches_the_matplotlib_backend():
 
 
 def test_plots_render_headless_through_the_object_oriented_api(tmp_path):
-    from satchain.report._save import save_figure, subplots
+    from matplotlib.figure import Figure
 
-    fig, ax = subplots(figsize=(2, 2))
+    from satchain.report._save import save_figure
+
+    fig = Figure(figsize=(2, 2))
+    ax = fig.subplots()
     ax.plot([0, 1], [0, 1])
     save_figure(fig, tmp_path / "f.png")
     assert (tmp_path / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

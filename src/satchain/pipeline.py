@@ -196,7 +196,7 @@ def _write_images(result: RunResult, out: Path) -> None:
 
 def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None) -> None:
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
-    from satchain.report import html, run_figures
+    from satchain.report import curves, html, run_figures
     from satchain.report._save import write_text
     from satchain.runconfig import config_to_toml
 
@@ -205,7 +205,7 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     _write_budget_and_scene(result, out)
     _write_images(result, out)
     view = ReportInputs(result, out, results)
-    run_figures.write_run_figures(view)
+    curves.write_curves(run_figures.write_run_figures(view), out / "curves")
     write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
     html.write_report(view, out / "report.html")
     report("report", 1, 1)

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
-from satchain.report._save import figure_api as plt  # no pyplot: no backend switch at import
-from satchain.report._save import save_figure  # noqa: E402
+from satchain.report._save import save_figure
+from satchain.report.compare_plots import with_rc
 
 __all__ = ["plot_mtf_budget", "plot_square_wave"]
 
@@ -22,6 +23,7 @@ _STYLE = {
 }
 
 
+@with_rc(9.6)
 def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title: str = "") -> None:
     """MTF of each component and of the system vs focal-plane frequency, ALT and ACT panels.
 
@@ -29,7 +31,8 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
     {"coltman": [...], "fourier_synthesis": [...]} on the same frequencies.
     """
     f = budget.f_cy_per_mm
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=True)
+    fig = Figure(figsize=(9.6, 5.8), layout="constrained")
+    axes = fig.subplots(1, 2, sharey=True)
     for ax, d in zip(axes, ("alt", "act"), strict=True):
         for name, m in getattr(budget, d).items():
             if name != "system" and np.allclose(m, 1.0):
@@ -40,21 +43,25 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
             ax.plot(f, ctf[d]["fourier_synthesis"], ":", color="tab:blue", label="CTF (paper's synthesis)")
         ny = budget.nyquist_cy_per_mm[d]
         ax.axvline(ny, color="gray", lw=1)
-        ax.text(ny, 1.02, f" Nyquist {ny:.1f}", color="gray", va="bottom", fontsize=8)
+        ax.text(ny, 0.72, f"Nyquist {ny:.1f} ", color="0.35", rotation=90, ha="right", va="center")
         ax.set_xlim(0, f[-1])
         ax.set_ylim(0, 1.08)
         ax.set_xlabel("focal-plane spatial frequency (cycles/mm)")
         ax.set_title(f"{d.upper()} ({'along-track, f_y' if d == 'alt' else 'across-track, f_x'})")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("modulation")
-    axes[0].legend(fontsize=8, loc="upper right")
-    axes[1].legend(fontsize=8, loc="upper right")
+    handles, labels = {}, {}
+    for ax in axes:  # one legend for both panels, below them (the ACT panel lacks the smear)
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    labels = list(handles)
+    fig.legend([handles[k] for k in labels], labels, loc="outside lower center", ncol=3)
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=130)
+    save_figure(fig, path, dpi=100)
 
 
+@with_rc(8)
 def plot_square_wave(
     x_m: np.ndarray,
     square: np.ndarray,
@@ -65,13 +72,13 @@ def plot_square_wave(
     note: str = "",
 ) -> None:
     """The paper's Figure 3(b): truncated Fourier series of a bar pattern and its MTF-degraded version."""
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig = Figure(figsize=(8, 4.6), layout="constrained")
+    ax = fig.subplots()
     ax.plot(x_m, square, "k-", label="input square wave (truncated Fourier series)")
     ax.plot(x_m, degraded, "b--", label="degraded by the system MTF")
     ax.set_xlabel("ground position (m)")
     ax.set_ylabel("relative reflectance")
     ax.set_title(f"Square wave of ground period {period_m:g} m{(' - ' + note) if note else ''}")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=130)
+    fig.legend(loc="outside lower center", ncol=2)
+    save_figure(fig, path, dpi=100)

@@ -17,14 +17,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.patches import Rectangle  # noqa: E402
-
-from satchain.report._save import save_figure  # noqa: E402
+from satchain.report._save import save_figure
 
 __all__ = ["plot_find"]
 
@@ -90,10 +87,12 @@ def plot_find(result, path: str | Path, *, image=None, title: str = "") -> None:
     """Combined ACT / ALT MTF (with +-2 sigma bands and the single edges) of a
     :class:`~satchain.measure.find_mtf.FindResult`; with ``image``, also the image with the ROIs used."""
     if image is not None:
-        fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(13, 5.2), gridspec_kw={"width_ratios": [1, 1.3]})
+        fig = Figure(figsize=(13, 5.2))
+        ax0, ax1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
         _draw_image(ax0, image, result)
     else:
-        fig, ax1 = plt.subplots(figsize=(7.5, 5.0))
+        fig = Figure(figsize=(7.5, 5.0))
+        ax1 = fig.subplots()
     _draw_mtf(ax1, result)
     fig.suptitle((f"{title}: " if title else "") + "MTF from the slanted edges found (no truth file)")
     fig.tight_layout()

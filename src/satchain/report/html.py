@@ -1,33 +1,43 @@
-"""The self-contained HTML report of a ``satchain run`` (every figure embedded as a data URI)."""
+"""The self-contained HTML report of a ``satchain run``: results first, the image shown, the comparison obvious.
+
+Every figure and thumbnail is embedded as a PNG data URI and click-to-zoom is pure HTML/CSS (``<details>``),
+so the page needs nothing outside itself. The report reads its inputs only through these attributes of
+``ctx``: ``out``, ``system``, ``otf``, ``budget``, ``truth``, ``image``, ``focal_plane``, ``simulator``,
+``measured``, ``comparison["results"]``, ``config`` (and ``timings_s`` / ``scene`` when present).
+"""
 
 from __future__ import annotations
 
 import base64
-import math
 from pathlib import Path
 
-import numpy as np
 from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 import satchain
 from satchain import ctf as _ctf
+from satchain.report import tables
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
 
-__all__ = ["table1_rows", "write_report"]
+__all__ = ["SECTIONS", "table1_rows", "write_report"]
 
-
-def _fmt(v) -> str:
-    if v is None:
-        return "–"
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, (float, np.floating)):
-        return "–" if not math.isfinite(v) else f"{v:.4g}"
-    if isinstance(v, (list, tuple)):
-        return ", ".join(_fmt(x) for x in v)
-    return str(v)
+#: The report's sections (anchor id, title), in order; the table of contents lists them.
+SECTIONS = (
+    ("summary", "Measured vs predicted: summary"),
+    ("paper", "The reference paper and where the prediction comes from"),
+    ("image", "The simulated image and every target"),
+    ("edges", "Slanted edges: ESF, LSF and MTF"),
+    ("star", "Siemens star: MTF per direction"),
+    ("bars", "Bar targets: CTF"),
+    ("wedges", "Hyperbolic wedges: resolution (Figure 4)"),
+    ("niirs", "SNR and NIIRS"),
+    ("camera", "Camera, geometry and radiometry (Figure 2)"),
+    ("budget", "MTF budget and Table 1 (Figure 3)"),
+    ("scene", "Synthetic ground truth (Figure 1)"),
+    ("not-measured", "Not measured"),
+    ("files", "Files and reproduction"),
+)
 
 
 def table1_rows(ctx) -> tuple[list[dict], bool]:
@@ -57,59 +67,105 @@ def table1_rows(ctx) -> tuple[list[dict], bool]:
     return rows, is_paper
 
 
-def write_report(ctx, path: Path) -> None:
-    figs = ctx.out / "figures"
+def _data_uri(png: bytes) -> str:
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
-    def img(name: str, caption: str) -> Markup:
-        p = (figs / name).resolve()
-        if not p.exists():
-            return Markup("")
-        data = base64.b64encode(p.read_bytes()).decode("ascii")
-        return Markup(
-            '<figure><img src="data:image/png;base64,{}" alt="{}"><figcaption>{}</figcaption></figure>'
-        ).format(Markup(data), caption, caption)
 
+def _figure_html(path: Path, caption: str, *, cls: str = "") -> Markup:
+    """A figure file as an embedded <figure> (nothing when the file is missing); a click opens it at its
+    native size (for phones, where the page shrinks it)."""
+    if not path.exists():
+        return Markup("")
+    png = path.read_bytes()
+    width = int.from_bytes(png[16:20], "big") if png[:8] == b"\x89PNG\r\n\x1a\n" else 0
+    return Markup(
+        '<figure class="{}"><details class="zoom fig"><summary title="click to enlarge; click again to close">'
+        '<img src="{}" alt="{}" style="--zw: {}px"></summary></details><figcaption>{}</figcaption></figure>'
+    ).format(cls, Markup(_data_uri(png)), caption, width or 1000, caption)
+
+
+def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
+    """A thumbnail ``display_w`` CSS px wide (at most) that opens, on click, as an overlay at native
+    resolution (integer-upscaled when small, pixels kept square)."""
+    k = max(1, min(16, 900 // max(panel["width"], 1)))
+    return Markup(
+        '<details class="zoom"><summary title="click to zoom; click again to close">'
+        '<img class="thumb" src="{}" alt="{}" width="{}" height="{}" style="--tw: {:.0f}px; --zw: {}px">'
+        '</summary><p class="zoomnote">{} — {} × {} px of {} cm, shown ×{}; click the image to close</p></details>'
+    ).format(
+        Markup(_data_uri(panel["png"])),
+        alt,
+        panel["width"],
+        panel["height"],
+        display_w,
+        panel["width"] * k,
+        alt,
+        panel["width"],
+        panel["height"],
+        f"{panel['pixel_m'] * 100:.3g}",
+        k,
+    )
+
+
+def _fit_rows(system) -> list[dict]:
+    prov = getattr(system, "provenance", None) or {}
+    names = prov.get("fitted_parameters") or []
+    vals = prov.get("fitted_values") or []
+    errs = prov.get("fitted_stderr") or [None] * len(names)
+    out = []
+    for n, v, e in zip(names, vals, errs, strict=False):
+        scale, unit, dig = (1e9, "nm", 2) if n.endswith("wavelength_m") else (1, "px" if "px" in n else "", 4)
+        out.append(
+            {
+                "name": n,
+                "value": tables.fmt(v * scale, dig, unit=unit),
+                "sigma": tables.fmt(None if e is None else e * scale, dig, unit=unit),
+            }
+        )
+    return out
+
+
+def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> None:
+    """Render ``report.html`` from the run's figures (``ctx.out/figures``, ``ctx.out/budget``) and results."""
+    from satchain.report.gallery import target_thumbnails
+
+    out = ctx.out
+    figs, budget_dir = out / "figures", out / "budget"
+    res = ctx.comparison["results"]
     env = Environment(
         loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"])
     )
-    res = ctx.comparison["results"]
-    rows = res["summary"]
-    plots = [
-        (n, c)
-        for n, c in (
-            ("edges_mtf.png", "Slanted edges: measured e-SFR vs the predicted MTF along each edge normal."),
-            ("star_mtf.png", "Siemens star: MTF per direction, measured vs predicted."),
-            (
-                "bars_ctf.png",
-                "Bar targets: measured CTF vs Coltman's predicted CTF (and the paper's method).",
-            ),
-            (
-                "wedge_contrast.png",
-                "Hyperbolic wedges: contrast across the stripes along the wedge (the paper's scan).",
-            ),
-        )
-    ]
-    chains = [
-        (p.name, p.stem.replace("_", " "))
-        for p in sorted(figs.glob("fig4_wedge_*.png")) + sorted(figs.glob("target_*.png"))
-    ]
     t1, is_paper = table1_rows(ctx)
+    if curve_files is None:
+        curve_files = sorted(p.name for p in (out / "curves").glob("*.csv"))
+    timings = getattr(ctx, "timings_s", None) or {}
     html = env.get_template("report.html.j2").render(
         system=ctx.system,
         version=satchain.__version__,
         seed=ctx.config.simulation.seed,
-        total_s=sum(ctx.timings_s.values()),
-        rows=rows,
-        n_pass=sum(r["pass"] is True for r in rows),
-        n_checked=sum(r["pass"] is not None for r in rows),
-        derived=ctx.budget["derived"],
+        total_s=sum(timings.values()),
+        sections=SECTIONS,
+        verdict=tables.verdict(res),
+        key=tables.key_figures(res, ctx.budget),
+        rows=tables.summary_rows(res),
+        paper=tables.paper_rows(res),
+        fit=_fit_rows(ctx.system),
+        provenance=getattr(ctx.system, "provenance", None) or {},
+        citation=tables.PAPER_CITATION,
+        camera=tables.camera_rows(ctx.system),
+        derived=tables.derived_rows(ctx.budget["derived"]),
+        radiometry=tables.radiometry_rows(ctx.budget["radiometry"]),
+        skipped=tables.skipped_groups(res.get("skipped", [])),
+        n_skipped=len(res.get("skipped", [])),
         results=res,
-        radiometry=ctx.budget["radiometry"],
+        tol=res.get("tolerances") or {},
+        thumbs=target_thumbnails(ctx),
         table1=t1,
         table1_paper=is_paper,
-        plots=plots,
-        chains=chains,
-        img=img,
-        fmt=_fmt,
+        curve_files=curve_files,
+        fig=lambda name, cap, cls="": _figure_html(figs / name, cap, cls=cls),
+        bfig=lambda name, cap, cls="": _figure_html(budget_dir / name, cap, cls=cls),
+        zoom=_zoom_img,
+        fmt=tables.fmt,
     )
     write_text(path, html)

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
-from satchain.report._save import figure_api as plt  # no pyplot: no backend switch at import
-from satchain.report._save import save_figure  # noqa: E402
+from satchain.report._save import save_figure
 
 __all__ = ["plot_bars", "plot_edge", "plot_star", "plot_wedge"]
 
@@ -44,7 +44,8 @@ def _nyquist(ax, top: float = 1.05) -> None:
 
 def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     """ESF, LSF and MTF (along the edge normal) of an :class:`~satchain.measure.edge.EdgeResult`."""
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    fig = Figure(figsize=(14, 4.2))
+    axes = fig.subplots(1, 3)
     x = np.asarray(result.esf_x_px)
     near = np.abs(x) <= 12
     axes[0].plot(x[near], np.asarray(result.esf)[near], color="black")
@@ -79,7 +80,8 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
 
 def plot_star(result, path: str | Path, *, title: str = "") -> None:
     """MTF per direction (ACT, ALT, diagonals) of a :class:`~satchain.measure.star.StarResult`."""
-    fig, ax = plt.subplots(figsize=(7, 4.6))
+    fig = Figure(figsize=(7, 4.6))
+    ax = fig.subplots()
     f = np.asarray(result.f_cy_per_px)
     for k, m in result.mtf.items():
         ax.plot(f, np.asarray(m, dtype=float), label=k, **_DIRECTION_STYLE.get(k, {}))
@@ -97,7 +99,8 @@ def plot_star(result, path: str | Path, *, title: str = "") -> None:
 
 def plot_bars(result, path: str | Path, *, title: str = "") -> None:
     """CTF per bar group and the MTF from the inverse Coltman series (a ``BarsResult``)."""
-    fig, ax = plt.subplots(figsize=(7, 4.6))
+    fig = Figure(figsize=(7, 4.6))
+    ax = fig.subplots()
     f = np.asarray(result.f_cy_per_px)
     order = np.argsort(f)
     ax.plot(f[order], np.asarray(result.ctf)[order], "o-", color="tab:red", label="CTF (measured)")
@@ -122,7 +125,8 @@ def plot_wedge(result, path: str | Path, *, title: str = "", pixel_m: float | No
     """
     scale, unit = (pixel_m, "m") if pixel_m else (1.0, "px")
     lw = np.asarray(result.line_width_px) * scale
-    fig, ax = plt.subplots(figsize=(8, 4.6))
+    fig = Figure(figsize=(8, 4.6))
+    ax = fig.subplots()
     ax.plot(lw, np.asarray(result.contrast), color="black", label="contrast across the stripes")
     ax.axhline(result.threshold, color="tab:red", lw=1, ls="--", label=f"threshold {result.threshold:.0%}")
     if result.resolved_line_width_px is not None:

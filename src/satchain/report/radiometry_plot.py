@@ -4,15 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
-from satchain.radiometry import RadiometryResult, spectral_per_m_to_per_um  # noqa: E402
-from satchain.report._save import figure_api as plt  # no pyplot: no backend switch at import
-from satchain.report._save import save_figure  # noqa: E402
+from satchain.radiometry import RadiometryResult, spectral_per_m_to_per_um
+from satchain.report._save import save_figure
+from satchain.report.compare_plots import with_rc
 
 __all__ = ["plot_spectral_radiance"]
 
 
+@with_rc(8)
 def plot_spectral_radiance(
     result: RadiometryResult, path: str | Path, *, wavelength_range_m: tuple[float, float] = (2.8e-7, 2.5e-6)
 ) -> None:
@@ -24,7 +26,8 @@ def plot_spectral_radiance(
     lam = result.wavelength_m
     keep = (lam >= wavelength_range_m[0]) & (lam <= wavelength_range_m[1])
     x_um = lam[keep] * 1e6
-    fig, ax = plt.subplots(figsize=(8, 4.6))
+    fig = Figure(figsize=(8, 5))
+    ax = fig.subplots()
     ax.plot(
         x_um,
         spectral_per_m_to_per_um(result.radiance_surface_w_per_m2_sr_per_m[keep]),
@@ -46,12 +49,11 @@ def plot_spectral_radiance(
     ax.set_xlabel("wavelength (um)")
     ax.set_ylabel("spectral radiance (W m$^{-2}$ sr$^{-1}$ um$^{-1}$)")
     ax.set_title(
-        f"Spectral radiance, sun zenith {result.sun_zenith_deg:g} deg, {result.solar_spectrum}; "
+        f"Spectral radiance, sun zenith {result.sun_zenith_deg:g} deg, {result.solar_spectrum}\n"
         f"in band: surface {result.radiance_surface_band_w_per_m2_sr:.1f}, "
-        f"TOA {result.radiance_toa_band_w_per_m2_sr:.1f} W m$^{{-2}}$ sr$^{{-1}}$",
-        fontsize=9,
+        f"TOA {result.radiance_toa_band_w_per_m2_sr:.1f} W m$^{{-2}}$ sr$^{{-1}}$"
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend()
     fig.tight_layout()
-    save_figure(fig, path, dpi=130)
+    save_figure(fig, path, dpi=100)

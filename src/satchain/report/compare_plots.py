@@ -1,0 +1,301 @@
+"""Measured vs predicted figures of a run, each with a residual panel and its tolerance band.
+
+One figure per slanted edge (ESF, LSF, MTF with MTF50, MTF10 and Nyquist marked), per Siemens star (one
+style per direction), per bar target (compared and not-compared groups, the cut-off drawn) and per wedge
+(contrast against line width, the 15 % crossing marked). Inputs are :func:`satchain.report.curves.build_curves`
+output and the tolerances of the run. Figures use matplotlib's object API (no pyplot state) and fonts of at
+least 9 pt at the size the report shows them (about 100 px per inch).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+
+from satchain.report._save import save_figure
+
+__all__ = [
+    "PRINT_WIDTH_IN",
+    "RC",
+    "rc_for",
+    "with_rc",
+    "plot_bars_comparison",
+    "plot_edge_comparison",
+    "plot_star_comparison",
+    "plot_wedge_comparison",
+]
+
+#: Font sizes of every report figure (points at the displayed size, which is about the saved size).
+RC = {
+    "font.size": 10.5,
+    "axes.titlesize": 11,
+    "axes.labelsize": 10.5,
+    "legend.fontsize": 9.5,
+    "xtick.labelsize": 9.5,
+    "ytick.labelsize": 9.5,
+    "figure.titlesize": 12,
+}
+DPI = 100
+#: Width of an A4 page's text block (in): a figure wider than this is scaled down when printed.
+PRINT_WIDTH_IN = 7.2
+
+
+def rc_for(width_in: float) -> dict:
+    """Font sizes for a figure ``width_in`` wide that stay >= 9 pt on screen (1 figure px = 1 CSS px) and when
+    the figure is scaled down to an A4 text block."""
+    k = max(1.0, width_in / PRINT_WIDTH_IN)
+    small = round(9.3 * k, 1)
+    return {
+        **RC,
+        "font.size": small + 0.5,
+        "axes.labelsize": small + 0.5,
+        "axes.titlesize": small + 1,
+        "legend.fontsize": small,
+        "xtick.labelsize": small,
+        "ytick.labelsize": small,
+        "figure.titlesize": small + 2,
+    }
+
+
+MEAS, PRED, TOL = "black", "tab:red", "tab:green"
+_DIR_STYLE = {
+    "ACT": dict(color="tab:blue", marker="o", ls="-"),
+    "ALT": dict(color="tab:red", marker="s", ls="--"),
+    "D45": dict(color="tab:green", marker="^", ls="-."),
+    "D135": dict(color="tab:purple", marker="v", ls=":"),
+}
+
+
+def with_rc(width_in: float):
+    """Decorator: run a plotting function with :func:`rc_for` fonts for a figure ``width_in`` wide."""
+    import functools
+
+    def deco(fn):
+        @functools.wraps(fn)
+        def wrapper(*args, **kwargs):
+            with matplotlib.rc_context(rc_for(width_in)):
+                return fn(*args, **kwargs)
+
+        return wrapper
+
+    return deco
+
+
+def _figure(w: float, h: float, n_cols: int = 1) -> tuple[Figure, list, list]:
+    fig = Figure(figsize=(w, h), dpi=DPI, layout="constrained")
+    gs = fig.add_gridspec(2, n_cols, height_ratios=(3, 1.25))
+    top = [fig.add_subplot(gs[0, i]) for i in range(n_cols)]
+    bottom = [fig.add_subplot(gs[1, i], sharex=top[i]) for i in range(n_cols)]
+    for ax in top + bottom:
+        ax.grid(alpha=0.3)
+    return fig, top, bottom
+
+
+def _band(ax, tol: float | None, *, x=None, label: str = "tolerance") -> None:
+    ax.axhline(0, color="gray", lw=0.8)
+    if tol is not None and np.isfinite(tol):
+        if x is None:
+            ax.axhspan(-tol, tol, color=TOL, alpha=0.15, label=f"{label} ±{tol:g}")
+        else:
+            ax.fill_between(x, -tol, tol, color=TOL, alpha=0.15, label=f"{label} ±{tol:g}")
+
+
+def _save(fig: Figure, path: Path) -> None:
+    save_figure(fig, path, dpi=DPI)
+
+
+def _mark(ax, x: float, text: str, y: float = 0.5) -> None:
+    """A vertical text label beside a vertical line, inside the axes (never over the title)."""
+    ax.text(
+        x,
+        y,
+        f" {text}",
+        color="0.35",
+        fontsize=matplotlib.rcParams["legend.fontsize"],
+        rotation=90,
+        ha="right",
+        va="center",
+        transform=ax.get_xaxis_transform(),
+    )
+
+
+def _vline(ax, x, color, ls, label=None):
+    if x is not None and np.isfinite(x):
+        ax.axvline(x, color=color, ls=ls, lw=1, label=label)
+
+
+def _edge_figure() -> tuple[Figure, list, list]:
+    """ESF | LSF above, the MTF full width below, each with its residual panel underneath."""
+    fig = Figure(figsize=(PRINT_WIDTH_IN, 9.0), dpi=DPI, layout="constrained")
+    gs = fig.add_gridspec(4, 2, height_ratios=(3, 1.1, 3.4, 1.3))
+    top = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[2, :])]
+    bot = [fig.add_subplot(gs[1, i], sharex=top[i]) for i in range(2)] + [fig.add_subplot(gs[3, :], sharex=top[2])]
+    for ax in top + bot:
+        ax.grid(alpha=0.3)
+    return fig, top, bot
+
+
+def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
+    """ESF, LSF and MTF of one edge, measured vs predicted, with residuals (measured - predicted) below."""
+    with matplotlib.rc_context(rc_for(PRINT_WIDTH_IN)):
+        fig, top, bot = _edge_figure()
+        x, near = c["x_px"], np.abs(c["x_px"]) <= 6
+        for ax, r, key, lab in (
+            (top[0], bot[0], "esf", "ESF (normalised)"),
+            (top[1], bot[1], "lsf", "LSF (1/px)"),
+        ):
+            ax.plot(x[near], c[key + "_measured"][near], color=MEAS, lw=1.4, label="measured")
+            ax.plot(x[near], c[key + "_predicted"][near], color=PRED, ls="--", lw=1.4, label="predicted")
+            ax.set_ylabel(lab)
+            ax.legend(loc="best")
+            r.plot(x[near], c[key + "_measured"][near] - c[key + "_predicted"][near], color=MEAS, lw=1)
+            _band(r, None)
+            r.set_xlabel("distance from edge (px)")
+            r.set_ylabel("meas. - pred.")
+        f, mm, mp = c["f_cy_per_px"], c["mtf_measured"], c["mtf_predicted"]
+        ax = top[2]
+        ax.plot(f, mm, color=MEAS, lw=1.4, label="measured (e-SFR)")
+        ax.plot(f, mp, color=PRED, ls="--", lw=1.4, label="predicted")
+        ax.axvline(0.5, color="gray", lw=1)
+        _mark(ax, 0.5, "Nyquist", 0.72)
+        nm, npred = c["nyquist"]
+        for (fm, fp), lvl, mk, name in (
+            (c["mtf50"], 0.5, "o", "MTF50"),
+            (c["mtf10"], 0.1, "s", "MTF10"),
+            ((0.5, 0.5), None, "D", "at Nyquist"),
+        ):
+            ys = (nm, npred) if lvl is None else (lvl, lvl)
+            for fv, yv, col in ((fm, ys[0], MEAS), (fp, ys[1], PRED)):
+                if fv is not None and yv is not None:
+                    ax.plot([fv], [yv], mk, color=col, mfc="none", ms=8, mew=1.5)
+            ax.plot([], [], mk, color="0.3", mfc="none", ms=8, label=name)
+        ax.set_xlim(0, min(1.0, float(f.max())))
+        ax.set_ylim(0, 1.08)
+        ax.set_ylabel("MTF")
+        ax.legend(loc="upper right")
+        r = bot[2]
+        ok = f <= 1.0
+        r.plot(f[ok], (mm - mp)[ok], color=MEAS, lw=1)
+        _band(r, tol, label="tol. at Nyquist")
+        r.axvline(0.5, color="gray", lw=1)
+        r.set_xlabel("frequency along the edge normal (cy/px)")
+        r.set_ylabel("meas. - pred.")
+        r.legend(loc="lower left")
+        for ax, t in zip(top, ("edge spread function", "line spread function", "MTF along the normal"), strict=True):
+            ax.set_title(t)
+        ang = c.get("angle_deg")
+        fig.suptitle(f"Slanted edge {c['id']} ({c['direction']}{'' if ang is None else f', {ang:.2f}°'})")
+        _save(fig, path)
+
+
+def plot_star_comparison(st: dict, path: Path, *, tol: float | None) -> None:
+    """Siemens-star MTF per direction: measured (markers), predicted (lines), residuals with the band."""
+    with matplotlib.rc_context(rc_for(8.5)):
+        fig, (ax,), (r,) = _figure(8.5, 6.4)
+        f = np.asarray(st["f_cy_per_px"], float)
+        for d, curve in (st.get("mtf_measured") or {}).items():
+            sty = _DIR_STYLE.get(d, dict(color="gray", marker="x", ls="-"))
+            meas = np.asarray(curve, float)
+            pred = np.asarray(st["directions"][d]["mtf_predicted"], float)
+            ax.plot(f, meas, sty["marker"], color=sty["color"], ms=4, mfc="none", label=f"{d} measured")
+            ax.plot(f, pred, ls=sty["ls"], color=sty["color"], lw=1.4, label=f"{d} predicted")
+            r.plot(f, meas - pred, ls=sty["ls"], marker=sty["marker"], ms=3, color=sty["color"], lw=1)
+        lo, hi = 0.05, 0.5
+        r.fill_between([lo, hi], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g} (checked)")
+        r.axhline(0, color="gray", lw=0.8)
+        for a in (ax, r):
+            a.axvline(0.5, color="gray", lw=1)
+        _mark(ax, 0.5, "Nyquist", 0.45)
+        ax.set_xlim(0, min(0.8, float(np.nanmax(f)) if f.size else 0.8))
+        ax.set_ylim(-0.05, 1.08)
+        ax.set_ylabel("MTF")
+        ax.set_title(f"Siemens star {st['id']}: MTF per direction")
+        ax.legend(ncol=2, loc="upper right")
+        r.set_ylim(-max(3 * (tol or 0.05), 0.1), max(3 * (tol or 0.05), 0.1))
+        r.set_xlabel("frequency along the direction (cy/px)")
+        r.set_ylabel("meas. - pred.")
+        r.legend(loc="lower left")
+        _save(fig, path)
+
+
+def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
+    """Bar-target CTF: compared groups (filled), groups beyond the cut-off (hollow, not compared), the cut-off,
+    Coltman's prediction and the paper's method; residuals of the compared groups with the band."""
+    with matplotlib.rc_context(rc_for(8.5)):
+        fig, (ax,), (r,) = _figure(8.5, 6.4)
+        f = np.asarray(b["f_cy_per_px"], float)
+        order = np.argsort(f)
+        f = f[order]
+        meas = np.asarray(b["ctf_measured"], float)[order]
+        col = np.asarray(b["ctf_coltman_predicted"], float)[order]
+        pap = np.asarray(b["ctf_fourier_synthesis_predicted"], float)[order]
+        lim = float(b.get("compared_up_to_cy_per_px") or 0.2)
+        cmp_ = f <= lim
+        ax.plot(f, col, "-", color=PRED, lw=1.4, label="predicted CTF (Coltman)")
+        ax.plot(f, pap, ":", color="tab:blue", lw=1.4, label="predicted, the paper's method")
+        ax.plot(f[cmp_], meas[cmp_], "o", color=MEAS, ms=7, label="measured, compared")
+        if (~cmp_).any():
+            ax.plot(f[~cmp_], meas[~cmp_], "o", color="gray", mfc="none", ms=7, label="measured, not compared")
+        for a in (ax, r):
+            a.axvline(lim, color="tab:orange", ls="--", lw=1.2)
+            a.axvspan(lim, max(0.55, float(f.max()) * 1.05), color="0.9", zorder=0)
+            a.axvline(0.5, color="gray", lw=1)
+        ax.text(
+            lim,
+            0.02,
+            f" cut-off {lim:g} cy/px (< {1 / lim:g} px per period:\n not compared, the result depends on phase)",
+            color="tab:orange",
+            va="bottom",
+        )
+        _mark(ax, 0.5, "Nyquist", 0.4)
+        ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
+        ax.set_ylim(0, 1.15)
+        ax.set_ylabel("CTF (bar modulation)")
+        ax.set_title(f"Bar target {b['id']} ({b.get('direction', '')}): CTF per bar group")
+        ax.legend(loc="upper right")
+        r.plot(f[cmp_], (meas - col)[cmp_], "o", color=MEAS, ms=6)
+        if (~cmp_).any():
+            r.plot(f[~cmp_], (meas - col)[~cmp_], "o", color="gray", mfc="none", ms=6)
+        r.fill_between([0, lim], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g}")
+        r.axhline(0, color="gray", lw=0.8)
+        r.set_xlabel("bar frequency = 1 / period (cy/px)")
+        r.set_ylabel("meas. - Coltman")
+        r.legend(loc="lower left")
+        _save(fig, path)
+
+
+def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None:
+    """Wedge contrast against line width (wide end left), the threshold, the measured and predicted crossings
+    and the tolerance band around the predicted resolution; the contrast residual below."""
+    with matplotlib.rc_context(rc_for(8.5)):
+        fig, (ax,), (r,) = _figure(8.5, 6.4)
+        lw, meas, pred = w["line_width_m"], w["contrast_measured"], w["ctf_coltman_predicted"]
+        thr, res, rp = w["threshold"], w.get("resolution_m"), w.get("resolution_predicted_m")
+        ax.plot(lw, meas, color=MEAS, lw=1.4, label="measured contrast across the stripes")
+        ax.plot(lw, pred, color=PRED, ls="--", lw=1.4, label="predicted (Coltman CTF across the stripes)")
+        ax.axhline(thr, color="tab:orange", lw=1.2, label=f"threshold {thr:.0%}")
+        for a in (ax, r):
+            if rp is not None and np.isfinite(rp) and tol_rel:
+                a.axvspan(rp * (1 - tol_rel), rp * (1 + tol_rel), color=TOL, alpha=0.15)
+            _vline(a, rp, PRED, "--")
+            _vline(a, res, MEAS, "-")
+            a.axvline(w["gsd_m"], color="gray", lw=1, ls=":")
+        if res is not None:
+            ax.plot([res], [thr], "o", color=MEAS, ms=8, label=f"measured resolution {res * 100:.1f} cm")
+        if rp is not None and np.isfinite(rp):
+            lab = f"predicted {rp * 100:.1f} cm" + (f", band ±{tol_rel:.0%}" if tol_rel else "")
+            ax.plot([rp], [thr], "D", color=PRED, mfc="none", ms=8, label=lab)
+        _mark(ax, w["gsd_m"], f"GSD {w['gsd_m'] * 100:.0f} cm", 0.45)
+        ax.set_xlim(float(np.max(lw)), float(np.min(lw)))
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("contrast")
+        ax.set_title(f"Hyperbolic wedge {w['id']} ({w.get('axis', '')}): the paper's contrast scan")
+        ax.legend(loc="upper right")
+        r.plot(lw, meas - pred, color=MEAS, lw=1)
+        r.axhline(0, color="gray", lw=0.8)
+        r.set_xlabel("line width (m); the scan runs from the wide end (left)")
+        r.set_ylabel("meas. - pred.")
+        _save(fig, path)

@@ -1,0 +1,324 @@
+"""Every measured and predicted curve of a run, as arrays (for the report's figures) and as CSV files.
+
+:func:`build_curves` gathers, per target, the measured curve and the prediction evaluated the way the
+measurement sees it (the same conventions as :mod:`satchain.comparison`); :func:`write_curves` writes
+one CSV per curve family into ``curves/`` beside ``results.json``, with a header naming every column and its
+unit. The edge ESF and LSF are not part of the measurement summary, so the edge is measured again here on
+the same region of interest (identical numbers: the e-SFR is deterministic).
+
+The predicted LSF along an edge normal ``n`` is the inverse Fourier transform of the (real, even) system
+OTF along ``n``: ``LSF(x) = 2 * integral_0^fc OTF(f n) cos(2 pi f x) df`` (x, f in pixels and cycles per
+pixel); the predicted ESF is its running integral, normalised from 0 (dark side) to 1 (bright side).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from satchain import ctf as _ctf
+from satchain import units
+from satchain.report._save import write_text
+
+__all__ = ["CSV_FAMILIES", "build_curves", "crossing", "predicted_lsf", "write_curves"]
+
+#: CSV file names (under ``curves/``), one per curve family.
+CSV_FAMILIES = (
+    "edges_esf_lsf.csv",
+    "edges_mtf.csv",
+    "star_mtf.csv",
+    "bars_ctf.csv",
+    "wedge_contrast.csv",
+    "system_mtf_ctf.csv",
+)
+
+_DIRECTIONS = {
+    "ACT": (1.0, 0.0),
+    "ALT": (0.0, 1.0),
+    "D45": (math.sqrt(0.5), math.sqrt(0.5)),
+    "D135": (math.sqrt(0.5), -math.sqrt(0.5)),
+}
+
+
+def crossing(f, m, level: float) -> float | None:
+    """First frequency where the curve ``m(f)`` falls to ``level`` (linear interpolation); None if never."""
+    f, m = np.asarray(f, float), np.asarray(m, float)
+    ok = np.isfinite(m)
+    f, m = f[ok], m[ok]
+    below = np.nonzero(m <= level)[0]
+    if below.size == 0 or below[0] == 0:
+        return None
+    i = below[0]
+    f0, f1, m0, m1 = f[i - 1], f[i], m[i - 1], m[i]
+    return float(f0 + (level - m0) * (f1 - f0) / (m1 - m0)) if m1 != m0 else float(f1)
+
+
+def _signed_axis_otf(otf, direction: tuple[float, float]):
+    """Real part of the system OTF along a unit direction, as a function of cycles/pixel; its cut-off."""
+    s = otf.system
+    pitch_m = math.sqrt(s.detector.pitch_x_m * s.detector.pitch_y_m)
+    n = math.hypot(*direction)
+    ux, uy = direction[0] / n, direction[1] / n
+
+    def along(f_cy_per_px):
+        f_mm = units.cy_per_px_to_cy_per_mm(np.asarray(f_cy_per_px, float), pitch_m=pitch_m)
+        return np.real(otf(f_mm * ux, f_mm * uy))
+
+    fc = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=pitch_m))
+    return along, fc
+
+
+def predicted_lsf(otf, direction: tuple[float, float], x_px) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted LSF (1/px, unit area) and ESF (0..1) at distances ``x_px`` along ``direction``."""
+    along, fc = _signed_axis_otf(otf, direction)
+    f = np.linspace(0.0, min(fc, 4.0), 1601)
+    w = np.full(f.size, f[1] - f[0])
+    w[[0, -1]] *= 0.5
+    x = np.asarray(x_px, float)
+    lsf = 2.0 * (np.cos(2 * np.pi * np.outer(x, f)) @ (along(f) * w))
+    esf = np.concatenate([[0.0], np.cumsum(0.5 * (lsf[1:] + lsf[:-1]) * np.diff(x))])
+    esf = (esf - esf[0]) / (esf[-1] - esf[0]) if esf[-1] != esf[0] else esf
+    return lsf, esf
+
+
+def _edge_curves(ctx, res: dict) -> list[dict]:
+    from satchain.measure import measure_edge
+
+    truth = {it["id"]: it for it in ctx.truth["items"]}
+    by_id = {e["id"]: e for e in (ctx.measured or {}).get("slanted_edges", [])}
+    out = []
+    for e in res.get("slanted_edges", []):
+        m = by_id.get(e["id"], {})
+        roi = m.get("roi_px")
+        if roi is None:
+            continue
+        r = measure_edge(np.asarray(ctx.image, float), roi=roi, pixel_m=ctx.system.gsd_act_m)
+        t = truth.get(e["id"], {})
+        normal = t.get("normal_to_bright", (1.0, 0.0) if e["direction"] == "ACT" else (0.0, 1.0))
+        x = np.asarray(r.esf_x_px, float)
+        lsf_p, esf_p = predicted_lsf(ctx.otf, tuple(normal), x)
+        esf_m = np.asarray(r.esf, float)
+        if esf_m[-1] < esf_m[0]:  # the measured ESF falls: compare like with like
+            esf_p, lsf_p = esf_p[::-1].copy(), lsf_p[::-1].copy()
+        f = np.asarray(e["f_cy_per_px"], float)
+        mm, mp = np.asarray(e["mtf_measured"], float), np.asarray(e["mtf_predicted"], float)
+        out.append(
+            {
+                "id": e["id"],
+                "direction": e["direction"],
+                "angle_deg": e.get("angle_deg"),
+                "x_px": x,
+                "esf_measured": esf_m,
+                "esf_predicted": esf_p,
+                "lsf_measured": np.asarray(r.lsf, float),
+                "lsf_predicted": lsf_p,
+                "f_cy_per_px": f,
+                "mtf_measured": mm,
+                "mtf_predicted": mp,
+                "mtf50": (crossing(f, mm, 0.5), crossing(f, mp, 0.5)),
+                "mtf10": (crossing(f, mm, 0.1), crossing(f, mp, 0.1)),
+                "nyquist": (e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")),
+                "sigma": e.get("mtf_at_nyquist_sigma", m.get("mtf_at_nyquist_std")),
+            }
+        )
+    return out
+
+
+def _wedge_curves(ctx, res: dict) -> list[dict]:
+    from satchain.prediction import AxisMTF, system_mtf_cy_per_px
+
+    by_id = {w["id"]: w for w in (ctx.measured or {}).get("hyperbolic_wedge", [])}
+    out = []
+    for w in res.get("hyperbolic_wedge", []):
+        m = by_id.get(w["id"], {})
+        lw = m.get("line_width_m")
+        if lw is None or w.get("contrast") is None:
+            continue
+        lw = np.asarray(lw, float)
+        gsd = float(w.get("gsd_m") or ctx.system.gsd_m)
+        axis = _DIRECTIONS.get(str(w.get("axis", "ALT")).upper(), (0.0, 1.0))
+        pred = np.asarray(_ctf.coltman_ctf(gsd / (2.0 * lw), AxisMTF(system_mtf_cy_per_px(ctx.otf), axis)), float)
+        out.append(
+            {
+                "id": w["id"],
+                "axis": w.get("axis"),
+                "line_width_m": lw,
+                "position_m": np.asarray(w.get("position_m") or m.get("position_m_along_wedge") or lw * np.nan),
+                "contrast_measured": np.asarray(w["contrast"], float),
+                "ctf_coltman_predicted": pred,
+                "threshold": float(w.get("threshold") or 0.15),
+                "resolution_m": w.get("resolution_m"),
+                "resolution_predicted_m": w.get("resolution_predicted_m"),
+                "gsd_m": gsd,
+            }
+        )
+    return out
+
+
+def build_curves(ctx) -> dict[str, Any]:
+    """Measured and predicted curves of every target of a run (arrays; see :func:`write_curves`)."""
+    res = ctx.comparison["results"]
+    b = ctx.budget or {}
+    return {
+        "edges": _edge_curves(ctx, res),
+        "stars": list(res.get("siemens_star", [])),
+        "bars": list(res.get("bar_targets", [])),
+        "wedges": _wedge_curves(ctx, res),
+        "system": {
+            "f_cy_per_mm": b.get("frequencies_cy_per_mm"),
+            "f_cy_per_px": b.get("frequencies_cy_per_px"),
+            "mtf": b.get("mtf", {}),
+            "ctf": b.get("ctf", {}),
+        },
+    }
+
+
+def _csv(path: Path, header: list[str], columns: list[list], comment: str) -> None:
+    lines = [f"# {comment}", ",".join(header)]
+    for row in zip(*columns, strict=True):
+        lines.append(",".join(_cell(v) for v in row))
+    write_text(path, "\n".join(lines) + "\n")
+
+
+def _cell(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, str):
+        return v
+    v = float(v)
+    return "" if not math.isfinite(v) else f"{v:.7g}"
+
+
+def _rep(v, n: int) -> list:
+    return [v] * n
+
+
+def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
+    """One CSV per curve family (:data:`CSV_FAMILIES`) into ``out_dir``; returns the paths written.
+
+    Empty cells are values that do not exist (NaN, or a measurement that was not made)."""
+    d = Path(out_dir)
+    cols: dict[str, tuple[list[str], list[list], str]] = {}
+    e = curves["edges"]
+    cols["edges_esf_lsf.csv"] = (
+        [
+            "edge_id",
+            "direction",
+            "x_px",
+            "esf_measured",
+            "esf_predicted",
+            "lsf_measured_per_px",
+            "lsf_predicted_per_px",
+        ],
+        _stack(e, ["id", "direction"], ["x_px", "esf_measured", "esf_predicted", "lsf_measured", "lsf_predicted"]),
+        "slanted edges: ESF (normalised 0..1) and LSF (1/px) along the edge normal; x_px from the edge",
+    )
+    cols["edges_mtf.csv"] = (
+        ["edge_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_predicted"],
+        _stack(e, ["id", "direction"], ["f_cy_per_px", "mtf_measured", "mtf_predicted"]),
+        "slanted edges: e-SFR (measured) and system MTF along the edge normal (predicted); Nyquist = 0.5 cy/px",
+    )
+    cols["star_mtf.csv"] = _star_columns(curves["stars"])
+    cols["bars_ctf.csv"] = _bars_columns(curves["bars"])
+    cols["wedge_contrast.csv"] = (
+        ["wedge_id", "axis", "position_m", "line_width_m", "contrast_measured", "ctf_coltman_predicted"],
+        _stack(
+            curves["wedges"],
+            ["id", "axis"],
+            ["position_m", "line_width_m", "contrast_measured", "ctf_coltman_predicted"],
+        ),
+        "hyperbolic wedges: contrast across the stripes along the wedge, and the predicted Coltman CTF",
+    )
+    cols["system_mtf_ctf.csv"] = _system_columns(curves["system"])
+    written = []
+    for name in CSV_FAMILIES:
+        header, columns, comment = cols[name]
+        _csv(d / name, header, columns, comment)
+        written.append(d / name)
+    return written
+
+
+def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
+    rows: list[list] = [[], [], [], [], []]
+    for st in stars:
+        f = list(st.get("f_cy_per_px", []))
+        for dname, curve in (st.get("mtf_measured") or {}).items():
+            pred = (st.get("directions") or {}).get(dname, {}).get("mtf_predicted", _rep(None, len(f)))
+            for c, v in zip(
+                rows, (_rep(st["id"], len(f)), _rep(dname, len(f)), f, list(curve), list(pred)), strict=True
+            ):
+                c.extend(v)
+    return (
+        ["star_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_predicted"],
+        rows,
+        "Siemens star: MTF per direction (ACT, ALT, diagonals), measured and predicted",
+    )
+
+
+def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
+    rows = [[] for _ in range(8)]
+    for br in bars:
+        f = list(br.get("f_cy_per_px", []))
+        lim = br.get("compared_up_to_cy_per_px", 0.2)
+        n = len(f)
+        vals = (
+            _rep(br["id"], n),
+            _rep(br.get("direction"), n),
+            f,
+            br.get("ctf_measured", _rep(None, n)),
+            br.get("ctf_coltman_predicted", _rep(None, n)),
+            br.get("ctf_fourier_synthesis_predicted", _rep(None, n)),
+            br.get("mtf_from_ctf_measured", _rep(None, n)),
+            ["yes" if fi <= lim else "no" for fi in f],
+        )
+        for c, v in zip(rows, vals, strict=True):
+            c.extend(v)
+    return (
+        [
+            "bars_id",
+            "direction",
+            "f_cy_per_px",
+            "ctf_measured",
+            "ctf_coltman_predicted",
+            "ctf_paper_method_predicted",
+            "mtf_from_ctf_measured",
+            "compared",
+        ],
+        rows,
+        "bar targets: CTF per bar group; compared = whether the group enters the pass/fail check",
+    )
+
+
+def _stack(items: list[dict], labels: list[str], arrays: list[str]) -> list[list]:
+    out: list[list] = [[] for _ in range(len(labels) + len(arrays))]
+    for it in items:
+        n = len(it[arrays[0]])
+        for i, k in enumerate(labels):
+            out[i].extend(_rep(it.get(k), n))
+        for j, k in enumerate(arrays):
+            out[len(labels) + j].extend(list(np.asarray(it[k], float)))
+    return out
+
+
+def _system_columns(sysc: dict) -> tuple[list[str], list[list], str]:
+    f_mm = list(np.asarray(sysc.get("f_cy_per_mm") if sysc.get("f_cy_per_mm") is not None else [], float))
+    n = len(f_mm)
+    header, columns = ["f_cy_per_mm"], [f_mm]
+    f_px = sysc.get("f_cy_per_px") or {}
+    for d in ("alt", "act"):
+        if isinstance(f_px, dict) and f_px.get(d) is not None and len(f_px[d]) == n:
+            header.append(f"f_cy_per_px_{d}")
+            columns.append(list(f_px[d]))
+    for d in ("alt", "act"):
+        for comp, vals in (sysc.get("mtf") or {}).get(d, {}).items():
+            if np.ndim(vals) == 1 and len(vals) == n:
+                header.append(f"mtf_{comp}_{d}")
+                columns.append(list(vals))
+        for kind, vals in (sysc.get("ctf") or {}).get(d, {}).items():
+            if np.ndim(vals) == 1 and len(vals) == n:
+                header.append(f"ctf_{kind}_{d}")
+                columns.append(list(vals))
+    return header, columns, "MTF budget: every component and the system, ALT and ACT, and the system CTF"

@@ -1,0 +1,180 @@
+"""The simulated image with every target's region drawn and labelled, and per-target thumbnails at ground
+truth, focal plane and detector (PNG bytes at native resolution, for the report's click-to-zoom).
+
+All three stages of a thumbnail share one grey scale, reflectance 0..1: the detector image is converted
+with the run's radiometric calibration (``measured["calibration"]``: offset and gain fitted to the truth's
+uniform areas), or stretched between its 0.5 and 99.5 percentiles when there is none.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+from satchain.report._save import save_figure
+from satchain.report.compare_plots import rc_for
+
+__all__ = ["GALLERY_KINDS", "plot_image_with_rois", "target_thumbnails"]
+
+#: Measurement targets (every one is shown) and real-world objects (the first of each kind is shown).
+GALLERY_KINDS = ("slanted_edge", "siemens_star", "bar_target", "hyperbolic_wedge")
+OBJECT_KINDS = ("car", "wagon", "house", "railway")
+_COLOURS = {
+    "slanted_edge": "tab:red",
+    "bar_target": "tab:orange",
+    "hyperbolic_wedge": "tab:green",
+    "siemens_star": "tab:blue",
+}
+_OBJECT_COLOUR = "#d0d000"
+#: Largest side of a native-resolution crop (px); larger crops are block-averaged by an integer factor.
+MAX_SIDE_PX = 2000
+#: Smallest extent shown around an object (m), so that a car is seen with its surroundings.
+MIN_EXTENT_M = 12.0
+
+
+def _to_reflectance(ctx):
+    """Detector DN -> reflectance, with the run's calibration (or a percentile stretch)."""
+    cal = (ctx.measured or {}).get("calibration") or {}
+    img = np.asarray(ctx.image, float)
+    gain, offset = cal.get("gain"), cal.get("offset")
+    if gain:
+        return (img - float(offset or 0.0)) / float(gain)
+    lo, hi = np.percentile(img, [0.5, 99.5])
+    return (img - lo) / max(hi - lo, 1e-12)
+
+
+def plot_image_with_rois(ctx, path: Path) -> None:
+    """The simulated image (detector samples) with every measured target's region of interest drawn and
+    labelled, and every other object outlined by kind."""
+    img = _to_reflectance(ctx)
+    gsd = float(ctx.system.gsd_act_m)
+    h, w = img.shape
+    rois = {}
+    for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge"):
+        for m in (ctx.measured or {}).get(key, []):
+            if m.get("roi_px") is not None:
+                rois[m["id"]] = m["roi_px"]
+    scale = min(820.0 / w, 1150.0 / h, 3.0)
+    width_in = w * scale / 100 + 1.0
+    with matplotlib.rc_context(rc_for(width_in)):
+        fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100, layout="constrained")
+        ax = fig.add_subplot()
+        ax.imshow(img, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, w * gsd, h * gsd, 0))
+        seen = set()
+        for it in ctx.truth["items"]:
+            x0, y0, x1, y1 = it["bbox_m"]
+            kind = it["kind"]
+            if kind in _COLOURS:
+                c = _COLOURS[kind]
+                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
+                if it["id"] in rois:
+                    rx0, ry0, rx1, ry1 = rois[it["id"]]
+                    ax.add_patch(
+                        Rectangle(
+                            (rx0 * gsd, ry0 * gsd), (rx1 - rx0) * gsd, (ry1 - ry0) * gsd, fill=False, ec=c, lw=1.6
+                        )
+                    )
+                ax.text(
+                    x0,
+                    y0 - 0.6,
+                    it["id"],
+                    color="white",
+                    va="bottom",
+                    bbox=dict(facecolor=c, edgecolor="none", pad=1.2, alpha=0.85),
+                )
+            else:
+                lab = kind if kind not in seen else None
+                seen.add(kind)
+                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
+        ax.set_xlabel("x, across-track (m)")
+        ax.set_ylabel("y, along-track (m)")
+        ax.set_title(f"Simulated image, GSD {gsd * 100:.0f} cm")
+        if seen:
+            ax.legend(loc="upper right", title="other objects", framealpha=0.85)
+        save_figure(fig, path, dpi=100)
+
+
+def _png(arr: np.ndarray) -> tuple[bytes, int, int]:
+    """Reflectance 0..1 -> 8-bit grey PNG bytes (block-averaged down to ``MAX_SIDE_PX``)."""
+    from PIL import Image
+
+    k = max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
+    if k > 1:
+        h, w = (arr.shape[0] // k) * k, (arr.shape[1] // k) * k
+        arr = arr[:h, :w].reshape(h // k, k, w // k, k).mean(axis=(1, 3))
+    u8 = np.clip(np.round(np.nan_to_num(arr) * 255.0), 0, 255).astype(np.uint8)
+    buf = io.BytesIO()
+    Image.fromarray(u8, mode="L").save(buf, format="PNG", optimize=True)
+    return buf.getvalue(), u8.shape[1], u8.shape[0]
+
+
+def _crop(image: np.ndarray, box_m, pixel_m: float, origin_m=(0.0, 0.0)) -> np.ndarray:
+    x0, y0, x1, y1 = box_m
+    ox, oy = origin_m
+    r0, c0 = max(int(math.floor((y0 - oy) / pixel_m)), 0), max(int(math.floor((x0 - ox) / pixel_m)), 0)
+    r1 = min(int(math.ceil((y1 - oy) / pixel_m)), image.shape[0])
+    c1 = min(int(math.ceil((x1 - ox) / pixel_m)), image.shape[1])
+    return image[r0:r1, c0:c1]
+
+
+def _scene(ctx):
+    sc = getattr(ctx, "scene", None)
+    if sc is not None:
+        return sc
+    from satchain.scene import load_layout
+
+    return load_layout(ctx.config.layout_source())
+
+
+def _box(it: dict, extent: tuple[float, float]) -> tuple[float, float, float, float]:
+    """The item's box, widened to at least MIN_EXTENT_M for small objects, clipped to the scene."""
+    x0, y0, x1, y1 = it["bbox_m"]
+    if it["kind"] not in GALLERY_KINDS:
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+        hw, hh = max(x1 - x0, MIN_EXTENT_M) / 2, max(y1 - y0, MIN_EXTENT_M) / 2
+        x0, x1, y0, y1 = cx - hw, cx + hw, cy - hh, cy + hh
+    return max(x0, 0.0), max(y0, 0.0), min(x1, extent[0]), min(y1, extent[1])
+
+
+def _chosen_items(ctx) -> list[dict]:
+    items = [it for it in ctx.truth["items"] if it["kind"] in GALLERY_KINDS]
+    for kind in OBJECT_KINDS:
+        first = next((it for it in ctx.truth["items"] if it["kind"] == kind), None)
+        if first is not None:
+            items.append(first)
+    return items
+
+
+def target_thumbnails(ctx) -> list[dict]:
+    """Per shown item: id, kind, box (m) and three panels (ground truth, focal plane, detector), each a dict
+    with ``title``, ``png`` (bytes), ``width``/``height`` (px) and ``pixel_m``."""
+    p = float(ctx.config.scene.pixel_m)
+    scene = _scene(ctx)
+    fp_pixel = p * float(ctx.simulator.D)
+    gsd = float(ctx.system.gsd_act_m)
+    det = _to_reflectance(ctx)
+    extent = (ctx.image.shape[1] * gsd, ctx.image.shape[0] * gsd)
+    out = []
+    for it in _chosen_items(ctx):
+        box = _box(it, extent)
+        x0, y0, x1, y1 = box
+        win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
+        panels = []
+        for title, arr, pix in (
+            ("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p),
+            ("focal plane", _crop(np.asarray(ctx.focal_plane, float), box, fp_pixel), fp_pixel),
+            ("detector", _crop(det, box, gsd), gsd),
+        ):
+            if arr.size == 0:
+                continue
+            png, wpx, hpx = _png(arr)
+            shown_pix = pix * max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
+            panels.append({"title": title, "png": png, "width": wpx, "height": hpx, "pixel_m": shown_pix})
+        out.append({"id": it["id"], "kind": it["kind"], "box_m": box, "panels": panels})
+    return out

@@ -1,0 +1,393 @@
+"""Tables of the HTML report in words and units: key figures, the measured-vs-predicted summary, camera
+inputs, derived quantities, radiometry, the paper's results beside satchain's, and the not-measured list
+grouped by reason. Everything is read defensively (``.get``) from ``results.json`` and the budget, so keys
+added later (a format version, an overall pass flag, ``"n/a"`` statuses, ``*_sigma`` fields) are tolerated.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "PAPER",
+    "PAPER_CITATION",
+    "camera_rows",
+    "derived_rows",
+    "fmt",
+    "key_figures",
+    "paper_rows",
+    "radiometry_rows",
+    "skipped_groups",
+    "summary_rows",
+    "verdict",
+]
+
+PAPER_CITATION = (
+    "“Spatial resolution and modulation transfer function analyses for satellite imaging” "
+    "(AnkaraSat-3 image-chain study; text in shared/reference/paper.txt)"
+)
+#: The paper's own results that satchain reproduces (values as printed in the paper).
+PAPER = {"mtf_at_nyquist_alt": 0.1228, "wedge_resolution_m": 0.525, "gsd_m": 0.49}
+_DIR_WORDS = {"ACT": "across-track", "ALT": "along-track", "D45": "diagonal 45°", "D135": "diagonal 135°"}
+
+
+def fmt(v, digits: int = 3, *, unit: str = "", signed: bool = False) -> str:
+    """A number with fixed decimals (no exponent for ordinary magnitudes), or an en dash when missing."""
+    if v is None or isinstance(v, str):
+        return "–" if v is None else v
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return str(v)
+    if not math.isfinite(x):
+        return "–"
+    s = f"{x:+.{digits}f}" if signed else f"{x:.{digits}f}"
+    return f"{s} {unit}".rstrip()
+
+
+def _status(p) -> str:
+    """'pass', 'fail' or 'n/a' from a pass field (True/False/None/'n/a')."""
+    if p is True:
+        return "pass"
+    if p is False:
+        return "fail"
+    return "n/a"
+
+
+def _num(v) -> float | None:
+    """A finite float, or None for anything else (None, NaN, "n/a", ...)."""
+    if isinstance(v, bool):
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _diff(m, p) -> float | None:
+    m, p = _num(m), _num(p)
+    return None if m is None or p is None else m - p
+
+
+def _mean(vals) -> float | None:
+    v = [x for x in (_num(x) for x in vals) if x is not None]
+    return float(np.mean(v)) if v else None
+
+
+def verdict(res: dict) -> dict[str, Any]:
+    """Overall result: results' own ``passed`` when present, else all compared checks passed."""
+    st = [_status(r.get("pass")) for r in res.get("summary", [])]
+    n_pass, n_fail = st.count("pass"), st.count("fail")
+    passed = res.get("passed")
+    if not isinstance(passed, bool):
+        passed = n_fail == 0 and n_pass > 0
+    return {"passed": passed, "n_pass": n_pass, "n_fail": n_fail, "n_na": st.count("n/a"), "n": len(st)}
+
+
+def key_figures(res: dict, budget: dict) -> list[dict]:
+    """GSD, MTF at Nyquist (ACT/ALT, predicted and measured), SNR and NIIRS, as label/predicted/measured."""
+    edges = res.get("slanted_edges", [])
+    mtf_n = res.get("mtf_at_nyquist") or {}
+    niirs = res.get("niirs") or {}
+    rad = res.get("radiometry") or {}
+
+    def edge_mean(d):
+        return _mean(e.get("mtf_at_nyquist_measured") for e in edges if e.get("direction") == d)
+
+    return [
+        {"label": "GSD", "predicted": fmt(res.get("gsd_m"), 3, unit="m"), "measured": "(geometry)"},
+        {
+            "label": "MTF at Nyquist, across-track",
+            "predicted": fmt(mtf_n.get("act")),
+            "measured": fmt(edge_mean("ACT")),
+        },
+        {"label": "MTF at Nyquist, along-track", "predicted": fmt(mtf_n.get("alt")), "measured": fmt(edge_mean("ALT"))},
+        {"label": "scene SNR (albedo 0.2)", "predicted": fmt(rad.get("snr"), 1), "measured": "–"},
+        {
+            "label": "contrast SNR (GIQE)",
+            "predicted": fmt(niirs.get("snr_predicted"), 1),
+            "measured": fmt(niirs.get("snr_measured"), 1),
+        },
+        {
+            "label": "NIIRS (GIQE 5)",
+            "predicted": fmt(niirs.get("giqe5_predicted"), 2),
+            "measured": fmt(niirs.get("giqe5_measured"), 2),
+        },
+    ]
+
+
+def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=True):
+    return {
+        "quantity": quantity,
+        "target": target,
+        "measured": fmt(meas, digits, unit=unit),
+        "predicted": fmt(pred, digits, unit=unit),
+        "difference": fmt(diff, digits, unit=unit, signed=signed),
+        "tolerance": tol,
+        "status": _status(p),
+    }
+
+
+def _mtf_rows(res: dict, tol: dict) -> list[dict]:
+    """Rows of the edges, stars and bars."""
+    rows = []
+    for e in res.get("slanted_edges", []):
+        m, p = e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")
+        d = _diff(m, p)
+        rows.append(
+            _row(
+                f"MTF at Nyquist, {_DIR_WORDS.get(e.get('direction'), e.get('direction'))}",
+                f"slanted edge {e['id']}",
+                m,
+                p,
+                d,
+                f"± {fmt(tol.get('edge_mtf_at_nyquist'), 3)}",
+                e.get("pass"),
+            )
+        )
+    for st in res.get("siemens_star", []):
+        rows.append(
+            _row(
+                "largest MTF difference up to Nyquist, all directions",
+                f"Siemens star {st['id']}",
+                None,
+                None,
+                st.get("max_abs_error_to_nyquist"),
+                f"≤ {fmt(tol.get('star_mtf'), 3)}",
+                st.get("pass"),
+                signed=False,
+            )
+        )
+    for b in res.get("bar_targets", []):
+        lim = b.get("compared_up_to_cy_per_px")
+        q = "largest CTF difference to Coltman's CTF" + (f" (groups ≤ {lim:g} cy/px)" if lim else "")
+        rows.append(
+            _row(
+                q,
+                f"bar target {b['id']}",
+                None,
+                None,
+                b.get("max_abs_error"),
+                f"≤ {fmt(tol.get('bar_ctf'), 3)}",
+                b.get("pass"),
+                signed=False,
+            )
+        )
+    return rows
+
+
+def _resolution_rows(res: dict, tol: dict) -> list[dict]:
+    """Rows of the wedges and NIIRS."""
+    rows = []
+    for w in res.get("hyperbolic_wedge", []):
+        m, p = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
+        m_cm = None if m is None else 100 * m
+        p_cm = None if p is None else 100 * p
+        d = _diff(m_cm, p_cm)
+        rt = tol.get("wedge_resolution_rel")
+        rows.append(
+            _row(
+                f"resolution (line width at 15 % contrast), {_DIR_WORDS.get(w.get('axis'), w.get('axis'))}",
+                f"hyperbolic wedge {w['id']}",
+                m_cm,
+                p_cm,
+                d,
+                "–" if rt is None else f"± {rt:.0%}",
+                w.get("pass"),
+                1,
+                "cm",
+            )
+        )
+    n = res.get("niirs") or {}
+    if n:
+        m, p = n.get("giqe5_measured"), n.get("giqe5_predicted")
+        d = _diff(m, p)
+        rows.append(
+            _row(
+                "NIIRS (GIQE 5)",
+                "image (edges' RER, measured SNR)",
+                m,
+                p,
+                d,
+                f"± {fmt(tol.get('niirs'), 2)}",
+                n.get("pass"),
+                2,
+            )
+        )
+    return rows
+
+
+def summary_rows(res: dict) -> list[dict]:
+    """Measured vs predicted in words: one row per check, a signed difference, fixed precision."""
+    tol = res.get("tolerances") or {}
+    return _mtf_rows(res, tol) + _angle_rows(res) + _resolution_rows(res, tol) + _not_measured_rows(res)
+
+
+#: Summary-row kinds in words: (quantity, target).
+_KIND_WORDS = {
+    "edge_mtf_at_nyquist": ("MTF at Nyquist", "slanted edge"),
+    "star_mtf": ("largest MTF difference up to Nyquist, all directions", "Siemens star"),
+    "bar_ctf": ("largest CTF difference to Coltman's CTF", "bar target"),
+    "wedge_resolution": ("resolution (line width at 15 % contrast)", "hyperbolic wedge"),
+}
+
+
+def _angle_rows(res: dict) -> list[dict]:
+    """The edge-angle checks (measured vs true tilt of each slanted edge), from the summary rows."""
+    rows = []
+    for r in res.get("summary", []):
+        if r.get("kind") != "edge_angle":
+            continue
+        m, p = _num(r.get("measured")), _num(r.get("predicted"))
+        rows.append(
+            _row("edge angle", f"slanted edge {r.get('id')}", m, p, _diff(m, p), r.get("tolerance", "–"),
+                 r.get("pass"), 3, "°")  # fmt: skip
+        )
+    return rows
+
+
+def _not_measured_rows(res: dict) -> list[dict]:
+    """The checks of targets the measurement had to skip: n/a, with the reason as the target's note."""
+    shown = {
+        x.get("id")
+        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
+        for x in res.get(key, [])
+    }
+    rows = []
+    for r in res.get("summary", []):
+        if r.get("pass") is not None or r.get("kind") not in _KIND_WORDS or r.get("id") in shown:
+            continue
+        q, t = _KIND_WORDS[r["kind"]]
+        row = _row(q, f"{t} {r.get('id')}", None, None, None, r.get("tolerance", "–"), None)
+        row["target"] += f" ({r.get('reason') or 'not measured'})"
+        rows.append(row)
+    return rows
+
+
+def camera_rows(system) -> list[tuple[str, str]]:
+    """The camera's inputs, named and with units."""
+    o, d, m, orb = system.optics, system.detector, system.motion, system.orbit
+    qe = d.qe if isinstance(d.qe, (int, float)) else f"table of {len(d.qe)} values"
+    wl = ", ".join(f"{w * 1e9:.1f}" for w in o.wavelengths_m)
+    return [
+        ("orbit altitude", fmt(orb.altitude_m / 1e3, 1, unit="km")),
+        ("off-nadir look angle", fmt(orb.off_nadir_deg, 1, unit="°")),
+        ("aperture diameter", fmt(o.aperture_diameter_m, 3, unit="m")),
+        ("focal length", fmt(system.focal_length_m, 3, unit="m")),
+        ("f-number", fmt(system.f_number, 2)),
+        ("central obscuration (diameter ratio)", fmt(o.obscuration_ratio, 4)),
+        ("wavelength(s) of the diffraction MTF", f"{wl} nm"),
+        ("pixel pitch", f"{d.pitch_x_m * 1e6:.2f} × {d.pitch_y_m * 1e6:.2f} µm"),
+        ("quantum efficiency", qe if isinstance(qe, str) else fmt(qe, 2)),
+        ("read noise", fmt(d.read_noise_e, 1, unit="e⁻ rms")),
+        ("full well", "–" if d.full_well_e is None else f"{d.full_well_e:,.0f} e⁻"),
+        ("dark current", f"{d.dark_current_e_per_s:,.0f} e⁻/s"),
+        ("ADC bit depth", "–" if d.bit_depth is None else f"{d.bit_depth} bit"),
+        ("TDI stages", f"{d.tdi_stages} ({d.readout.upper()} accumulation)"),
+        ("along-track smear", fmt(m.smear_px, 4, unit="px")),
+        ("jitter", fmt(m.jitter_rms_px, 3, unit="px rms")),
+    ]
+
+
+_DERIVED = [
+    ("focal_length_m", "focal length", 1, 3, "m"),
+    ("gsd_act_m", "GSD across-track", 100, 1, "cm"),
+    ("gsd_alt_m", "GSD along-track", 100, 1, "cm"),
+    ("ifov_act_urad", "IFOV across-track", 1, 4, "µrad"),
+    ("range_m", "slant range", 1e-3, 1, "km"),
+    ("nyquist_cy_per_mm", "Nyquist frequency (focal plane)", 1, 2, "cy/mm"),
+    ("nyquist_act_cy_per_m_ground", "Nyquist frequency (ground)", 1, 3, "cy/m"),
+    ("effective_wavelength_m", "effective wavelength", 1e9, 1, "nm"),
+    ("q_effective", "Q = λ F# / pitch", 1, 3, ""),
+    ("limited_by", "resolution limited by", None, 0, ""),
+    ("ground_speed_m_per_s", "ground speed", 1e-3, 3, "km/s"),
+]
+
+
+def derived_rows(derived: dict) -> list[tuple[str, str]]:
+    """Derived geometry in words and units (only the keys present)."""
+    out = []
+    for key, label, scale, digits, unit in _DERIVED:
+        if key not in derived:
+            continue
+        v = derived[key]
+        if isinstance(v, (list, tuple)):
+            v = v[0] if v else None
+        out.append(
+            (label, str(v) if scale is None else fmt(None if v is None else float(v) * scale, digits, unit=unit))
+        )
+    return out
+
+
+_RADIOMETRY = [
+    ("reflectance", "scene reflectance (albedo)", 1, 2, ""),
+    ("sun_zenith_deg", "sun zenith angle", 1, 1, "°"),
+    ("atmosphere_transmission_down", "atmospheric transmission, down", 1, 2, ""),
+    ("atmosphere_transmission_up", "atmospheric transmission, up", 1, 2, ""),
+    ("radiance_toa_band_w_per_m2_sr", "in-band radiance at the top of the atmosphere", 1, 2, "W m⁻² sr⁻¹"),
+    ("focal_plane_irradiance_band_w_per_m2", "in-band focal-plane irradiance", 1, 4, "W m⁻²"),
+    ("integration_time_s", "integration time per TDI stage", 1e6, 2, "µs"),
+    ("signal_e", "signal (all TDI stages)", 1, 0, "e⁻"),
+    ("well_fill", "full-well fill", 100, 1, "%"),
+    ("snr", "scene SNR at this albedo", 1, 1, ""),
+    ("signal_7pct_e", "signal at 7 % reflectance", 1, 0, "e⁻"),
+    ("signal_15pct_e", "signal at 15 % reflectance", 1, 0, "e⁻"),
+    ("contrast_snr", "contrast SNR (GIQE: 15 % vs 7 % reflectance)", 1, 1, ""),
+]
+
+
+def radiometry_rows(rad: dict) -> list[tuple[str, str]]:
+    out = []
+    for key, label, scale, digits, unit in _RADIOMETRY:
+        v = rad.get(key)
+        if v is None or isinstance(v, (dict, list)):
+            continue
+        out.append((label, fmt(float(v) * scale, digits, unit=unit)))
+    return out
+
+
+def paper_rows(res: dict) -> list[dict]:
+    """The paper's own results beside satchain's prediction and measurement."""
+    mtf_n = _num((res.get("mtf_at_nyquist") or {}).get("alt"))
+    alt_edges = _mean(
+        e.get("mtf_at_nyquist_measured") for e in res.get("slanted_edges", []) if e.get("direction") == "ALT"
+    )
+    wedges = [w for w in res.get("hyperbolic_wedge", []) if w.get("axis") == "ALT"] or res.get("hyperbolic_wedge", [])
+    w = wedges[0] if wedges else {}
+    wm, wp = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
+    return [
+        {
+            "quantity": "system MTF at Nyquist, along-track",
+            "paper": "12.28 %",
+            "predicted": fmt(None if mtf_n is None else 100 * mtf_n, 2, unit="%"),
+            "measured": fmt(None if alt_edges is None else 100 * alt_edges, 2, unit="%"),
+        },
+        {
+            "quantity": "hyperbolic-wedge resolution" + (f" ({w.get('id')})" if w else ""),
+            "paper": "52.5 cm",
+            "predicted": fmt(None if wp is None else 100 * wp, 1, unit="cm"),
+            "measured": fmt(None if wm is None else 100 * wm, 1, unit="cm"),
+        },
+        {
+            "quantity": "GSD",
+            "paper": "49 cm",
+            "predicted": fmt(100 * res["gsd_m"], 1, unit="cm") if res.get("gsd_m") else "–",
+            "measured": "–",
+        },
+    ]
+
+
+def skipped_groups(skipped: list[dict]) -> list[dict]:
+    """Not-measured items grouped by kind and reason: kind, reason, count, ids."""
+    groups: OrderedDict[tuple[str, str], list[str]] = OrderedDict()
+    for s in skipped:
+        groups.setdefault((str(s.get("kind", "")), str(s.get("reason", ""))), []).append(str(s.get("id", "")))
+    return [
+        {"kind": k.replace("_", " "), "reason": r, "count": len(ids), "ids": ", ".join(ids)}
+        for (k, r), ids in groups.items()
+    ]
