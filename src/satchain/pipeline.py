@@ -25,7 +25,6 @@ from typing import Any
 
 import numpy as np
 
-from satchain.errors import SatchainIOError
 from satchain.runconfig import RunConfig
 
 __all__ = ["STAGES", "RunContext", "run_pipeline"]
@@ -94,6 +93,7 @@ def _stage_scene(ctx: RunContext, progress: Progress) -> None:
 
 def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     from satchain import io
+    from satchain.engine.memory import check_simulation_memory
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
@@ -104,15 +104,16 @@ def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     ctx.simulator = sim = Simulator(
         ctx.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=ctx.otf
     )
+    check_simulation_memory(sim, focal_plane="coarse")
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
     ctx.sensor = sensor_from_system(ctx.system)
     ctx.image = sim.run(src, sensor=ctx.sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
     ctx.focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
     s, d = ctx.system, ctx.out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
-    dtype = np.uint16 if c.units == "dn" else np.float32
-    io.write_tiff(d / "simulated.tif", ctx.image.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
-    io.write_png(d / "simulated.png", io.preview_uint8(ctx.image), pixel_m=s.gsd_act_m)
+    io.write_simulated(
+        d / "simulated.tif", ctx.image, units=c.units, bit_depth=ctx.sensor.bit_depth, pixel_m=s.gsd_act_m, metadata=meta
+    )
     fp_pixel = src.pixel_m * sim.D
     io.write_tiff(
         d / "focal_plane.tif",
@@ -182,11 +183,10 @@ def _manifest(ctx: RunContext) -> dict[str, Any]:
 
 
 def _check_out_dir(out: Path) -> None:
-    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / MANIFEST).exists())):
-        raise SatchainIOError(
-            f"-o {str(out)!r}: exists and is not a satchain run directory (no {MANIFEST}); "
-            "choose a new or empty directory, nothing was changed"
-        )
+    from satchain._safety import check_run_dir, clean_stale
+
+    check_run_dir(out)  # only a missing, empty or satchain-marked directory may be replaced
+    clean_stale(out)  # staging / old folders of killed runs
 
 
 def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
@@ -195,6 +195,7 @@ def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress |
     _check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+    _claim_run_dir(staging)
     report = progress or (lambda stage, done, total: None)
     ctx = RunContext(config=config, out=staging, timings_s={})
     try:
@@ -215,6 +216,14 @@ def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress |
     return ctx.comparison["results"]
 
 
+def _claim_run_dir(directory: Path, *, marker: bool = True) -> None:
+    from satchain._safety import claim, write_run_marker
+
+    claim(directory)
+    if marker:
+        write_run_marker(directory)
+
+
 def _swap_in(staging: Path, out: Path) -> None:
     """Replace ``out`` by ``staging`` with two renames; the old results are removed only afterwards."""
     old = None
@@ -222,6 +231,7 @@ def _swap_in(staging: Path, out: Path) -> None:
         old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
         os.rmdir(old)
         os.replace(out, old)
+        _claim_run_dir(old, marker=False)
     try:
         os.replace(staging, out)
     except BaseException:
