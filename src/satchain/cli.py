@@ -11,7 +11,7 @@ import typer
 from rich.table import Table
 
 from satchain._cli_common import console, err_console, handle_errors, parse_numbers, set_debug
-from satchain._safety import check_dir_outputs, check_inputs_outside, check_disk, check_distinct_paths, check_memory
+from satchain._safety import check_dir_outputs, check_disk, check_distinct_paths, check_inputs_outside, check_memory
 from satchain.engine.memory import check_simulation_memory
 from satchain.errors import ConfigError
 
@@ -190,8 +190,9 @@ def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> Non
     p = sc.pixel_m if pixel_m is None else check_positive("--pixel-m", pixel_m)
     rows, cols = sc.shape_px(p) if win is None else win[2:]
     what = f"scene {rows} x {cols} px at --pixel-m {p:g}"
-    check_memory(4096.0 * (rows / 256 + 1) * (cols / 256 + 1) + 8 * 2**20, what, fix="use a larger --pixel-m or a --window")
-    check_disk(4.0 * rows * cols, [out], what, fix="use a larger --pixel-m or a --window")
+    fix = "use a larger --pixel-m or a --window"
+    check_memory(4096.0 * (rows / 256 + 1) * (cols / 256 + 1) + 8 * 2**20, what, fix=fix)  # tile index
+    check_disk(4.0 * rows * cols, [out], what, fix=fix)
 
 
 _IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".npy")

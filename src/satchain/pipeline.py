@@ -111,8 +111,9 @@ def _stage_simulate(ctx: RunContext, progress: Progress) -> None:
     ctx.focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
     s, d = ctx.system, ctx.out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
+    bits = ctx.sensor.bit_depth
     io.write_simulated(
-        d / "simulated.tif", ctx.image, units=c.units, bit_depth=ctx.sensor.bit_depth, pixel_m=s.gsd_act_m, metadata=meta
+        d / "simulated.tif", ctx.image, units=c.units, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta
     )
     fp_pixel = src.pixel_m * sim.D
     io.write_tiff(

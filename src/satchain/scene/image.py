@@ -13,9 +13,9 @@ import os
 
 import numpy as np
 
+from satchain._safety import check_memory
 from satchain._validate import as_float_array, check_positive
 from satchain.errors import ConfigError, InputError
-from satchain._safety import check_memory
 from satchain.io import integer_scale, open_image
 from satchain.scene.shapes import Window, check_window
 
