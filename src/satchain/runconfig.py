@@ -30,16 +30,21 @@ class _Frozen(BaseModel):
 class SystemRef(_Frozen):
     """``preset`` (a packaged name), or ``file`` (a system TOML, relative to the config), or ``inline``."""
 
-    preset: str | None = None
+    preset: str | None = "ankarasat3"
     file: str | None = None
     inline: dict[str, Any] | None = None
 
-    @model_validator(mode="after")
-    def _one(self) -> SystemRef:
-        given = [k for k in ("preset", "file", "inline") if getattr(self, k) is not None]
+    @model_validator(mode="before")
+    @classmethod
+    def _one(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in ("preset", "file", "inline") if data.get(k) is not None]
         if len(given) > 1:
             raise ValueError(f"system: {' and '.join(given)} are both given; give one of preset, file or inline")
-        return self
+        if given and given[0] != "preset":
+            data = {**data, "preset": None}  # the default preset does not apply when a file or inline is given
+        return data
 
 
 class SceneConfig(_Frozen):
