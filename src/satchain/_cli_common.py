@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import os
 import shutil
@@ -15,6 +16,9 @@ from rich.text import Text
 from satchain.errors import ConfigError, SatchainError
 
 __all__ = ["console", "err_console", "error_line", "handle_errors", "parse_numbers", "print_error", "set_debug"]
+
+# readers' own log lines (e.g. tifffile's "invalid offset") would add a second line to an error message
+logging.getLogger("tifffile").setLevel(logging.ERROR)
 
 console = Console(width=max(shutil.get_terminal_size((150, 40)).columns, 120))
 err_console = Console(stderr=True, soft_wrap=True)
@@ -51,6 +55,7 @@ def error_line(exc: BaseException) -> str:
             IsADirectoryError: "give a file path",
             NotADirectoryError: "a parent of this path is a file, not a folder",
             FileNotFoundError: "check the path",
+            FileExistsError: "a file is in the way: choose another path",
             PermissionError: "check the permissions or choose another path",
         }
         fix = next((v for k, v in fixes.items() if isinstance(exc, k)), "check the path and the free disk space")

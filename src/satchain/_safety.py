@@ -35,6 +35,7 @@ __all__ = [
     "check_star_radius",
     "check_dir_outputs",
     "check_inputs_outside",
+    "check_output_files",
     "claim",
     "clean_stale",
     "clean_stale_temp_files",
@@ -305,3 +306,10 @@ def check_inputs_outside(out_dir: str | os.PathLike, inputs: Mapping[str, object
                 f"-o {str(out_dir)!r}: the run would replace this directory, which holds {name} {str(value)!r}; "
                 "copy that file elsewhere or choose another output directory"
             )
+
+
+def check_output_files(outputs: Mapping[str, str | os.PathLike | None]) -> None:
+    """An output file path must not be an existing directory (refused before any work)."""
+    for name, value in outputs.items():
+        if value is not None and Path(value).is_dir():
+            raise ConfigError(f"{name} {str(value)!r}: is a directory; give a file path, e.g. {name} out.tif")

@@ -11,7 +11,14 @@ import typer
 from rich.table import Table
 
 from satchain._cli_common import console, err_console, handle_errors, parse_numbers, set_debug
-from satchain._safety import check_dir_outputs, check_disk, check_distinct_paths, check_inputs_outside, check_memory
+from satchain._safety import (
+    check_dir_outputs,
+    check_disk,
+    check_distinct_paths,
+    check_inputs_outside,
+    check_memory,
+    check_output_files,
+)
 from satchain.engine.memory import check_simulation_memory
 from satchain.errors import ConfigError
 
@@ -142,6 +149,7 @@ def _progress(description: str):
         TimeRemainingColumn(),
         console=err_console,
         transient=False,
+        disable=not err_console.is_terminal,  # no bar in logs and pipes: an error stays one line
     )
     task = bar.add_task(description, total=None)
 
@@ -169,6 +177,7 @@ def scene(
     win = parse_cli_window(window) if window else None
     stem = out.with_suffix("") if out.suffix.lower() in (".tif", ".tiff") else out
     layout_file = None if layout == "paper" else layout
+    check_output_files({"-o": out})
     check_distinct_paths(
         {"-o": out, "-o (preview)": f"{stem}.png", "-o (truth)": f"{stem}.truth.json"}, {"--layout": layout_file}
     )
@@ -247,9 +256,11 @@ def simulate(
     from satchain.engine.simulate import Simulator
 
     check_choice("--units", units_, OUTPUT_UNITS)
+    check_choice("--focal-plane-grid", fp_grid, ("input", "coarse"))
     if seed < 0:
         raise ConfigError(f"--seed {seed}: must be >= 0")
     in_file = input_ if Path(input_).exists() else None
+    check_output_files({"-o": out, "--focal-plane": focal_plane})
     check_distinct_paths(
         {"-o": out, "-o (preview)": out.with_suffix(".png"), "--focal-plane": focal_plane},
         {"INPUT": in_file, "--system": system},
@@ -322,6 +333,7 @@ def run(
         TextColumn("{task.percentage:>3.0f}%"),
         TimeElapsedColumn(),
         console=err_console,
+        disable=not err_console.is_terminal,
     )
     tasks = {name: bar.add_task(name, total=None, start=False) for name in STAGES}
 

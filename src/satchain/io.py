@@ -276,9 +276,15 @@ def write_npy(path: str | os.PathLike, image: np.ndarray) -> None:
 
 def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with tifffile.TiffFile(path) as tf:
-        page = tf.pages[0]
+        page = _first_page(tf, path)
         check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(path)!r}")
         return page.asarray(), _tiff_meta(tf, page)
+
+
+def _first_page(tf, path: Path):
+    if len(tf.pages) == 0 or tf.pages.first is None:
+        raise SatchainIOError(f"image = {str(path)!r}: no image in this TIFF (damaged or truncated?)")
+    return tf.pages.first
 
 
 def _nbytes(shape, dtype) -> int:
@@ -335,7 +341,8 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
     """
     p = Path(path)
     if not p.is_file():
-        raise SatchainIOError(f"image = {str(p)!r}: no such file")
+        what = "is a directory, not an image file" if p.is_dir() else "no such file"
+        raise SatchainIOError(f"image = {str(p)!r}: {what}")
     suffix = p.suffix.lower()
     try:
         if suffix in (".tif", ".tiff"):
@@ -389,7 +396,7 @@ class ImageReader:
 
     def _open_tiff(self) -> None:
         self._tf = tf = tifffile.TiffFile(self.path)
-        page = tf.pages[0]
+        page = _first_page(tf, self.path)
         self.meta = _tiff_meta(tf, page)
         self._page = page
         if page.samplesperpixel != 1 or len(page.shape) != 2 or getattr(page, "imagedepth", 1) > 1:
@@ -450,7 +457,8 @@ def open_image(path: str | os.PathLike) -> ImageReader:
     """Open a TIFF/GeoTIFF/BigTIFF, PNG or NPY image for window reads (see :class:`ImageReader`)."""
     p = Path(path)
     if not p.is_file():
-        raise SatchainIOError(f"image = {str(p)!r}: no such file")
+        what = "is a directory, not an image file" if p.is_dir() else "no such file"
+        raise SatchainIOError(f"image = {str(p)!r}: {what}")
     if p.suffix.lower() not in (".tif", ".tiff", ".png", ".npy"):
         raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {p.suffix!r}; use .tif, .tiff, .png or .npy")
     try:

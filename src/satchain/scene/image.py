@@ -70,7 +70,9 @@ class ImageScene:
         if pixel_m is None:
             pixel_m = meta.get("pixel_m")
             if pixel_m is None:
-                raise ConfigError("pixel_m = None: the image states no pixel size; pass pixel_m (m)")
+                raise ConfigError(
+                    "pixel_m = None: the image states no pixel size; pass pixel_m in m (--scene-pixel-m on the CLI)"
+                )
         self.pixel_m = check_positive("pixel_m", pixel_m)
         if self._reader.shape[0] < 1 or self._reader.shape[1] < 1:
             raise InputError("image: is empty")
