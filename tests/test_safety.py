@@ -291,3 +291,16 @@ def test_killed_run_leftovers_are_removed_by_the_next_run(tmp_path):
 
     _check_out_dir(tmp_path / "res")  # the first thing run_pipeline does
     assert not staging.exists()
+
+
+def test_warnings_and_written_paths_keep_their_brackets(tmp_path):
+    from satchain._cli_common import print_warning
+
+    runner_app = __import__("typer").Typer()
+    runner_app.command()(lambda: print_warning("pip install satchain[dask] for [scene] in [min, max]"))
+    r = CliRunner().invoke(runner_app, [])
+    assert r.stderr.strip() == "warning: pip install satchain[dask] for [scene] in [min, max]"
+    out = tmp_path / "run[1]" / "s[bold].tif"
+    r = runner.invoke(app, ["scene", "--pixel-m", "2", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert f"wrote tiff: {out}" in " ".join(r.stdout.split())

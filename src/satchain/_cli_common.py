@@ -15,7 +15,16 @@ from rich.text import Text
 
 from satchain.errors import ConfigError, SatchainError
 
-__all__ = ["console", "err_console", "error_line", "handle_errors", "parse_numbers", "print_error", "set_debug"]
+__all__ = [
+    "console",
+    "err_console",
+    "error_line",
+    "handle_errors",
+    "parse_numbers",
+    "print_error",
+    "print_warning",
+    "set_debug",
+]
 
 # readers' own log lines (e.g. tifffile's "invalid offset") would add a second line to an error message
 logging.getLogger("tifffile").setLevel(logging.ERROR)
@@ -68,6 +77,12 @@ def error_line(exc: BaseException) -> str:
 def print_error(exc: BaseException) -> None:
     """Print ``error: <message>`` on stderr as plain text (no rich markup: ``[dask]`` stays as written)."""
     err_console.print(Text("error: ", style="bold red") + Text(error_line(exc)), highlight=False, soft_wrap=True)
+
+
+def print_warning(message: str, console: Console | None = None) -> None:
+    """Print ``warning: <message>`` on stderr as plain text (brackets in the message are kept)."""
+    text = Text("warning: ", style="bold yellow") + Text(_one_line(message))
+    (console or err_console).print(text, highlight=False, soft_wrap=True)
 
 
 def handle_errors(fn):

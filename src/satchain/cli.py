@@ -10,7 +10,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from satchain._cli_common import console, err_console, handle_errors, parse_numbers, set_debug
+from satchain._cli_common import console, err_console, handle_errors, parse_numbers, print_warning, set_debug
 from satchain._safety import (
     check_dir_outputs,
     check_disk,
@@ -130,7 +130,7 @@ def budget(
 
         written = write_budget_outputs(s, res, out)
         if not as_json:
-            console.print("wrote " + ", ".join(str(p) for p in written))
+            console.print("wrote " + ", ".join(str(p) for p in written), markup=False, highlight=False)
     if as_json:
         print(json.dumps(res, indent=2))
     else:
@@ -187,7 +187,7 @@ def scene(
     with bar:
         written = render_scene_to_file(layout, out, pixel_m=pixel_m, window=win, progress=update)
     for kind, path in written.items():
-        console.print(f"wrote {kind}: {path}")
+        console.print(f"wrote {kind}: {path}", markup=False, highlight=False)
 
 
 def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> None:
@@ -293,13 +293,17 @@ def simulate(
     }
     bits = sensor.bit_depth if sensor is not None else s.detector.bit_depth
     io.write_simulated(out, img, units=units_, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)
-    console.print(f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}")
+    console.print(
+        f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}",
+        markup=False,
+        highlight=False,
+    )
     if focal_plane is not None:
         fp = sim.focal_plane(coarse, grid=fp_grid)
         fp_pixel = src.pixel_m * (sim.D if fp_grid == "coarse" else 1)
         meta = {"units": "input (reflectance) filtered by the optics and motion", "system": s.name, "grid": fp_grid}
         io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=fp_pixel, metadata=meta)
-        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)")
+        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)", markup=False, highlight=False)
 
 
 @app.command()
@@ -358,7 +362,7 @@ def run(
         )
     console.print(t)
     for w in res.get("warnings", []):
-        err_console.print(f"[bold yellow]warning:[/] {w}", highlight=False)
+        print_warning(w)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
 
 
