@@ -41,5 +41,5 @@ def check_simulation_memory(sim, *, focal_plane: str | None = None) -> None:
     check_memory(
         simulation_bytes(sim, focal_plane=focal_plane),
         f"simulating {iy} x {ix} input px into a {oy} x {ox} px image ({oy * ox / 1e9:.2f} Gpx)",
-        fix="check --scene-pixel-m (the input's ground pixel size) or simulate a smaller window",
+        fix="check --scene-pixel-m (the input's ground pixel size) or crop the input",
     )
