@@ -39,6 +39,11 @@ def files(tmp_path_factory):
     np.save(f["nan"], np.full((300, 300), np.nan))
     f["bare"] = d / "bare.npy"
     np.save(f["bare"], np.full((300, 300), 0.5))
+    for key, value in (("meta_text", "abc"), ("meta_huge", 1e308), ("meta_list", [1, 2])):
+        f[key] = d / f"{key}.tif"
+        tifffile.imwrite(
+            f[key], np.full((64, 64), 9, np.uint8), description=json.dumps({"satchain": {"pixel_m": value}})
+        )
     f["bad_toml"] = d / "bad.toml"
     f["bad_toml"].write_text("name = \n[optics")
     f["unknown_key"] = d / "unknown.toml"
@@ -112,6 +117,11 @@ def _cases(f):
         "simulate 3-D array": ["simulate", str(f["cube"]), "--scene-pixel-m", "0.5", "-o", out],
         "simulate NaN image": ["simulate", str(f["nan"]), "--scene-pixel-m", "0.2", "-o", out],
         "simulate no pixel size": ["simulate", str(f["bare"]), "-o", out],
+        "simulate metadata pixel text": ["simulate", str(f["meta_text"]), "-o", out],
+        "simulate metadata pixel 1e308": ["simulate", str(f["meta_huge"]), "-o", out],
+        "simulate metadata pixel list": ["simulate", str(f["meta_list"]), "-o", out],
+        "simulate pixel 1e308": ["simulate", img, "--scene-pixel-m", "1e308", "-o", out],
+        "edge metadata pixel text": ["measure", "edge", str(f["meta_text"])],
         "simulate negative pixel": ["simulate", img, "--scene-pixel-m", "-1", "-o", out],
         "simulate bad units": ["simulate", img, "--units", "furlongs", "-o", out],
         "simulate negative seed": ["simulate", img, "--seed", "-1", "-o", out],

@@ -308,6 +308,24 @@ def _tiff_meta(tf, page) -> dict[str, Any]:
         i, j = float(tie.value[0]), float(tie.value[1])
         px = meta.get("pixel_m", 1.0)
         meta["origin_m"] = [float(tie.value[3]) - i * px, -(float(tie.value[4]) + j * px)]
+    return _checked_meta(meta)
+
+
+def _checked_meta(meta: dict[str, Any]) -> dict[str, Any]:
+    """A stated pixel size must be a number in (0, 1e6] m; otherwise it moves to ``invalid_pixel_m``."""
+    v = meta.get("pixel_m")
+    if v is None:
+        return meta
+    try:
+        f = float(v)
+        ok = math.isfinite(f) and 0 < f <= 1e6
+    except (TypeError, ValueError):
+        ok = False
+    if ok:
+        meta["pixel_m"] = f
+    else:
+        meta.pop("pixel_m")
+        meta["invalid_pixel_m"] = v
     return meta
 
 
@@ -319,8 +337,9 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         if text:
             with contextlib.suppress(ValueError, TypeError):
                 meta.update(json.loads(text))
-        if "pixel_m" not in meta and img.info.get("dpi"):
-            meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
+        with contextlib.suppress(TypeError, ValueError, ZeroDivisionError, IndexError):
+            if "pixel_m" not in meta and img.info.get("dpi"):
+                meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
         if img.mode in ("I;16", "I;16B", "I;16L"):
             arr = np.array(img, dtype=np.uint16)
         elif img.mode == "I":
@@ -330,7 +349,7 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         else:
             arr = np.array(img.convert("L"))
             meta["converted_from"] = img.mode
-    return arr, meta
+    return arr, _checked_meta(meta)
 
 
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:

@@ -14,7 +14,7 @@ import os
 import numpy as np
 
 from satchain._safety import check_memory
-from satchain._validate import as_float_array, check_positive
+from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import ConfigError, InputError
 from satchain.io import integer_scale, open_image
 from satchain.scene.shapes import Window, check_window
@@ -69,11 +69,16 @@ class ImageScene:
             self._reader = _ArrayReader(source)
         if pixel_m is None:
             pixel_m = meta.get("pixel_m")
+            if "invalid_pixel_m" in meta:
+                raise ConfigError(
+                    f"pixel_m: the image's metadata gives {meta['invalid_pixel_m']!r}, not a ground pixel size in "
+                    "(0, 1e6] m; pass pixel_m in m (--scene-pixel-m on the CLI)"
+                )
             if pixel_m is None:
                 raise ConfigError(
                     "pixel_m = None: the image states no pixel size; pass pixel_m in m (--scene-pixel-m on the CLI)"
                 )
-        self.pixel_m = check_positive("pixel_m", pixel_m)
+        self.pixel_m = check_range("pixel_m", pixel_m, 0.0, 1e6, lo_open=True)
         if self._reader.shape[0] < 1 or self._reader.shape[1] < 1:
             raise InputError("image: is empty")
         if scale is None:
