@@ -304,3 +304,31 @@ def test_warnings_and_written_paths_keep_their_brackets(tmp_path):
     r = runner.invoke(app, ["scene", "--pixel-m", "2", "-o", str(out)])
     assert r.exit_code == 0, r.output
     assert f"wrote tiff: {out}" in " ".join(r.stdout.split())
+
+
+@pytest.mark.parametrize(
+    "layout",
+    [
+        {"tile": (32, 48), "compression": "zlib"},
+        {"tile": (32, 32), "bigtiff": True},
+        {"rowsperstrip": 7, "compression": "zlib"},
+        {},  # contiguous, uncompressed: memory-mapped
+        "npy",
+    ],
+)
+def test_window_reads_equal_the_array_for_every_layout(tmp_path, layout):
+    rng = np.random.default_rng(3)
+    a = rng.integers(0, 65536, size=(101, 157), dtype=np.uint16)
+    if layout == "npy":
+        path = tmp_path / "a.npy"
+        np.save(path, a)
+    else:
+        path = _tif(tmp_path / "a.tif", a, **layout)
+    with io.open_image(path) as r:
+        assert r.shape == a.shape and r.dtype == a.dtype
+        for _ in range(25):
+            r0, c0 = rng.integers(0, 101), rng.integers(0, 157)
+            h, w = rng.integers(1, 102 - r0), rng.integers(1, 158 - c0)
+            np.testing.assert_array_equal(r.read(r0, c0, h, w), a[r0 : r0 + h, c0 : c0 + w])
+        with pytest.raises(Exception, match="outside the image"):
+            r.read(100, 0, 2, 1)
