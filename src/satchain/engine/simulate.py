@@ -208,8 +208,9 @@ class Simulator:
         need = _FRAME_BYTES_PER_PX * length[0] * length[1]
         if need > p.max_frame_bytes:
             raise ResourceLimitError(
-                f"coarse frame {length[0]} x {length[1]} needs about {need / 2**30:.2f} GiB; "
-                f"SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} GiB"
+                f"input {self.input_shape[0]} x {self.input_shape[1]} px: its coarse frame {length[0]} x {length[1]} "
+                f"needs about {need / 2**30:.2f} GiB; SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} "
+                "GiB: simulate the input in parts (crop it) or raise SimParams.max_frame_bytes"
             )
 
     @property
