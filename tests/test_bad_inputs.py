@@ -91,6 +91,7 @@ def _cases(f):
         "budget system is a directory": ["budget", "--system", str(d)],
         "budget invalid TOML": ["budget", "--system", str(f["bad_toml"])],
         "budget unknown key": ["budget", "--system", str(f["unknown_key"])],
+        "budget system is a device": ["budget", "--system", os.devnull.replace("null", "zero")],
         "budget negative f-number": ["budget", "--system", str(f["neg_fnum"])],
         "budget freqs not numbers": ["budget", "--freqs", "ten,[dask]"],
         "budget negative freq": ["budget", "--freqs", "-5"],
@@ -135,6 +136,7 @@ def _cases(f):
         "simulate unknown scheduler": ["simulate", img, "--scheduler", "tcp://[::1", "-o", out],
         # run
         "run missing config": ["run", "--config", "missing.toml", "-o", str(f["dir"] / "r")],
+        "run config is a device": ["run", "--config", os.devnull.replace("null", "zero"), "-o", str(f["dir"] / "r")],
         "run invalid config": ["run", "--config", str(f["cfg_bad"]), "-o", str(f["dir"] / "r")],
         "run unknown key": ["run", "--config", str(f["cfg_unknown"]), "-o", str(f["dir"] / "r")],
         "run negative seed": ["run", "--config", str(f["cfg_seed"]), "-o", str(f["dir"] / "r")],

@@ -202,11 +202,37 @@ def test_integer_inputs_are_scaled_to_reflectance(tmp_path, dtype, top):
 
 # ------------------------------------------------------------------------------------- 5, 6. error text
 def test_unexpected_errors_are_one_line_and_debug_shows_the_traceback(tmp_path):
-    r = runner.invoke(app, ["budget", "--system", str(tmp_path)])  # a directory: IsADirectoryError
-    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and "directory" in r.stderr
-    assert "Traceback" not in r.output
+    import typer
+
+    from satchain._cli_common import handle_errors, set_debug
+
+    errors = {
+        "dir": IsADirectoryError(21, "Is a directory", str(tmp_path)),
+        "key": KeyError("alt"),
+        "mem": MemoryError(),
+        "perm": PermissionError(13, "Permission denied", "/root/x.tif"),
+    }
+    mini = typer.Typer()
+
+    @mini.command()
+    @handle_errors
+    def boom(kind: str):
+        raise errors[kind]
+
+    for kind in errors:
+        r = CliRunner().invoke(mini, [kind])
+        assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and r.stderr.startswith("error: ")
+        assert "Traceback" not in r.output, kind
+    set_debug(True)
+    try:
+        assert isinstance(CliRunner().invoke(mini, ["key"]).exception, KeyError)
+    finally:
+        set_debug(False)
+    # the real app: --debug lets the error propagate; without it, one line
     r = runner.invoke(app, ["--debug", "budget", "--system", str(tmp_path)])
-    assert isinstance(r.exception, IsADirectoryError)
+    assert isinstance(r.exception, SatchainIOError)
+    r = runner.invoke(app, ["budget", "--system", str(tmp_path)])
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and "directory" in r.stderr
     r = runner.invoke(app, ["budget", "--no-such-option"])  # typer's own usage error stays exit 2
     assert r.exit_code == 2
 

@@ -34,6 +34,7 @@ __all__ = [
     "check_run_dir",
     "check_star_radius",
     "check_dir_outputs",
+    "check_input_file",
     "check_inputs_outside",
     "check_output_files",
     "claim",
@@ -313,3 +314,19 @@ def check_output_files(outputs: Mapping[str, str | os.PathLike | None]) -> None:
     for name, value in outputs.items():
         if value is not None and Path(value).is_dir():
             raise ConfigError(f"{name} {str(value)!r}: is a directory; give a file path, e.g. {name} out.tif")
+
+
+def check_input_file(path: str | os.PathLike, name: str, *, max_bytes: int = 64 * 2**20) -> Path:
+    """A small text input (TOML, JSON) must be a regular file of at most ``max_bytes`` (not a device or a
+    pipe that never ends)."""
+    p = Path(path)
+    if p.is_dir():
+        raise SatchainIOError(f"{name} {str(p)!r}: is a directory; give a file")
+    if not p.exists():
+        raise SatchainIOError(f"{name} {str(p)!r}: not found")
+    if not p.is_file():
+        raise SatchainIOError(f"{name} {str(p)!r}: not a regular file (a device or a pipe?); give a file")
+    size = p.stat().st_size
+    if size > max_bytes:
+        raise SatchainIOError(f"{name} {str(p)!r}: {size / 2**20:.0f} MiB is far too large for a {name}; wrong file?")
+    return p

@@ -158,7 +158,9 @@ def load_run_config(path: str | Path | None) -> RunConfig:
     """The default configuration, or a TOML file (relative paths inside it are relative to the file)."""
     if path is None:
         return RunConfig()
-    p = Path(path)
+    from satchain._safety import check_input_file
+
+    p = check_input_file(path, "--config")
     try:
         with p.open("rb") as fh:
             data = tomllib.load(fh)
