@@ -44,6 +44,10 @@ def files(tmp_path_factory):
         tifffile.imwrite(
             f[key], np.full((64, 64), 9, np.uint8), description=json.dumps({"satchain": {"pixel_m": value}})
         )
+    f["complex"] = d / "complex.npy"
+    np.save(f["complex"], np.ones((64, 64), np.complex64))
+    f["objects"] = d / "objects.npy"
+    np.save(f["objects"], np.array([[None, 1]], dtype=object), allow_pickle=True)
     f["bad_toml"] = d / "bad.toml"
     f["bad_toml"].write_text("name = \n[optics")
     f["unknown_key"] = d / "unknown.toml"
@@ -123,6 +127,9 @@ def _cases(f):
         "simulate metadata pixel list": ["simulate", str(f["meta_list"]), "-o", out],
         "simulate pixel 1e308": ["simulate", img, "--scene-pixel-m", "1e308", "-o", out],
         "edge metadata pixel text": ["measure", "edge", str(f["meta_text"])],
+        "simulate complex image": ["simulate", str(f["complex"]), "--scene-pixel-m", "0.5", "-o", out],
+        "simulate pickled objects": ["simulate", str(f["objects"]), "--scene-pixel-m", "0.5", "-o", out],
+        "edge complex image": ["measure", "edge", str(f["complex"]), "--pixel-m", "0.5"],
         "simulate negative pixel": ["simulate", img, "--scene-pixel-m", "-1", "-o", out],
         "simulate bad units": ["simulate", img, "--units", "furlongs", "-o", out],
         "simulate negative seed": ["simulate", img, "--seed", "-1", "-o", out],

@@ -331,6 +331,7 @@ def _checked_meta(meta: dict[str, Any]) -> dict[str, Any]:
 
 def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with Image.open(path) as img:
+        check_memory(8.0 * img.size[0] * img.size[1], f"image = {str(path)!r} ({img.size[0]} x {img.size[1]} px)")
         img.load()
         meta: dict[str, Any] = {"format": "png"}
         text = img.info.get("satchain")
@@ -364,14 +365,18 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
         raise SatchainIOError(f"image = {str(p)!r}: {what}")
     suffix = p.suffix.lower()
     try:
-        if suffix in (".tif", ".tiff"):
-            return _read_tiff(p)
-        if suffix == ".png":
-            return _read_png(p)
-        if suffix == ".npy":
-            return np.load(p, allow_pickle=False), {"format": "npy"}
-    except (OSError, ValueError, tifffile.TiffFileError) as exc:
-        if isinstance(exc, SatchainIOError):
+        if suffix in (".tif", ".tiff", ".png", ".npy"):
+            if suffix == ".png":
+                image, meta = _read_png(p)
+            elif suffix == ".npy":
+                image, meta = np.load(p, allow_pickle=False), {"format": "npy"}
+            else:
+                image, meta = _read_tiff(p)
+            if image.dtype.kind not in "biuf":
+                raise InputError(f"image = {str(p)!r}: values must be real numbers, got dtype {image.dtype}")
+            return image, meta
+    except (OSError, ValueError, tifffile.TiffFileError, Image.DecompressionBombError) as exc:
+        if isinstance(exc, (SatchainIOError, InputError)):
             raise
         raise SatchainIOError(f"image = {str(p)!r}: cannot read: {exc}") from exc
     raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {suffix!r}; use .tif, .tiff, .png or .npy")
@@ -409,6 +414,8 @@ class ImageReader:
         else:
             self._array, self.meta = read_image(path)
         if self._array is not None:
+            if self._array.dtype.kind not in "biuf":
+                raise InputError(f"image = {str(path)!r}: values must be real numbers, got dtype {self._array.dtype}")
             if self._array.ndim != 2:
                 raise InputError(f"image = {str(path)!r}: must be 2-D (one band), got shape {self._array.shape}")
             self.shape, self.dtype = tuple(int(v) for v in self._array.shape), self._array.dtype
@@ -427,6 +434,8 @@ class ImageReader:
             self._array = tifffile.memmap(self.path, mode="r")
             return
         self.shape, self.dtype = (int(page.shape[0]), int(page.shape[1])), np.dtype(page.dtype)
+        if self.dtype.kind not in "biuf":
+            raise InputError(f"image = {str(self.path)!r}: values must be real numbers, got dtype {self.dtype}")
         self._seg = (page.tilelength, page.tilewidth) if page.is_tiled else (page.rowsperstrip, self.shape[1])
         self._seg = (min(int(self._seg[0]) or self.shape[0], self.shape[0]), int(self._seg[1]))
         self._per_row = -(-self.shape[1] // self._seg[1])
