@@ -358,3 +358,23 @@ def test_window_reads_equal_the_array_for_every_layout(tmp_path, layout):
             np.testing.assert_array_equal(r.read(r0, c0, h, w), a[r0 : r0 + h, c0 : c0 + w])
         with pytest.raises(Exception, match="outside the image"):
             r.read(100, 0, 2, 1)
+
+
+def test_sidecar_files_replace_only_what_satchain_wrote(tmp_path):
+    """`simulate -o x.tif` also writes x.png: a user's own x.png is refused and kept; satchain's own is replaced
+    (a re-run); the same for scene's preview and truth file."""
+    from PIL import Image
+
+    Image.fromarray(np.zeros((4, 4), np.uint8)).save(tmp_path / "x.png")  # the user's, no satchain chunk
+    mine = (tmp_path / "x.png").read_bytes()
+    args = ["simulate", "paper", "--scene-pixel-m", "0.5", "--no-noise", "-o", str(tmp_path / "x.tif")]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 2 and "x.png" in r.stderr and (tmp_path / "x.png").read_bytes() == mine
+    assert not (tmp_path / "x.tif").exists()
+    (tmp_path / "x.png").unlink()
+    assert runner.invoke(app, args).exit_code == 0
+    assert runner.invoke(app, args).exit_code == 0  # its own preview: replaced
+    (tmp_path / "s.truth.json").write_text('{"my": "notes"}')
+    r = runner.invoke(app, ["scene", "--pixel-m", "2", "-o", str(tmp_path / "s.tif")])
+    assert r.exit_code == 2 and "s.truth.json" in r.stderr
+    assert (tmp_path / "s.truth.json").read_text() == '{"my": "notes"}'

@@ -32,6 +32,7 @@ __all__ = [
     "check_distinct_paths",
     "check_memory",
     "check_run_dir",
+    "check_sidecars",
     "check_star_radius",
     "check_dir_outputs",
     "check_input_file",
@@ -330,3 +331,30 @@ def check_input_file(path: str | os.PathLike, name: str, *, max_bytes: int = 64 
     if size > max_bytes:
         raise SatchainIOError(f"{name} {str(p)!r}: {size / 2**20:.0f} MiB is far too large for a {name}; wrong file?")
     return p
+
+
+def _written_by_satchain(path: Path) -> bool:
+    try:
+        if path.suffix.lower() == ".png":
+            from PIL import Image
+
+            with Image.open(path) as img:
+                return "satchain" in img.info
+        if path.suffix.lower() == ".json":
+            data = json.loads(path.read_text())
+            return isinstance(data, dict) and str(data.get("format", "")).startswith("satchain")
+    except Exception:  # unreadable: not ours
+        return False
+    return False
+
+
+def check_sidecars(sidecars: Mapping[str, str | os.PathLike]) -> None:
+    """Files a command writes beside ``-o`` (a ``.png`` preview, a ``.truth.json``) may replace only files
+    satchain wrote itself; a user's file of that name is refused (``-o`` itself is the user's explicit choice)."""
+    for name, value in sidecars.items():
+        p = Path(value)
+        if (p.exists() or p.is_symlink()) and not (p.is_file() and _written_by_satchain(p)):
+            raise ConfigError(
+                f"{name} {str(p)!r} exists and was not written by satchain; it would be overwritten: "
+                "move it or choose another -o"
+            )

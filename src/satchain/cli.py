@@ -18,6 +18,7 @@ from satchain._safety import (
     check_inputs_outside,
     check_memory,
     check_output_files,
+    check_sidecars,
 )
 from satchain.engine.memory import check_simulation_memory
 from satchain.errors import ConfigError
@@ -181,6 +182,7 @@ def scene(
     check_distinct_paths(
         {"-o": out, "-o (preview)": f"{stem}.png", "-o (truth)": f"{stem}.truth.json"}, {"--layout": layout_file}
     )
+    check_sidecars({"-o (preview)": f"{stem}.png", "-o (truth)": f"{stem}.truth.json"})
     _check_scene_size(layout, pixel_m, win, out)
     out.parent.mkdir(parents=True, exist_ok=True)
     bar, update = _progress("rendering scene")
@@ -265,6 +267,7 @@ def simulate(
         {"-o": out, "-o (preview)": out.with_suffix(".png"), "--focal-plane": focal_plane},
         {"INPUT": in_file, "--system": system},
     )
+    check_sidecars({"-o (preview)": out.with_suffix(".png")})
     s = _system(preset, system)
     src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
     sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
