@@ -378,3 +378,19 @@ def test_sidecar_files_replace_only_what_satchain_wrote(tmp_path):
     r = runner.invoke(app, ["scene", "--pixel-m", "2", "-o", str(tmp_path / "s.tif")])
     assert r.exit_code == 2 and "s.truth.json" in r.stderr
     assert (tmp_path / "s.truth.json").read_text() == '{"my": "notes"}'
+
+
+def test_float_image_in_0_255_is_refused_not_saturated(tmp_path):
+    """A float image holding 8-bit values (0..255) is not reflectance: refused with the fix, not a saturated
+    image; with --input-scale 1/255 it simulates to the DN of its reflectance."""
+    a = np.full((300, 300), 51.0, np.float32)  # 51/255 = reflectance 0.2
+    src = _tif(tmp_path / "f255.tif", a)
+    r = runner.invoke(app, ["simulate", str(src), "--no-noise", "-o", str(tmp_path / "o.tif")])
+    assert r.exit_code == 2 and "--input-scale" in r.stderr and not (tmp_path / "o.tif").exists()
+    r = runner.invoke(
+        app, ["simulate", str(src), "--no-noise", "--input-scale", str(1 / 255), "-o", str(tmp_path / "o.tif")]
+    )
+    assert r.exit_code == 0, r.output
+    ref = _tif(tmp_path / "f02.tif", np.full((300, 300), 0.2, np.float32))
+    assert runner.invoke(app, ["simulate", str(ref), "--no-noise", "-o", str(tmp_path / "r.tif")]).exit_code == 0
+    np.testing.assert_array_equal(tifffile.imread(tmp_path / "o.tif"), tifffile.imread(tmp_path / "r.tif"))

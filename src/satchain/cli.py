@@ -207,6 +207,8 @@ def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> Non
 
 
 _IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".npy")
+#: reflectance an image input may hold after scaling (glints above 1 allowed; 255 or 65535 are not reflectance)
+REFLECTANCE_RANGE = (-0.5, 4.0)
 
 
 def _ground_truth(input_: str, scene_pixel_m: float | None, input_scale: float | None = None):
@@ -214,7 +216,7 @@ def _ground_truth(input_: str, scene_pixel_m: float | None, input_scale: float |
     from satchain.scene import ImageScene, load_layout
 
     if Path(input_).suffix.lower() in _IMAGE_SUFFIXES:
-        img = ImageScene(input_, pixel_m=scene_pixel_m, scale=input_scale)
+        img = ImageScene(input_, pixel_m=scene_pixel_m, scale=input_scale, valid_range=REFLECTANCE_RANGE)
         return SceneSource(img), None
     if input_scale is not None:
         raise ConfigError(f"--input-scale {input_scale:g}: applies to image inputs only, not to scene {input_!r}")

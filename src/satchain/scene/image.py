@@ -45,6 +45,8 @@ class ImageScene:
     scale : multiply stored values by this to get reflectance. Default (None): integer images are
         scaled by ``1 / (2**bits - 1)`` (8-bit 0..255 and 16-bit 0..65535 -> 0..1; ``bits`` from the
         file's ``bit_depth`` metadata or BitsPerSample, see :func:`satchain.io.integer_scale`), floats by 1.
+    valid_range : (lo, hi) reflectance allowed after scaling; a window outside it is an InputError
+        (``satchain simulate`` uses (-0.5, 4): values of 255 or 65535 are not reflectance).
 
     Examples
     --------
@@ -59,7 +61,14 @@ class ImageScene:
 
     name = "image"
 
-    def __init__(self, source, pixel_m: float | None = None, *, scale: float | None = None):
+    def __init__(
+        self,
+        source,
+        pixel_m: float | None = None,
+        *,
+        scale: float | None = None,
+        valid_range: tuple[float, float] | None = None,
+    ):
         meta: dict = {}
         if isinstance(source, (str, os.PathLike)):
             self._reader = open_image(source)
@@ -84,6 +93,7 @@ class ImageScene:
         if scale is None:
             scale = integer_scale(self._reader.dtype, meta)
         self.scale = check_positive("--input-scale", scale)
+        self.valid_range = valid_range
         self.metadata = meta
 
     @property
@@ -120,6 +130,14 @@ class ImageScene:
         block = np.asarray(self._reader.read(r0, c0, h, w), dtype=np.float32) * np.float32(self.scale)
         if not np.all(np.isfinite(block)):
             raise InputError(f"image {self.name!r}: window {tuple(window)} holds NaN/inf; ground truth must be finite")
+        if self.valid_range is not None:
+            lo, hi = float(block.min()), float(block.max())
+            if lo < self.valid_range[0] or hi > self.valid_range[1]:
+                raise InputError(
+                    f"image {self.name!r}: values {lo:g}..{hi:g} (x scale {self.scale:g}) in window {tuple(window)} "
+                    f"are not reflectance (allowed {self.valid_range[0]:g}..{self.valid_range[1]:g}); "
+                    "give --input-scale, e.g. 0.00392157 (1/255) for 8-bit values stored as floats"
+                )
         return block
 
     def truth(self, pixel_m: float | None = None, window: Window | None = None) -> dict:
