@@ -274,6 +274,11 @@ def simulate(
     src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
     sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
     sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
+    if min(sim.k) < 1:
+        raise ConfigError(
+            f"--scene-pixel-m {src.pixel_m:g}: the ground truth must be finer than the camera's ground pixel "
+            f"({min(s.gsd_alt_m, s.gsd_act_m):.4g} m); a coarser one cannot show what the camera sees"
+        )
     check_simulation_memory(sim, focal_plane=fp_grid if focal_plane is not None else None)
     out.parent.mkdir(parents=True, exist_ok=True)
     if focal_plane is not None:
