@@ -110,6 +110,8 @@ def _cases(f):
         "scene zero pixel": ["scene", "--pixel-m", "0", "-o", out],
         "scene window of 3": ["scene", "--window", "1,2,3", "-o", out],
         "scene window words": ["scene", "--window", "a,b,c,d", "-o", out],
+        "scene window outside": ["scene", "--pixel-m", "1", "--window", "100000,0,10,10", "-o", out],
+        "scene window negative": ["scene", "--pixel-m", "1", "--window", "-5,0,10,10", "-o", out],
         "scene micrometre pixels": ["scene", "--pixel-m", "1e-6", "-o", out],
         "scene -o a directory": ["scene", "--pixel-m", "2", "-o", str(d)],
         "scene -o over layout": ["scene", "--layout", str(f["bad_scene"]), "-o", str(f["bad_scene"])],

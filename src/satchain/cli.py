@@ -199,7 +199,13 @@ def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> Non
 
     sc = load_layout(layout)
     p = sc.pixel_m if pixel_m is None else check_positive("--pixel-m", pixel_m)
-    rows, cols = sc.shape_px(p) if win is None else win[2:]
+    full = sc.shape_px(p)
+    if win is not None and (win[0] < 0 or win[1] < 0 or win[0] + win[2] > full[0] or win[1] + win[3] > full[1]):
+        raise ConfigError(
+            f"--window {win[1]},{win[0]},{win[3]},{win[2]} (X0,Y0,W,H): outside the scene, which is {full[1]} x "
+            f"{full[0]} px (W x H) at --pixel-m {p:g}"
+        )
+    rows, cols = full if win is None else win[2:]
     what = f"scene {rows} x {cols} px at --pixel-m {p:g}"
     fix = "use a larger --pixel-m or a --window"
     check_memory(4096.0 * (rows / 256 + 1) * (cols / 256 + 1) + 8 * 2**20, what, fix=fix)  # tile index
