@@ -231,8 +231,8 @@ def _swap_in(staging: Path, out: Path) -> None:
     if out.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
         os.rmdir(old)
+        _claim_run_dir(out, marker=False)  # owned by this process from before it is renamed
         os.replace(out, old)
-        _claim_run_dir(old, marker=False)
     try:
         os.replace(staging, out)
     except BaseException:
