@@ -132,7 +132,7 @@ def _cases(f):
         "simulate complex image": ["simulate", str(f["complex"]), "--scene-pixel-m", "0.5", "-o", out],
         "simulate pickled objects": ["simulate", str(f["objects"]), "--scene-pixel-m", "0.5", "-o", out],
         "edge complex image": ["measure", "edge", str(f["complex"]), "--pixel-m", "0.5"],
-        "simulate truth coarser than GSD": ["simulate", "paper", "--scene-pixel-m", "1000", "-o", out],
+        "simulate a one-pixel truth": ["simulate", "paper", "--scene-pixel-m", "1000", "-o", out],
         "simulate truth at a millimetre": ["simulate", "paper", "--scene-pixel-m", "1e-3", "-o", out],
         "simulate negative pixel": ["simulate", img, "--scene-pixel-m", "-1", "-o", out],
         "simulate bad units": ["simulate", img, "--units", "furlongs", "-o", out],

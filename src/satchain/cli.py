@@ -280,12 +280,12 @@ def simulate(
     src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
     sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
     sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
-    if min(sim.k) < 1:
-        raise ConfigError(
-            f"--scene-pixel-m {src.pixel_m:g}: the ground truth must be finer than the camera's ground pixel "
-            f"({min(s.gsd_alt_m, s.gsd_act_m):.4g} m); a coarser one cannot show what the camera sees"
-        )
     check_simulation_memory(sim, focal_plane=fp_grid if focal_plane is not None else None)
+    if min(src.shape_px) < 8:
+        raise ConfigError(
+            f"INPUT {input_!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; a "
+            "ground truth needs at least 8 px a side: check --scene-pixel-m"
+        )
     out.parent.mkdir(parents=True, exist_ok=True)
     if focal_plane is not None:
         focal_plane.parent.mkdir(parents=True, exist_ok=True)
