@@ -303,6 +303,24 @@ def test_predict_from_a_system_matches_the_system_otf_in_cycles_per_pixel(ankara
     assert p.edges["alt"].mtf_at_nyquist == pytest.approx(nyq["alt"], rel=1e-9)
 
 
+def test_local_predictions_leave_out_the_aerosol_adjacency_plateau(ankarasat3):
+    """Aerosol adjacency puts a plateau 1 - s on every image frequency (its PSF spans ~200 m): the system MTF
+    at Nyquist drops by exactly 1 - s, but an edge measured in a local ROI normalises that away, so the edge
+    prediction is the one without adjacency."""
+    from satchain.tf.budget import SystemOTF, mtf_at_nyquist
+
+    s = 0.1
+    hazy = ankarasat3.model_copy(
+        update={"atmosphere": ankarasat3.atmosphere.model_copy(update={"aerosol_scattered_fraction": s})}
+    )
+    truth = {"items": [edge_truth("act", 0.0), edge_truth("alt", 90.0)]}
+    clear = predict(ankarasat3, truth, otf=SystemOTF(ankarasat3), quality={"giqe5": 3.0})
+    local = predict(hazy, truth, otf=SystemOTF(hazy), quality={"giqe5": 3.0})
+    for axis in ("act", "alt"):
+        assert mtf_at_nyquist(hazy)[axis] == pytest.approx((1 - s) * mtf_at_nyquist(ankarasat3)[axis], rel=1e-6)
+        assert local.edges[axis].mtf_at_nyquist == pytest.approx(clear.edges[axis].mtf_at_nyquist, rel=1e-9)
+
+
 def test_saturation_warning_names_the_target_and_its_electrons():
     class Sensor:
         full_well_e, offset_e, dark_e, electrons_per_unit = 1000.0, 10.0, 0.0, 1500.0

@@ -3,29 +3,104 @@
 from __future__ import annotations
 
 import functools
+import logging
 import math
+import os
 import shutil
 
+import click
 import typer
 from rich.console import Console
+from rich.text import Text
 
 from satchain.errors import ConfigError, SatchainError
 
-__all__ = ["console", "err_console", "handle_errors", "parse_numbers"]
+__all__ = [
+    "console",
+    "err_console",
+    "error_line",
+    "handle_errors",
+    "parse_numbers",
+    "print_error",
+    "print_warning",
+    "set_debug",
+]
+
+# readers' own log lines (e.g. tifffile's "invalid offset") would add a second line to an error message
+logging.getLogger("tifffile").setLevel(logging.ERROR)
 
 console = Console(width=max(shutil.get_terminal_size((150, 40)).columns, 120))
 err_console = Console(stderr=True, soft_wrap=True)
 
 
+_DEBUG = {"on": os.environ.get("SATCHAIN_DEBUG", "") not in ("", "0")}
+
+
+def set_debug(on: bool) -> None:
+    """``--debug``: let errors propagate with their traceback instead of the one-line message."""
+    _DEBUG["on"] = bool(on)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def error_line(exc: BaseException) -> str:
+    """The one-line message for any exception (satchain's own say what to fix; others get a hint).
+
+    Examples
+    --------
+    >>> error_line(IsADirectoryError(21, "Is a directory", "/tmp"))
+    "'/tmp': is a directory: give a file path"
+    >>> error_line(KeyError("alt"))
+    "unexpected KeyError: 'alt' (run with --debug for a traceback and please report it)"
+    """
+    if isinstance(exc, SatchainError):
+        return _one_line(exc)
+    if isinstance(exc, OSError):
+        name = exc.filename if exc.filename is not None else ""
+        what = (exc.strerror or str(exc)).lower()
+        fixes = {
+            IsADirectoryError: "give a file path",
+            NotADirectoryError: "a parent of this path is a file, not a folder",
+            FileNotFoundError: "check the path",
+            FileExistsError: "a file is in the way: choose another path",
+            PermissionError: "check the permissions or choose another path",
+        }
+        fix = next((v for k, v in fixes.items() if isinstance(exc, k)), "check the path and the free disk space")
+        return _one_line(f"{str(name)!r}: {what}: {fix}" if name else f"{what}: {fix}")
+    if isinstance(exc, MemoryError):
+        return "out of memory: reduce the image or scene size (or the window), or use a machine with more memory"
+    return _one_line(f"unexpected {type(exc).__name__}: {exc} (run with --debug for a traceback and please report it)")
+
+
+def print_error(exc: BaseException) -> None:
+    """Print ``error: <message>`` on stderr as plain text (no rich markup: ``[dask]`` stays as written)."""
+    err_console.print(Text("error: ", style="bold red") + Text(error_line(exc)), highlight=False, soft_wrap=True)
+
+
+def print_warning(message: str, console: Console | None = None) -> None:
+    """Print ``warning: <message>`` on stderr as plain text (brackets in the message are kept)."""
+    text = Text("warning: ", style="bold yellow") + Text(_one_line(message))
+    (console or err_console).print(text, highlight=False, soft_wrap=True)
+
+
 def handle_errors(fn):
-    """Turn satchain's errors into one clear line on stderr and exit status 2 (no traceback)."""
+    """Turn every error into one clear line on stderr and exit status 2 (no traceback unless ``--debug``).
+
+    Typer's own exits and usage errors pass through unchanged (usage errors keep exit status 2).
+    """
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except SatchainError as exc:
-            err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        except (typer.Exit, typer.Abort, click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
+            raise
+        except Exception as exc:
+            if _DEBUG["on"]:
+                raise
+            print_error(exc)
             raise typer.Exit(2) from None
 
     return wrapper

@@ -3,13 +3,25 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
-from satchain._cli_common import console, err_console, handle_errors, parse_numbers
+from satchain._cli_common import console, err_console, handle_errors, parse_numbers, print_warning, set_debug
+from satchain._safety import (
+    check_dir_outputs,
+    check_disk,
+    check_distinct_paths,
+    check_inputs_outside,
+    check_memory,
+    check_output_files,
+    check_sidecars,
+)
+from satchain.engine.memory import check_simulation_memory
 from satchain.errors import ConfigError
 
 app = typer.Typer(
@@ -25,6 +37,14 @@ SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML fi
 
 
 _handle_errors = handle_errors
+
+
+@app.callback()
+def _main(
+    debug: Annotated[bool, typer.Option("--debug", help="show the traceback of an error (for bug reports)")] = False,
+) -> None:
+    """Satellite image-chain simulation and image-quality measurement."""
+    set_debug(debug or os.environ.get("SATCHAIN_DEBUG", "") not in ("", "0"))
 
 
 def _system(preset: str | None, system: Path | None):
@@ -104,6 +124,7 @@ def budget(
     out: Annotated[Path | None, typer.Option("-o", "--out", help="also write CSV tables, JSON and plots here")] = None,
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
+    check_dir_outputs(out, ["*.json", "*.csv", "*.png"], {"--system": system})
     s = _system(preset, system)
     res = _budget(s, _parse_floats("--freqs", freqs))
     if out is not None:
@@ -111,7 +132,7 @@ def budget(
 
         written = write_budget_outputs(s, res, out)
         if not as_json:
-            console.print("wrote " + ", ".join(str(p) for p in written))
+            console.print("wrote " + ", ".join(str(p) for p in written), markup=False, highlight=False)
     if as_json:
         print(json.dumps(res, indent=2))
     else:
@@ -130,6 +151,7 @@ def _progress(description: str):
         TimeRemainingColumn(),
         console=err_console,
         transient=False,
+        disable=not err_console.is_terminal,  # no bar in logs and pipes: an error stays one line
     )
     task = bar.add_task(description, total=None)
 
@@ -155,24 +177,56 @@ def scene(
     from satchain.scene import parse_cli_window, render_scene_to_file
 
     win = parse_cli_window(window) if window else None
+    stem = out.with_suffix("") if out.suffix.lower() in (".tif", ".tiff") else out
+    layout_file = None if layout == "paper" else layout
+    check_output_files({"-o": out})
+    check_distinct_paths(
+        {"-o": out, "-o (preview)": f"{stem}.png", "-o (truth)": f"{stem}.truth.json"}, {"--layout": layout_file}
+    )
+    check_sidecars({"-o (preview)": f"{stem}.png", "-o (truth)": f"{stem}.truth.json"})
+    _check_scene_size(layout, pixel_m, win, out)
     out.parent.mkdir(parents=True, exist_ok=True)
     bar, update = _progress("rendering scene")
     with bar:
         written = render_scene_to_file(layout, out, pixel_m=pixel_m, window=win, progress=update)
     for kind, path in written.items():
-        console.print(f"wrote {kind}: {path}")
+        console.print(f"wrote {kind}: {path}", markup=False, highlight=False)
+
+
+def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> None:
+    """Refuse a render that cannot fit (the TIFF on disk, its tile index in memory) before writing anything."""
+    from satchain._validate import check_positive
+    from satchain.scene import load_layout
+
+    sc = load_layout(layout)
+    p = sc.pixel_m if pixel_m is None else check_positive("--pixel-m", pixel_m)
+    full = sc.shape_px(p)
+    if win is not None and (win[0] < 0 or win[1] < 0 or win[0] + win[2] > full[0] or win[1] + win[3] > full[1]):
+        raise ConfigError(
+            f"--window {win[1]},{win[0]},{win[3]},{win[2]} (X0,Y0,W,H): outside the scene, which is {full[1]} x "
+            f"{full[0]} px (W x H) at --pixel-m {p:g}"
+        )
+    rows, cols = full if win is None else win[2:]
+    what = f"scene {rows} x {cols} px at --pixel-m {p:g}"
+    fix = "use a larger --pixel-m or a --window"
+    check_memory(4096.0 * (rows / 256 + 1) * (cols / 256 + 1) + 8 * 2**20, what, fix=fix)  # tile index
+    check_disk(4.0 * rows * cols, [out], what, fix=fix)
 
 
 _IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".npy")
+#: reflectance an image input may hold after scaling (glints above 1 allowed; 255 or 65535 are not reflectance)
+REFLECTANCE_RANGE = (-0.5, 4.0)
 
 
-def _ground_truth(input_: str, scene_pixel_m: float | None):
+def _ground_truth(input_: str, scene_pixel_m: float | None, input_scale: float | None = None):
     from satchain.engine.sources import SceneSource
     from satchain.scene import ImageScene, load_layout
 
     if Path(input_).suffix.lower() in _IMAGE_SUFFIXES:
-        img = ImageScene(input_, pixel_m=scene_pixel_m)
+        img = ImageScene(input_, pixel_m=scene_pixel_m, scale=input_scale, valid_range=REFLECTANCE_RANGE)
         return SceneSource(img), None
+    if input_scale is not None:
+        raise ConfigError(f"--input-scale {input_scale:g}: applies to image inputs only, not to scene {input_!r}")
     sc = load_layout(input_)
     return SceneSource(sc, pixel_m=scene_pixel_m), sc
 
@@ -194,6 +248,14 @@ def simulate(
         str, typer.Option("--focal-plane-grid", help="input: on the input grid (exact); coarse: every D-th pixel")
     ] = "input",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address, or 'local'")] = None,
+    input_scale: Annotated[
+        float | None,
+        typer.Option(
+            "--input-scale",
+            help="multiply image values by this to get reflectance (default: integer images / (2^bits - 1), "
+            "so 8-bit 255 and 16-bit 65535 are reflectance 1; float images as they are)",
+        ),
+    ] = None,
     out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF")] = ...,
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size)."""
@@ -205,13 +267,29 @@ def simulate(
     from satchain.engine.simulate import Simulator
 
     check_choice("--units", units_, OUTPUT_UNITS)
+    check_choice("--focal-plane-grid", fp_grid, ("input", "coarse"))
+    if seed < 0:
+        raise ConfigError(f"--seed {seed}: must be >= 0")
+    in_file = input_ if Path(input_).exists() else None
+    check_output_files({"-o": out, "--focal-plane": focal_plane})
+    check_distinct_paths(
+        {"-o": out, "-o (preview)": out.with_suffix(".png"), "--focal-plane": focal_plane},
+        {"INPUT": in_file, "--system": system},
+    )
+    check_sidecars({"-o (preview)": out.with_suffix(".png")})
+    s = _system(preset, system)
+    src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
+    sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
+    sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
+    check_simulation_memory(sim, focal_plane=fp_grid if focal_plane is not None else None)
+    if min(src.shape_px) < 8:
+        raise ConfigError(
+            f"INPUT {input_!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; a "
+            "ground truth needs at least 8 px a side: check --scene-pixel-m"
+        )
     out.parent.mkdir(parents=True, exist_ok=True)
     if focal_plane is not None:
         focal_plane.parent.mkdir(parents=True, exist_ok=True)
-    s = _system(preset, system)
-    src, _ = _ground_truth(input_, scene_pixel_m)
-    sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
-    sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
     bar, update = _progress(f"simulating {src.shape_px[0]}x{src.shape_px[1]} px")
     with bar:
         if scheduler is not None:
@@ -221,9 +299,7 @@ def simulate(
         else:
             coarse = sim.decimate(src, progress=update)
     img = sim.run(src, sensor=sensor, units=units_, noise=not no_noise, seed=seed, coarse=coarse)
-    dtype = np.uint16 if units_ == "dn" and s.detector.bit_depth and s.detector.bit_depth <= 16 else np.float32
     meta = {
-        "units": units_,
         "system": s.name,
         "seed": seed,
         "noise": not no_noise,
@@ -232,15 +308,19 @@ def simulate(
         "input": str(input_),
         "input_pixel_m": src.pixel_m,
     }
-    io.write_tiff(out, img.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
-    io.write_png(out.with_suffix(".png"), io.preview_uint8(img), pixel_m=s.gsd_act_m)
-    console.print(f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}")
+    bits = sensor.bit_depth if sensor is not None else s.detector.bit_depth
+    io.write_simulated(out, img, units=units_, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)
+    console.print(
+        f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}",
+        markup=False,
+        highlight=False,
+    )
     if focal_plane is not None:
         fp = sim.focal_plane(coarse, grid=fp_grid)
         fp_pixel = src.pixel_m * (sim.D if fp_grid == "coarse" else 1)
         meta = {"units": "input (reflectance) filtered by the optics and motion", "system": s.name, "grid": fp_grid}
         io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=fp_pixel, metadata=meta)
-        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)")
+        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)", markup=False, highlight=False)
 
 
 def _print_run(result) -> None:
@@ -250,13 +330,13 @@ def _print_run(result) -> None:
         t.add_column(col, justify="left" if col == "figure of merit" else "right")
     for r in c.rows:
         verdict = "n/a" if r.passed is None else ("[green]pass[/]" if r.passed else "[red]FAIL[/]")
-        t.add_row(r.figure, _fmt(r.measured), _fmt(r.predicted), r.tolerance_text, verdict)
+        t.add_row(Text(r.figure), _fmt(r.measured), _fmt(r.predicted), r.tolerance_text, verdict)
     console.print(t)
     for r in c.rows:
         if r.passed is None and r.reason:
-            err_console.print(f"[bold]n/a:[/] {r.figure}: {r.reason}", highlight=False)
+            err_console.print(Text("n/a: ", style="bold") + Text(f"{r.figure}: {r.reason}"), highlight=False)
     for w in result.warnings:
-        err_console.print(f"[bold yellow]warning:[/] {w}", highlight=False)
+        print_warning(w)
 
 
 @app.command()
@@ -288,6 +368,7 @@ def run(
         print(DEFAULT_CONFIG_TOML, end="")
         return
     cfg = load_run_config(config)
+    check_inputs_outside(out, {"--config": config, "system.file": cfg.system_path()})
     if preset is not None:
         cfg = RunConfig.from_dict({**cfg.to_dict(), "system": {"preset": preset}}, base_dir=cfg.base_dir)
     bar = Progress(
@@ -296,6 +377,7 @@ def run(
         TextColumn("{task.percentage:>3.0f}%"),
         TimeElapsedColumn(),
         console=err_console,
+        disable=not err_console.is_terminal,
     )
     tasks = {name: bar.add_task(name, total=None, start=False) for name in STAGES}
 
@@ -306,7 +388,7 @@ def run(
     with bar:
         result = satchain.run(cfg, out_dir=out, progress=update)
     _print_run(result)
-    console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}")
+    console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}", markup=False, highlight=False)
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
@@ -315,7 +397,7 @@ def run(
 
 from satchain.cli_measure import measure_app  # noqa: E402
 
-app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto.")
+app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find.")
 
 
 def main() -> None:  # pragma: no cover

@@ -19,6 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from satchain._cli_common import handle_errors, parse_numbers
+from satchain._safety import check_dir_outputs, check_star_radius
 from satchain.errors import ConfigError, SatchainIOError
 
 __all__ = ["measure_app"]
@@ -146,6 +147,7 @@ def edge(
     from satchain.measure.edge import measure_edge
     from satchain.report.measure_plots import plot_edge
 
+    check_dir_outputs(out, ["edge.json", "edge.png"], {"IMAGE": image})
     data, p, _ = _load(image, pixel_m)
     region = _roi("--roi", roi)
     r = measure_edge(data, roi=region, pixel_m=p)
@@ -199,7 +201,9 @@ def star(
     from satchain.measure.star import STAR_DIRECTIONS, measure_star
     from satchain.report.measure_plots import plot_star
 
+    check_dir_outputs(out, ["star.json", "star.png"], {"IMAGE": image})
     data, p, _ = _load(image, pixel_m)
+    check_star_radius(radius, data.shape)
     region = _roi("--roi", roi)
     c = None if center is None else _numbers("--center", center, 2)
     if c is not None and region is not None:
@@ -251,6 +255,7 @@ def bars(
     from satchain.measure.bars import measure_bars
     from satchain.report.measure_plots import plot_bars
 
+    check_dir_outputs(out, ["bars.json", "bars.png"], {"IMAGE": image})
     data, p, _ = _load(image, pixel_m)
     periods = _numbers("--periods-px", periods_px)
     if group_roi:
@@ -380,6 +385,7 @@ def wedge(
     from satchain.measure.wedge import measure_wedge
     from satchain.report.measure_plots import plot_wedge
 
+    check_dir_outputs(out, ["wedge.json", "wedge.png"], {"IMAGE": image, "--truth": truth})
     data, p, meta = _load(image, pixel_m)
     if truth is not None:
         if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
@@ -498,6 +504,7 @@ def auto(
     """Every applicable measurement of a (simulated) image, guided by its scene's truth file."""
     from satchain.measure.auto import measure_auto
 
+    check_dir_outputs(out, ["auto.json", "*.png"], {"IMAGE": image, "--truth": truth})
     data, p, meta = _load(image, pixel_m)
     res = measure_auto(data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}

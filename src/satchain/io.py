@@ -37,13 +37,19 @@ import numpy as np
 import tifffile
 from PIL import Image, PngImagePlugin
 
+from satchain._safety import check_memory, clean_stale_temp_files
 from satchain._validate import check_positive
 from satchain.errors import InputError, SatchainIOError
 
 __all__ = [
     "BIGTIFF_THRESHOLD_BYTES",
+    "ImageReader",
     "atomic_path",
+    "integer_scale",
+    "open_image",
     "read_image",
+    "simulated_dtype",
+    "write_simulated",
     "write_npy",
     "write_png",
     "write_tiff",
@@ -73,7 +79,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     final = Path(path)
     if not final.parent.is_dir():
         raise SatchainIOError(f"output = {str(final)!r}: directory {str(final.parent)!r} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent)
+    clean_stale_temp_files(final)  # left by a killed process (the pid in the name is gone)
+    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.{os.getpid()}.", suffix=".tmp", dir=final.parent)
     os.close(fd)
     tmp_path = Path(tmp)
     try:
@@ -269,37 +276,71 @@ def write_npy(path: str | os.PathLike, image: np.ndarray) -> None:
 
 def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with tifffile.TiffFile(path) as tf:
-        page = tf.pages[0]
-        image = page.asarray()
-        meta: dict[str, Any] = {"format": "tiff", "bigtiff": tf.is_bigtiff}
-        desc = page.tags.get(270)
-        if desc is not None:
-            with contextlib.suppress(ValueError, TypeError, AttributeError):
-                meta.update({k: v for k, v in json.loads(desc.value).get("satchain", {}).items() if v is not None})
-        scale = page.tags.get(_MODEL_PIXEL_SCALE)
-        if scale is not None:
-            sx, sy = float(scale.value[0]), float(scale.value[1])
-            if not math.isclose(sx, sy, rel_tol=1e-9):
-                meta["pixel_m_xy"] = [sx, sy]
-            meta["pixel_m"] = sx
-        tie = page.tags.get(_MODEL_TIEPOINT)
-        if tie is not None and len(tie.value) >= 6:
-            i, j = float(tie.value[0]), float(tie.value[1])
-            px = meta.get("pixel_m", 1.0)
-            meta["origin_m"] = [float(tie.value[3]) - i * px, -(float(tie.value[4]) + j * px)]
-    return image, meta
+        page = _first_page(tf, path)
+        check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(path)!r}")
+        return page.asarray(), _tiff_meta(tf, page)
+
+
+def _first_page(tf, path: Path):
+    if len(tf.pages) == 0 or tf.pages.first is None:
+        raise SatchainIOError(f"image = {str(path)!r}: no image in this TIFF (damaged or truncated?)")
+    return tf.pages.first
+
+
+def _nbytes(shape, dtype) -> int:
+    return int(np.prod([int(v) for v in shape], dtype=np.float64) * max(np.dtype(dtype).itemsize, 4))
+
+
+def _tiff_meta(tf, page) -> dict[str, Any]:
+    meta: dict[str, Any] = {"format": "tiff", "bigtiff": tf.is_bigtiff, "bits_per_sample": page.bitspersample}
+    desc = page.tags.get(270)
+    if desc is not None:
+        with contextlib.suppress(ValueError, TypeError, AttributeError):
+            meta.update({k: v for k, v in json.loads(desc.value).get("satchain", {}).items() if v is not None})
+    scale = page.tags.get(_MODEL_PIXEL_SCALE)
+    if scale is not None:
+        sx, sy = float(scale.value[0]), float(scale.value[1])
+        if not math.isclose(sx, sy, rel_tol=1e-9):
+            meta["pixel_m_xy"] = [sx, sy]
+        meta["pixel_m"] = sx
+    tie = page.tags.get(_MODEL_TIEPOINT)
+    if tie is not None and len(tie.value) >= 6:
+        i, j = float(tie.value[0]), float(tie.value[1])
+        px = meta.get("pixel_m", 1.0)
+        meta["origin_m"] = [float(tie.value[3]) - i * px, -(float(tie.value[4]) + j * px)]
+    return _checked_meta(meta)
+
+
+def _checked_meta(meta: dict[str, Any]) -> dict[str, Any]:
+    """A stated pixel size must be a number in (0, 1e6] m; otherwise it moves to ``invalid_pixel_m``."""
+    v = meta.get("pixel_m")
+    if v is None:
+        return meta
+    try:
+        f = float(v)
+        ok = math.isfinite(f) and 0 < f <= 1e6
+    except (TypeError, ValueError):
+        ok = False
+    if ok:
+        meta["pixel_m"] = f
+    else:
+        meta.pop("pixel_m")
+        meta["invalid_pixel_m"] = v
+    return meta
 
 
 def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with Image.open(path) as img:
+        check_memory(8.0 * img.size[0] * img.size[1], f"image = {str(path)!r} ({img.size[0]} x {img.size[1]} px)")
         img.load()
         meta: dict[str, Any] = {"format": "png"}
         text = img.info.get("satchain")
         if text:
             with contextlib.suppress(ValueError, TypeError):
                 meta.update(json.loads(text))
-        if "pixel_m" not in meta and img.info.get("dpi"):
-            meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
+        with contextlib.suppress(TypeError, ValueError, ZeroDivisionError, IndexError):
+            if "pixel_m" not in meta and img.info.get("dpi"):
+                meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
         if img.mode in ("I;16", "I;16B", "I;16L"):
             arr = np.array(img, dtype=np.uint16)
         elif img.mode == "I":
@@ -309,7 +350,7 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         else:
             arr = np.array(img.convert("L"))
             meta["converted_from"] = img.mode
-    return arr, meta
+    return arr, _checked_meta(meta)
 
 
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
@@ -320,17 +361,205 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
     """
     p = Path(path)
     if not p.is_file():
-        raise SatchainIOError(f"image = {str(p)!r}: no such file")
+        what = "is a directory, not an image file" if p.is_dir() else "no such file"
+        raise SatchainIOError(f"image = {str(p)!r}: {what}")
     suffix = p.suffix.lower()
     try:
-        if suffix in (".tif", ".tiff"):
-            return _read_tiff(p)
-        if suffix == ".png":
-            return _read_png(p)
-        if suffix == ".npy":
-            return np.load(p, allow_pickle=False), {"format": "npy"}
-    except (OSError, ValueError, tifffile.TiffFileError) as exc:
-        if isinstance(exc, SatchainIOError):
+        if suffix in (".tif", ".tiff", ".png", ".npy"):
+            if suffix == ".png":
+                image, meta = _read_png(p)
+            elif suffix == ".npy":
+                image, meta = np.load(p, allow_pickle=False), {"format": "npy"}
+            else:
+                image, meta = _read_tiff(p)
+            if image.dtype.kind not in "biuf":
+                raise InputError(f"image = {str(p)!r}: values must be real numbers, got dtype {image.dtype}")
+            return image, meta
+    except (OSError, ValueError, tifffile.TiffFileError, Image.DecompressionBombError) as exc:
+        if isinstance(exc, (SatchainIOError, InputError)):
             raise
         raise SatchainIOError(f"image = {str(p)!r}: cannot read: {exc}") from exc
     raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {suffix!r}; use .tif, .tiff, .png or .npy")
+
+
+# ---------------------------------------------------------------------------------------------- windowed reading
+class ImageReader:
+    """Window access to a 2-D image file without reading it whole where the format allows it.
+
+    Tiled or stripped TIFF / GeoTIFF / BigTIFF (any compression) is read segment by segment, contiguous
+    uncompressed TIFF and NPY through a memory map; PNG and colour TIFF are read whole (after a memory check).
+    ``read(row0, col0, height, width)`` returns the stored values (the file's dtype) of a window inside the image.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "t.tif")
+    >>> write_tiff(p, np.arange(1200, dtype=np.uint16).reshape(30, 40), tile=(16, 16))
+    >>> with open_image(p) as r:
+    ...     r.shape, r.read(17, 20, 2, 3).tolist()
+    ((30, 40), [[700, 701, 702], [740, 741, 742]])
+    """
+
+    def __init__(self, path: Path):
+        self.path = path
+        self._tf = None
+        self._array = None
+        self.segments_read = 0  # decoded TIFF segments (tiles or strips), for tests and benchmarks
+        suffix = path.suffix.lower()
+        if suffix in (".tif", ".tiff"):
+            self._open_tiff()
+        elif suffix == ".npy":
+            self._array = np.load(path, mmap_mode="r", allow_pickle=False)
+            self.meta: dict[str, Any] = {"format": "npy"}
+        else:
+            self._array, self.meta = read_image(path)
+        if self._array is not None:
+            if self._array.dtype.kind not in "biuf":
+                raise InputError(f"image = {str(path)!r}: values must be real numbers, got dtype {self._array.dtype}")
+            if self._array.ndim != 2:
+                raise InputError(f"image = {str(path)!r}: must be 2-D (one band), got shape {self._array.shape}")
+            self.shape, self.dtype = tuple(int(v) for v in self._array.shape), self._array.dtype
+
+    def _open_tiff(self) -> None:
+        self._tf = tf = tifffile.TiffFile(self.path)
+        page = _first_page(tf, self.path)
+        self.meta = _tiff_meta(tf, page)
+        self._page = page
+        if page.samplesperpixel != 1 or len(page.shape) != 2 or getattr(page, "imagedepth", 1) > 1:
+            check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(self.path)!r}")
+            arr, _ = read_image(self.path)  # colour: converted to grayscale whole
+            self._array = np.asarray(arr)[..., 0] if np.asarray(arr).ndim == 3 else arr
+            return
+        if page.is_memmappable:
+            self._array = tifffile.memmap(self.path, mode="r")
+            return
+        self.shape, self.dtype = (int(page.shape[0]), int(page.shape[1])), np.dtype(page.dtype)
+        if self.dtype.kind not in "biuf":
+            raise InputError(f"image = {str(self.path)!r}: values must be real numbers, got dtype {self.dtype}")
+        self._seg = (page.tilelength, page.tilewidth) if page.is_tiled else (page.rowsperstrip, self.shape[1])
+        self._seg = (min(int(self._seg[0]) or self.shape[0], self.shape[0]), int(self._seg[1]))
+        self._per_row = -(-self.shape[1] // self._seg[1])
+
+    def read(self, row0: int, col0: int, height: int, width: int) -> np.ndarray:
+        rows, cols = self.shape
+        if row0 < 0 or col0 < 0 or height < 1 or width < 1 or row0 + height > rows or col0 + width > cols:
+            raise InputError(f"window = {(row0, col0, height, width)!r}: outside the image of shape {self.shape}")
+        if self._array is not None:
+            return np.array(self._array[row0 : row0 + height, col0 : col0 + width])
+        out = np.empty((height, width), self.dtype)
+        sh, sw = self._seg
+        fh, page = self._tf.filehandle, self._page
+        for i in range(row0 // sh, (row0 + height - 1) // sh + 1):
+            for j in range(col0 // sw, (col0 + width - 1) // sw + 1):
+                index = i * self._per_row + j
+                fh.seek(page.dataoffsets[index])
+                data = fh.read(page.databytecounts[index])
+                seg = page.decode(data, index, jpegtables=page.jpegtables)[0]
+                self.segments_read += 1
+                seg = np.asarray(seg).reshape(seg.shape[-3], seg.shape[-2])
+                r0, c0 = i * sh, j * sw
+                a0, a1 = max(row0, r0), min(row0 + height, r0 + seg.shape[0])
+                b0, b1 = max(col0, c0), min(col0 + width, c0 + seg.shape[1])
+                out[a0 - row0 : a1 - row0, b0 - col0 : b1 - col0] = seg[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0]
+        return out
+
+    def __getstate__(self) -> dict:  # picklable (Dask workers): reopened from the path
+        return {"path": self.path}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["path"])
+
+    def close(self) -> None:
+        if self._tf is not None:
+            self._tf.close()
+            self._tf = None
+
+    def __enter__(self) -> ImageReader:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def open_image(path: str | os.PathLike) -> ImageReader:
+    """Open a TIFF/GeoTIFF/BigTIFF, PNG or NPY image for window reads (see :class:`ImageReader`)."""
+    p = Path(path)
+    if not p.is_file():
+        what = "is a directory, not an image file" if p.is_dir() else "no such file"
+        raise SatchainIOError(f"image = {str(p)!r}: {what}")
+    if p.suffix.lower() not in (".tif", ".tiff", ".png", ".npy"):
+        raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {p.suffix!r}; use .tif, .tiff, .png or .npy")
+    try:
+        return ImageReader(p)
+    except (OSError, ValueError, tifffile.TiffFileError, IndexError, KeyError) as exc:
+        if isinstance(exc, (SatchainIOError, InputError)):
+            raise
+        raise SatchainIOError(f"image = {str(p)!r}: cannot read: {exc}") from exc
+
+
+def integer_scale(dtype, metadata: dict[str, Any] | None = None) -> float:
+    """The factor that turns stored values into reflectance: ``1 / (2**bits - 1)`` for integers, 1 for floats.
+
+    ``bits`` is the file's stated ``bit_depth`` (satchain writes it with DN images), else its TIFF
+    BitsPerSample, else the integer type's width; signed integers use ``2**(bits - 1) - 1``.
+    So 8-bit 0..255 and 16-bit 0..65535 both map to reflectance 0..1; give an explicit scale otherwise.
+
+    Examples
+    --------
+    >>> integer_scale(np.uint8), integer_scale(np.uint16, {"bit_depth": 12}), integer_scale(np.float32)
+    (0.00392156862745098, 0.0002442002442002442, 1.0)
+    """
+    dt = np.dtype(dtype)
+    if dt.kind == "b":
+        return 1.0
+    if dt.kind not in "ui":
+        return 1.0
+    meta = metadata or {}
+    bits = meta.get("bit_depth") or meta.get("bits_per_sample") or dt.itemsize * 8
+    try:
+        bits = int(bits)
+    except (TypeError, ValueError):
+        bits = dt.itemsize * 8
+    bits = min(max(bits, 1), dt.itemsize * 8)
+    return 1.0 / (2.0 ** (bits - 1 if dt.kind == "i" else bits) - 1.0) if bits > 1 or dt.kind == "u" else 1.0
+
+
+# ---------------------------------------------------------------------------------------------- simulated images
+def simulated_dtype(units: str, bit_depth: int | None) -> np.dtype:
+    """The file type of a simulated image: DN at the camera's bit depth (uint8/16/32), float32 otherwise."""
+    if units != "dn":
+        return np.dtype(np.float32)
+    b = 12 if bit_depth is None else int(bit_depth)
+    return np.dtype(np.uint8 if b <= 8 else np.uint16 if b <= 16 else np.uint32)
+
+
+def write_simulated(
+    path: str | os.PathLike,
+    image: np.ndarray,
+    *,
+    units: str,
+    bit_depth: int | None,
+    pixel_m: float,
+    metadata: dict[str, Any] | None = None,
+    preview: bool = True,
+) -> Path | None:
+    """Write a simulated image (TIFF; and a PNG preview beside it): the one writer of ``run`` and ``simulate``.
+
+    DN are stored at the camera's bit depth (values rounded and clipped to ``[0, 2**bits - 1]``, which the
+    sensor model already guarantees), other units as float32. ``bit_depth`` is recorded in the metadata,
+    so reading the file back as ground truth scales it by ``1 / (2**bits - 1)``. Returns the preview path.
+    """
+    dtype = simulated_dtype(units, bit_depth)
+    a = np.asarray(image)
+    if units == "dn":
+        top = 2.0 ** (12 if bit_depth is None else int(bit_depth)) - 1
+        a = np.clip(np.round(a), 0, top)
+    meta = {**(metadata or {}), "units": units}
+    if units == "dn":
+        meta["bit_depth"] = 12 if bit_depth is None else int(bit_depth)
+    write_tiff(path, a.astype(dtype), pixel_m=pixel_m, metadata=meta)
+    if not preview:
+        return None
+    png = Path(path).with_suffix(".png")
+    write_png(png, preview_uint8(image), pixel_m=pixel_m)
+    return png

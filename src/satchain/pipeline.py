@@ -29,7 +29,6 @@ import numpy as np
 
 from satchain.api import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
 from satchain.comparison import Comparison
-from satchain.errors import SatchainIOError
 from satchain.prediction import Predictions
 from satchain.runconfig import RunConfig
 
@@ -73,6 +72,7 @@ def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
 def _stage_simulate(
     config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress
 ) -> SimulationResult:
+    from satchain.engine.memory import check_simulation_memory
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
@@ -81,6 +81,7 @@ def _stage_simulate(
     src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
     sim = Simulator(budget.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=budget.otf)
+    check_simulation_memory(sim, focal_plane="coarse")
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
     sensor = sensor_from_system(budget.system)
     image = sim.run(src, sensor=sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
@@ -182,9 +183,10 @@ def _write_images(result: RunResult, out: Path) -> None:
     c, s, sim = result.config.simulation, result.system, result.simulation
     d = out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
-    dtype = np.uint16 if c.units == "dn" else np.float32
-    io.write_tiff(d / "simulated.tif", sim.image.astype(dtype), pixel_m=s.gsd_act_m, metadata=meta)
-    io.write_png(d / "simulated.png", io.preview_uint8(sim.image), pixel_m=s.gsd_act_m)
+    io.write_simulated(
+        d / "simulated.tif", sim.image, units=c.units, bit_depth=sim.sensor.bit_depth, pixel_m=s.gsd_act_m,
+        metadata=meta,
+    )
     io.write_tiff(
         d / "focal_plane.tif",
         sim.focal_plane.astype(np.float32),
@@ -244,11 +246,10 @@ def _manifest(result: RunResult) -> dict[str, Any]:
 
 
 def _check_out_dir(out: Path) -> None:
-    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / MANIFEST).exists())):
-        raise SatchainIOError(
-            f"-o {str(out)!r}: exists and is not a satchain run directory (no {MANIFEST}); "
-            "choose a new or empty directory, nothing was changed"
-        )
+    from satchain._safety import check_run_dir, clean_stale
+
+    check_run_dir(out)  # only a missing, empty or satchain-marked directory may be replaced
+    clean_stale(out)  # staging / old folders of killed runs
 
 
 def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> RunResult:
@@ -257,6 +258,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
     _check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+    _claim_run_dir(staging)
     try:
         result = run_in_memory(config, progress=progress)
         t0 = time.perf_counter()
@@ -279,12 +281,21 @@ def run_pipeline(config: RunConfig, out_dir: str | Path, *, progress: Progress |
     return run_to_directory(config, out_dir, progress=progress).to_json_dict()
 
 
+def _claim_run_dir(directory: Path, *, marker: bool = True) -> None:
+    from satchain._safety import claim, write_run_marker
+
+    claim(directory)
+    if marker:
+        write_run_marker(directory)
+
+
 def _swap_in(staging: Path, out: Path) -> None:
     """Replace ``out`` by ``staging`` with two renames; the old results are removed only afterwards."""
     old = None
     if out.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
         os.rmdir(old)
+        _claim_run_dir(out, marker=False)  # owned by this process from before it is renamed
         os.replace(out, old)
     try:
         os.replace(staging, out)

@@ -85,24 +85,39 @@ class AxisMTF:
 
 
 class _SystemMTF:
-    """A SystemOTF as a callable of cy/px (square pixels of pitch sqrt(px py)), with its cutoff in cy/px."""
+    """A SystemOTF as a callable of cy/px (square pixels of pitch sqrt(px py)), with its cutoff in cy/px;
+    the components named in ``exclude`` are left out."""
 
-    def __init__(self, otf: Any):
+    def __init__(self, otf: Any, exclude: tuple[str, ...] = ()):
         from satchain import units
 
         d = otf.system.detector
         self._otf = otf
+        self._exclude = tuple(exclude)
         self.pitch_m = math.sqrt(d.pitch_x_m * d.pitch_y_m)
         self._to_mm = float(units.cy_per_px_to_cy_per_mm(1.0, pitch_m=self.pitch_m))
         self.cutoff = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=self.pitch_m))
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
-        return np.abs(self._otf(np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * self._to_mm))
+        fx, fy = np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * self._to_mm
+        return np.abs(self._otf(fx, fy, exclude=self._exclude))
 
 
-def system_mtf_cy_per_px(otf: Any) -> MTF2D:
-    """The system MTF of a :class:`~satchain.tf.budget.SystemOTF` as a callable of ``(fx, fy)`` in cy/px."""
-    return _SystemMTF(otf)
+#: Components whose PSF is far wider than any target's measurement region (the aerosol adjacency spreads a
+#: fraction ``s`` of the light over ``aerosol_psf_scale_m``, 200 m by default). A local measurement (edge, star,
+#: bars, wedge) normalises by the levels it sees around the target, which already hold that scattered light,
+#: so the plateau ``1 - s`` the component puts on every image frequency is invisible to it; predicting it
+#: would put the prediction ``1 - s`` below any correct measurement. Left out of the local predictions.
+WIDE_COMPONENTS = ("aerosol",)
+
+
+def system_mtf_cy_per_px(otf: Any, *, local: bool = False) -> MTF2D:
+    """The system MTF of a :class:`~satchain.tf.budget.SystemOTF` as a callable of ``(fx, fy)`` in cy/px.
+
+    ``local=True``: as a measurement on a target far smaller than the aerosol adjacency scale sees it
+    (:data:`WIDE_COMPONENTS` left out)."""
+    names = getattr(otf, "component_names", ())
+    return _SystemMTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names) if local else ())
 
 
 @dataclass(frozen=True)
@@ -266,7 +281,7 @@ def predict(
     otf = SystemOTF(system) if otf is None else otf
     quality = predict_quality(system, otf=otf).to_dict() if quality is None else quality
     return predict_from_mtf(
-        system_mtf_cy_per_px(otf),
+        system_mtf_cy_per_px(otf, local=True),
         dict(truth),
         gsd_m=system.gsd_m,
         wedge_threshold=wedge_threshold,

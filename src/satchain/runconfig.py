@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from satchain.errors import ConfigError, SatchainIOError
 from satchain.system import ImagingSystem, _config_error, load_preset
@@ -33,6 +33,18 @@ class SystemRef(_Frozen):
     preset: str | None = "ankarasat3"
     file: str | None = None
     inline: dict[str, Any] | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in ("preset", "file", "inline") if data.get(k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"system: {' and '.join(given)} are both given; give one of preset, file or inline")
+        if given and given[0] != "preset":
+            data = {**data, "preset": None}  # the default preset does not apply when a file or inline is given
+        return data
 
 
 class SceneConfig(_Frozen):
@@ -84,9 +96,6 @@ class RunConfig(_Frozen):
 
     def load_system(self) -> ImagingSystem:
         ref = self.system
-        given = [k for k in ("file", "inline") if getattr(ref, k) is not None]
-        if len(given) > 1:
-            raise ConfigError("system: give one of preset, file or inline")
         if ref.inline is not None:
             return ImagingSystem.from_dict(ref.inline)
         if ref.file is not None:
@@ -101,11 +110,24 @@ class RunConfig(_Frozen):
     def to_dict(self) -> dict[str, Any]:
         return self.model_dump(mode="json", exclude={"base_dir"}, exclude_none=True)
 
+    def system_path(self) -> Path | None:
+        """The system file this configuration reads (absolute), or None."""
+        return None if self.system.file is None else (Path(self.base_dir) / self.system.file).resolve()
+
+    def absolute(self) -> RunConfig:
+        """The same configuration with its system and scene files as absolute paths (valid from anywhere)."""
+        d = self.to_dict()
+        if self.system.file is not None:
+            d["system"] = {"file": str(self.system_path())}
+        if self.scene.layout != "paper":
+            d["scene"] = {**d["scene"], "layout": str(Path(self.layout_source()).resolve())}
+        return RunConfig.from_dict(d, base_dir=Path(self.base_dir).resolve())
+
 
 DEFAULT_CONFIG_TOML = """\
 # satchain run configuration. Every key is optional; these are the defaults.
-[system]
-preset = "ankarasat3"          # a packaged preset, or: file = "mycamera.toml"
+[system]                       # one of: preset = "ankarasat3" (the default), file = "mycamera.toml", inline
+preset = "ankarasat3"
 
 [scene]
 layout = "paper"               # the reference paper's Figure 1 layout, or a scene file (.toml / .json)
@@ -136,7 +158,9 @@ def load_run_config(path: str | Path | None) -> RunConfig:
     """The default configuration, or a TOML file (relative paths inside it are relative to the file)."""
     if path is None:
         return RunConfig()
-    p = Path(path)
+    from satchain._safety import check_input_file
+
+    p = check_input_file(path, "--config")
     try:
         with p.open("rb") as fh:
             data = tomllib.load(fh)
@@ -181,6 +205,6 @@ def config_to_toml(config: RunConfig) -> str:
     True
     """
     lines = ["# satchain run configuration (written by satchain; reproduces this run)"]
-    for section, values in config.to_dict().items():
+    for section, values in config.absolute().to_dict().items():
         _toml_table(section, values, lines)
     return "\n".join(lines)

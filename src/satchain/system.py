@@ -298,7 +298,9 @@ def _config_error(exc: ValidationError) -> ConfigError:
 
 
 def _read_toml(path: str | Path) -> dict[str, Any]:
-    p = Path(path)
+    from satchain._safety import check_input_file
+
+    p = check_input_file(path, "system file")
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)

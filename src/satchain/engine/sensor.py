@@ -178,7 +178,8 @@ def sensor_from_system(system) -> SensorModel:
 
     The signal is linear in surface reflectance, ``N(rho) = rho N_1 + N_path`` electrons (all TDI stages);
     dark electrons are ``dark_current x integration time x stages``; read noise accumulates once for CCD-style
-    (charge-domain) TDI and ``sqrt(stages)`` times for CMOS-style (digital) TDI.
+    (charge-domain) TDI and ``sqrt(stages)`` times for CMOS-style (digital) TDI. A detector without a stated
+    ``full_well_e`` saturates at the signal of reflectance 1 (plus dark), so its ADC range spans reflectance 0..1.
 
     Examples
     --------
@@ -203,7 +204,10 @@ def sensor_from_system(system) -> SensorModel:
         radiance_offset=l0,
         dark_e=det.dark_current_e_per_s * system.integration_time_s * stages,
         read_noise_e=read,
-        full_well_e=math.inf if det.full_well_e is None else det.full_well_e,
+        # no stated full well (a system without radiometric detail): the ADC range spans reflectance 0..1
+        full_well_e=n1 + det.dark_current_e_per_s * system.integration_time_s * stages
+        if det.full_well_e is None
+        else det.full_well_e,
         bit_depth=det.bit_depth or 12,
         prnu=det.prnu,
         dsnu_e=det.dsnu_e,

@@ -175,8 +175,10 @@ class Simulator:
         tile_coarse = int(side // self.D)
         if tile_coarse < 16:
             raise ResourceLimitError(
-                f"max_tile_bytes = {p.max_tile_bytes}: a decimation tile with its {self.margin_fine}-px margins "
-                f"needs at least {_TILE_BYTES_PER_PX * (16 * self.D + 2 * self.margin_fine) ** 2 / 2**20:.0f} MiB"
+                f"input_pixel_m = {self.input_pixel_m:g}: far finer than the system resolves (a decimation tile with "
+                f"its {self.margin_fine}-px margins needs at least "
+                f"{_TILE_BYTES_PER_PX * (16 * self.D + 2 * self.margin_fine) ** 2 / 2**20:.0f} MiB, max_tile_bytes "
+                f"allows {p.max_tile_bytes / 2**20:.0f} MiB); use a coarser ground-truth pixel"
             )
         self.tile_coarse = min(tile_coarse, max(self.n_coarse))
         origin = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D)
@@ -208,8 +210,9 @@ class Simulator:
         need = _FRAME_BYTES_PER_PX * length[0] * length[1]
         if need > p.max_frame_bytes:
             raise ResourceLimitError(
-                f"coarse frame {length[0]} x {length[1]} needs about {need / 2**30:.2f} GiB; "
-                f"SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} GiB"
+                f"input {self.input_shape[0]} x {self.input_shape[1]} px: its coarse frame {length[0]} x {length[1]} "
+                f"needs about {need / 2**30:.2f} GiB; SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} "
+                "GiB: simulate the input in parts (crop it) or raise SimParams.max_frame_bytes"
             )
 
     @property

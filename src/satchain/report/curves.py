@@ -21,6 +21,7 @@ import numpy as np
 
 from satchain import ctf as _ctf
 from satchain import units
+from satchain.prediction import WIDE_COMPONENTS
 from satchain.report._save import write_text
 
 __all__ = ["CSV_FAMILIES", "build_curves", "crossing", "predicted_lsf", "write_curves"]
@@ -65,8 +66,9 @@ def _signed_axis_otf(otf, direction: tuple[float, float]):
 
     def along(f_cy_per_px):
         f_mm = units.cy_per_px_to_cy_per_mm(np.asarray(f_cy_per_px, float), pitch_m=pitch_m)
-        return np.real(otf(f_mm * ux, f_mm * uy))
+        return np.real(otf(f_mm * ux, f_mm * uy, exclude=local))
 
+    local = tuple(c for c in WIDE_COMPONENTS if c in getattr(otf, "component_names", ()))  # as measured locally
     fc = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=pitch_m))
     return along, fc
 
@@ -140,7 +142,8 @@ def _wedge_curves(ctx, res: dict) -> list[dict]:
         lw = np.asarray(lw, float)
         gsd = float(w.get("gsd_m") or ctx.system.gsd_m)
         axis = _DIRECTIONS.get(str(w.get("axis", "ALT")).upper(), (0.0, 1.0))
-        pred = np.asarray(_ctf.coltman_ctf(gsd / (2.0 * lw), AxisMTF(system_mtf_cy_per_px(ctx.otf), axis)), float)
+        mtf = AxisMTF(system_mtf_cy_per_px(ctx.otf, local=True), axis)
+        pred = np.asarray(_ctf.coltman_ctf(gsd / (2.0 * lw), mtf), float)
         out.append(
             {
                 "id": w["id"],

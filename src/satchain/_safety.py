@@ -1,0 +1,360 @@
+"""Data safety: never overwrite an input, replace only satchain's own run directories, refuse work that
+cannot fit in memory (or on disk) before allocating, and clean what a killed run left behind.
+
+* :func:`check_distinct_paths` -- every output path differs from every input and from the other outputs
+  (resolved paths, symbolic links and hard links included).
+* :func:`check_run_dir` / :func:`write_run_marker` -- a run directory carries ``.satchain-run.json``
+  (``{"tool": "satchain", "kind": "run", "format": 1}``); only a directory holding that marker, an empty
+  directory or a missing one may be replaced by ``satchain run``.
+* :func:`claim` / :func:`clean_stale` -- staging folders and temporary files carry the id of the process
+  that owns them; the next run removes those whose process is gone (never one a live process owns).
+* :func:`check_memory` / :func:`check_disk` -- the need in GiB against a limit: ``SATCHAIN_MEMORY_LIMIT``
+  (bytes, or with a K/M/G/T suffix) or 80 % of the memory available now.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import shutil
+import socket
+import time
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from satchain.errors import ConfigError, ResourceLimitError, SatchainIOError
+
+__all__ = [
+    "MARKER",
+    "OWNER",
+    "check_disk",
+    "check_distinct_paths",
+    "check_memory",
+    "check_run_dir",
+    "check_sidecars",
+    "check_star_radius",
+    "check_dir_outputs",
+    "check_input_file",
+    "check_inputs_outside",
+    "check_output_files",
+    "claim",
+    "clean_stale",
+    "clean_stale_temp_files",
+    "memory_limit_bytes",
+    "write_run_marker",
+]
+
+#: the file that marks a directory as a satchain run (and the only licence to replace it)
+MARKER = ".satchain-run.json"
+MARKER_CONTENT = {"tool": "satchain", "kind": "run", "format": 1}
+#: the owner file of a staging / old-results folder: which process (on which host) may still use it
+OWNER = ".satchain-owner.json"
+
+
+# ---------------------------------------------------------------------------------------------- paths
+def _same(a: Path, b: Path) -> bool:
+    if a.resolve() == b.resolve():
+        return True
+    with contextlib.suppress(OSError):
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    return False
+
+
+def check_distinct_paths(
+    outputs: Mapping[str, str | os.PathLike | None], inputs: Mapping[str, str | os.PathLike | None] | None = None
+) -> None:
+    """Refuse an output that is (or links to) an input or another output.
+
+    Parameters
+    ----------
+    outputs, inputs : option name (e.g. ``"-o"``, ``"--focal-plane"``, ``"IMAGE"``) -> path (``None`` = not given)
+
+    Raises
+    ------
+    ConfigError naming both options and the path; nothing has been written.
+
+    Examples
+    --------
+    >>> check_distinct_paths({"-o": "b.tif"}, inputs={"INPUT": "a.tif"})
+    >>> try:
+    ...     check_distinct_paths({"-o": "a.tif"}, inputs={"INPUT": "./a.tif"})
+    ... except ConfigError as exc:
+    ...     print(str(exc)[:48])
+    -o 'a.tif' is the same file as INPUT 'a.tif': it
+    """
+    outs = [(k, Path(v)) for k, v in outputs.items() if v is not None]
+    ins = [(k, Path(v)) for k, v in (inputs or {}).items() if v is not None]
+    for i, (name, path) in enumerate(outs):
+        for other, opath in ins + outs[:i]:
+            if _same(path, opath):
+                raise ConfigError(
+                    f"{name} {str(path)!r} is the same file as {other} {str(opath)!r}: it would be overwritten; "
+                    "choose another output path"
+                )
+
+
+# ---------------------------------------------------------------------------------------------- run directories
+def write_run_marker(directory: str | os.PathLike) -> Path:
+    """Write the run marker into ``directory`` (which satchain has just created)."""
+    path = Path(directory) / MARKER
+    path.write_text(json.dumps(MARKER_CONTENT) + "\n")
+    return path
+
+
+def _is_marked(directory: Path) -> bool:
+    try:
+        data = json.loads((directory / MARKER).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and data.get("tool") == "satchain" and data.get("kind") == "run"
+
+
+def check_run_dir(out: str | os.PathLike) -> None:
+    """Allow ``out`` to be replaced only when missing, empty, or marked as a satchain run.
+
+    Raises
+    ------
+    SatchainIOError naming a few of the entries found; nothing is changed.
+    """
+    out = Path(out)
+    if not out.exists() and not out.is_symlink():
+        return
+    if out.is_symlink() or not out.is_dir():
+        raise SatchainIOError(
+            f"-o {str(out)!r}: exists and is not a directory; choose a new or empty directory, nothing was changed"
+        )
+    entries = sorted(p.name for p in out.iterdir())
+    if not entries or _is_marked(out):
+        return
+    shown = ", ".join(entries[:5]) + (f", ... ({len(entries)} entries)" if len(entries) > 5 else "")
+    raise SatchainIOError(
+        f"-o {str(out)!r}: not a satchain run directory (no {MARKER}; it holds {shown}); "
+        "choose a new or empty directory, nothing was changed"
+    )
+
+
+# ---------------------------------------------------------------------------------------------- ownership
+def claim(directory: str | os.PathLike) -> None:
+    """Record the current process as the owner of ``directory`` (a staging or old-results folder)."""
+    data = {"pid": os.getpid(), "host": socket.gethostname(), "time": time.time()}
+    (Path(directory) / OWNER).write_text(json.dumps(data) + "\n")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # exists (owned by another user) or unknown: keep it
+    return True
+
+
+def _owner_gone(directory: Path, *, min_age_s: float) -> bool:
+    try:
+        data = json.loads((directory / OWNER).read_text())
+        pid, host = int(data["pid"]), str(data["host"])
+    except (OSError, ValueError, KeyError, TypeError):
+        # no owner recorded (killed before claiming): stale only when empty and not brand new
+        try:
+            return not any(directory.iterdir()) and time.time() - directory.stat().st_mtime > min_age_s
+        except OSError:
+            return False
+    return host == socket.gethostname() and not _alive(pid)
+
+
+def clean_stale(out: str | os.PathLike, *, min_age_s: float = 60.0) -> list[Path]:
+    """Remove ``.NAME.staging-*`` / ``.NAME.old-*`` folders beside ``out`` whose owning process is gone.
+
+    Returns the folders removed. A folder owned by a live process (or by another host) is kept.
+    """
+    out = Path(out)
+    removed = []
+    if not out.parent.is_dir():
+        return removed
+    for pattern in (f".{out.name}.staging-*", f".{out.name}.old-*"):
+        for d in out.parent.glob(pattern):
+            if d.is_dir() and not d.is_symlink() and _owner_gone(d, min_age_s=min_age_s):
+                shutil.rmtree(d, ignore_errors=True)
+                removed.append(d)
+    return removed
+
+
+def clean_stale_temp_files(final: str | os.PathLike) -> list[Path]:
+    """Remove ``atomic_path`` temporary files of ``final`` (``.NAME.<pid>.*.tmp``) whose process is gone."""
+    final = Path(final)
+    removed = []
+    if not final.parent.is_dir():
+        return removed
+    for f in final.parent.glob(f".{final.name}.*.tmp"):
+        pid_text = f.name[len(final.name) + 2 :].split(".", 1)[0]
+        if pid_text.isdigit() and f.is_file() and not f.is_symlink() and not _alive(int(pid_text)):
+            with contextlib.suppress(OSError):
+                f.unlink()
+                removed.append(f)
+    return removed
+
+
+# ---------------------------------------------------------------------------------------------- resources
+def _parse_bytes(text: str) -> int:
+    t = text.strip().upper().removesuffix("B").removesuffix("I")
+    mult = {"K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+    try:
+        if t and t[-1] in mult:
+            return int(float(t[:-1]) * mult[t[-1]])
+        return int(float(t))
+    except ValueError:
+        raise ConfigError(f"SATCHAIN_MEMORY_LIMIT = {text!r}: must be a number of bytes, e.g. 8G or 500M") from None
+
+
+def _available_bytes() -> int:
+    with contextlib.suppress(OSError, ValueError):
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    with contextlib.suppress(ValueError, OSError, AttributeError):
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    return 8 * 2**30
+
+
+def memory_limit_bytes() -> int:
+    """``SATCHAIN_MEMORY_LIMIT`` when set, else 80 % of the memory available now."""
+    env = os.environ.get("SATCHAIN_MEMORY_LIMIT")
+    if env:
+        return _parse_bytes(env)
+    return int(0.8 * _available_bytes())
+
+
+def check_memory(need_bytes: float, what: str, *, fix: str = "") -> None:
+    """Raise ResourceLimitError when ``what`` would need more than :func:`memory_limit_bytes`."""
+    limit = memory_limit_bytes()
+    if need_bytes > limit:
+        hint = f"; {fix}" if fix else ""
+        raise ResourceLimitError(
+            f"{what}: needs about {need_bytes / 2**30:.2f} GiB of memory, {limit / 2**30:.2f} GiB allowed{hint} "
+            "(the limit is 80% of the available memory, or SATCHAIN_MEMORY_LIMIT); nothing was written"
+        )
+
+
+def check_disk(need_bytes: float, paths: Iterable[str | os.PathLike], what: str, *, fix: str = "") -> None:
+    """Raise ResourceLimitError when ``what`` would not fit on the disk holding the first of ``paths``."""
+    for p in paths:
+        d = Path(p).resolve().parent
+        while not d.exists() and d != d.parent:
+            d = d.parent
+        try:
+            free = shutil.disk_usage(d).free
+        except OSError:
+            return
+        if need_bytes > free:
+            hint = f"; {fix}" if fix else ""
+            raise ResourceLimitError(
+                f"{what}: needs about {need_bytes / 2**30:.2f} GiB on disk, {free / 2**30:.2f} GiB free in "
+                f"{str(d)!r}{hint}; nothing was written"
+            )
+        return
+
+
+def check_star_radius(radius_px: float | None, shape: tuple[int, int], *, annulus_px: float = 1.0) -> None:
+    """``measure star --radius``: refuse a radius whose annuli would not fit, or that lies outside the image."""
+    if radius_px is None:
+        return
+    from satchain.errors import InputError
+
+    if not radius_px > 0 or radius_px != radius_px:
+        raise InputError(f"--radius = {radius_px!r}: must be > 0 (pixels)")
+    check_memory(48.0 * radius_px / annulus_px, f"--radius {radius_px:g}", fix="use a radius inside the image")
+    half_diag = 0.5 * (shape[0] ** 2 + shape[1] ** 2) ** 0.5
+    if radius_px > half_diag:
+        raise InputError(
+            f"--radius = {radius_px:g}: outside the image ({shape[1]} x {shape[0]} px, half-diagonal "
+            f"{half_diag:.0f} px); give a radius inside the image"
+        )
+
+
+def check_dir_outputs(out_dir: str | os.PathLike | None, names: Iterable[str], inputs: Mapping[str, object]) -> None:
+    """An output directory must not be an input, nor hold an input under a name the command writes.
+
+    ``names`` are file names or ``fnmatch`` patterns (e.g. ``"*.png"``) written into ``out_dir``.
+    """
+    import fnmatch
+
+    if out_dir is None:
+        return
+    out = Path(out_dir)
+    for name, value in inputs.items():
+        if value is None:
+            continue
+        p = Path(str(value))
+        if _same(out, p) or (
+            p.exists() and out.exists() and _same(out, p.parent) and any(fnmatch.fnmatch(p.name, pat) for pat in names)
+        ):
+            raise ConfigError(f"-o {str(out)!r}: would overwrite {name} {str(p)!r}; choose another output directory")
+
+
+def check_inputs_outside(out_dir: str | os.PathLike, inputs: Mapping[str, object]) -> None:
+    """``run -o DIR`` replaces DIR as a whole: refuse when an input file lies inside it."""
+    out = Path(out_dir).resolve()
+    for name, value in inputs.items():
+        if value is None:
+            continue
+        p = Path(str(value)).resolve()
+        if p == out or out in p.parents:
+            raise ConfigError(
+                f"-o {str(out_dir)!r}: the run would replace this directory, which holds {name} {str(value)!r}; "
+                "copy that file elsewhere or choose another output directory"
+            )
+
+
+def check_output_files(outputs: Mapping[str, str | os.PathLike | None]) -> None:
+    """An output file path must not be an existing directory (refused before any work)."""
+    for name, value in outputs.items():
+        if value is not None and Path(value).is_dir():
+            raise ConfigError(f"{name} {str(value)!r}: is a directory; give a file path, e.g. {name} out.tif")
+
+
+def check_input_file(path: str | os.PathLike, name: str, *, max_bytes: int = 64 * 2**20) -> Path:
+    """A small text input (TOML, JSON) must be a regular file of at most ``max_bytes`` (not a device or a
+    pipe that never ends)."""
+    p = Path(path)
+    if p.is_dir():
+        raise SatchainIOError(f"{name} {str(p)!r}: is a directory; give a file")
+    if not p.exists():
+        raise SatchainIOError(f"{name} {str(p)!r}: not found")
+    if not p.is_file():
+        raise SatchainIOError(f"{name} {str(p)!r}: not a regular file (a device or a pipe?); give a file")
+    size = p.stat().st_size
+    if size > max_bytes:
+        raise SatchainIOError(f"{name} {str(p)!r}: {size / 2**20:.0f} MiB is far too large for a {name}; wrong file?")
+    return p
+
+
+def _written_by_satchain(path: Path) -> bool:
+    try:
+        if path.suffix.lower() == ".png":
+            from PIL import Image
+
+            with Image.open(path) as img:
+                return "satchain" in img.info
+        if path.suffix.lower() == ".json":
+            data = json.loads(path.read_text())
+            return isinstance(data, dict) and str(data.get("format", "")).startswith("satchain")
+    except Exception:  # unreadable: not ours
+        return False
+    return False
+
+
+def check_sidecars(sidecars: Mapping[str, str | os.PathLike]) -> None:
+    """Files a command writes beside ``-o`` (a ``.png`` preview, a ``.truth.json``) may replace only files
+    satchain wrote itself; a user's file of that name is refused (``-o`` itself is the user's explicit choice)."""
+    for name, value in sidecars.items():
+        p = Path(value)
+        if (p.exists() or p.is_symlink()) and not (p.is_file() and _written_by_satchain(p)):
+            raise ConfigError(
+                f"{name} {str(p)!r} exists and was not written by satchain; it would be overwritten: "
+                "move it or choose another -o"
+            )
