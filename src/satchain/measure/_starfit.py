@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit"]
+__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit", "symmetry_center"]
 
 
 def _band(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, width: float):
@@ -54,6 +54,29 @@ class _Cost:
         return _rss(c, *self.args)
 
 
+def symmetry_center(data: np.ndarray) -> tuple[float, float]:
+    """Centre of point symmetry (any star, odd or even cycles): the peak of ``|d * d|`` (self-convolution of
+    the mean-removed region) is at twice the centre; within the middle half of the region, parabolic
+    sub-pixel.  A start for :func:`fit_center`, good to a fraction of a pixel on a star.
+    """
+    ny, nx = data.shape
+    d = data - data.mean()
+    big = (2 * ny, 2 * nx)
+    conv = np.abs(np.fft.irfft2(np.fft.rfft2(d, big) ** 2, big))
+    y0, y1, x0, x1 = ny // 2, ny + ny // 2 - 1, nx // 2, nx + nx // 2 - 1  # centre in the middle half
+    win = conv[y0:y1, x0:x1]
+    iy, ix = np.unravel_index(int(np.argmax(win)), win.shape)
+    iy, ix = iy + y0, ix + x0
+
+    def vertex(a, b, c):
+        den = a - 2 * b + c
+        return 0.0 if den == 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+
+    sy = iy + (vertex(conv[iy - 1, ix], conv[iy, ix], conv[iy + 1, ix]) if 0 < iy < big[0] - 1 else 0.0)
+    sx = ix + (vertex(conv[iy, ix - 1], conv[iy, ix], conv[iy, ix + 1]) if 0 < ix < big[1] - 1 else 0.0)
+    return sx / 2.0, sy / 2.0
+
+
 def fit_center(
     data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float, width_px: float = 2.0
 ):
@@ -64,19 +87,24 @@ def fit_center(
     """
     cx, cy = float(start_xy[0]), float(start_xy[1])
     best = (cx, cy)
-    for _ in range(2):  # second round: annulus membership about the improved centre
+    for round_ in range(2):  # second round: annulus membership about the improved centre
         x, y, v, k, nk = _band(data, best[0], best[1], r_lo, r_hi, width_px)
         if nk < 2:
             return cx, cy, None
         cost = _Cost(x, y, v, k, nk, n)
         if search_px > 0:
-            step = 0.5
-            offs = np.arange(-search_px, search_px + 1e-9, step)
+            offs = np.arange(-search_px, search_px + 1e-9, 0.5)
             grid = [(best[0] + dx, best[1] + dy) for dy in offs for dx in offs]
             best = min(grid, key=cost)
             search_px = 0.0
-        res = minimize(cost, np.array(best), method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-12})
+        b0 = np.array(best)
+        simplex = np.array([b0, b0 + (0.25, 0.0), b0 + (0.0, 0.25)])
+        opts = {"xatol": 1e-3, "fatol": 1e-12, "initial_simplex": simplex}
+        res = minimize(cost, b0, method="Nelder-Mead", options=opts)
+        moved = float(np.hypot(res.x[0] - best[0], res.x[1] - best[1]))
         best = (float(res.x[0]), float(res.x[1]))
+        if round_ == 0 and moved < 0.25:  # membership barely changes: no second round needed
+            break
     j0 = cost(np.array(best))
     h = 0.05
     hess = np.empty((2, 2))
@@ -115,17 +143,22 @@ def harmonic_spectrum(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi:
 
 
 def annulus_fit(theta: np.ndarray, values: np.ndarray, n: int):
-    """Least-squares ``a + b cos(n th) + c sin(n th)``: (a, amplitude, amplitude sigma, residual sigma).
-
-    The amplitude is debiased for the noise (Rice: E[A^2] = A^2 + 2 s_b^2), so pure noise gives ~0.
+    """Least-squares ``a + g1 cos th + g2 sin th + b cos(n th) + c sin(n th)`` (the ``g`` terms take a linear
+    illumination gradient out of the fit and of the noise): (a, amplitude, amplitude sigma, residual sigma,
+    relative gradient ``|g| / a``).  The amplitude is debiased for the noise (Rice: E[A^2] = A^2 + 2 s_b^2),
+    so pure noise gives ~0.
     """
-    design = np.column_stack([np.ones_like(theta), np.cos(n * theta), np.sin(n * theta)])
+    cols = [np.ones_like(theta), np.cos(n * theta), np.sin(n * theta)]
+    if n != 1:
+        cols += [np.cos(theta), np.sin(theta)]
+    design = np.column_stack(cols)
     beta, *_ = np.linalg.lstsq(design, values, rcond=None)
     resid = values - design @ beta
-    dof = max(values.size - 3, 1)
+    dof = max(values.size - design.shape[1], 1)
     s = float(np.sqrt(np.sum(resid**2) / dof))
     cov = s * s * np.linalg.pinv(design.T @ design)
     sb = float(np.sqrt(0.5 * (cov[1, 1] + cov[2, 2])))
     a2 = float(beta[1] ** 2 + beta[2] ** 2)
     amp = float(np.sqrt(max(a2 - 2 * sb * sb, 0.0)))
-    return float(beta[0]), amp, sb, s
+    grad = float(np.hypot(beta[3], beta[4]) / beta[0]) if n != 1 and beta[0] > 0 else 0.0
+    return float(beta[0]), amp, sb, s, grad

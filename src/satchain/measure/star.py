@@ -32,7 +32,7 @@ import numpy as np
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
-from satchain.measure._starfit import annulus_fit, fit_center, harmonic_spectrum
+from satchain.measure._starfit import annulus_fit, fit_center, harmonic_spectrum, symmetry_center
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["StarResult", "measure_star", "STAR_DIRECTIONS"]
@@ -76,44 +76,65 @@ class StarResult(ResultMixin):
 MTF_MAX = 1.2
 
 
-def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray, sig: np.ndarray | None = None) -> tuple[float, float]:
-    """Modulation at zero frequency and its 1-sigma: weighted fit of ``log m = c0 + c1 f + c2 f^2`` to the
-    outer radii (``f <= max(2.5 f_min, f_min + 0.08)``, at least 6 points), ``m0 = exp(c0)``.
+def _log_quadratic_m0(f, mod, sig, f_hi: float) -> tuple[float, float]:
+    """``exp(c0)`` and its 1-sigma from the weighted fit ``log m = c0 + c1 f + c2 f^2`` over ``f <= f_hi``."""
+    sel = f <= f_hi
+    if np.count_nonzero(sel) < 6:
+        sel = np.argsort(f)[: min(6, f.size)]
+    fs, ms = f[sel], mod[sel]
+    ss = np.where(np.isfinite(sig[sel]) & (sig[sel] > 0), sig[sel], 0.0) + 1e-12 * ms
+    w = ms / ss  # 1 / sigma of log m
+    deg = 2 if fs.size >= 5 else 1
+    design = np.vander(fs, deg + 1, increasing=True) * w[:, None]
+    beta, *_ = np.linalg.lstsq(design, np.log(ms) * w, rcond=None)
+    chi2 = float(np.sum((np.log(ms) * w - design @ beta) ** 2) / max(fs.size - deg - 1, 1))
+    cov = np.linalg.pinv(design.T @ design) * max(chi2, 1.0)
+    m0 = float(np.exp(beta[0]))
+    return m0, float(m0 * np.sqrt(cov[0, 0]))
 
-    Gaussian blur is exactly quadratic in ``log m``; diffraction (linear at 0) is caught by ``c1``.
+
+def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray, sig: np.ndarray | None = None) -> tuple[float, float]:
+    """Modulation at zero frequency and its 1-sigma, from the outer radii (no MTF shape assumed beyond
+    smoothness): the weighted fit of ``log m = c0 + c1 f + c2 f^2`` over ``f <= 2 f_min``.
+
+    Gaussian blur is exactly quadratic in ``log m``; diffraction (linear at 0) is caught by ``c1``.  The
+    1-sigma adds, to the fit's noise, the change of ``m0`` when the range grows to ``f <= 3 f_min``,
+    beyond its noise, doubled (the model error of the extrapolation, large when the outer MTF is far below 1).
     """
     sig = np.full_like(mod, np.nan) if sig is None else sig
     ok = np.isfinite(mod) & (mod > 0)
     f, mod, sig = f[ok], mod[ok], sig[ok]
     if f.size < 3:
         return (float(np.median(mod)) if f.size else float("nan")), float("nan")
-    sel = f <= max(2.5 * f.min(), f.min() + 0.08)
-    if np.count_nonzero(sel) < 6:
-        sel = np.argsort(f)[: min(6, f.size)]
-    fs, ms = f[sel], mod[sel]
-    ss = np.where(np.isfinite(sig[sel]) & (sig[sel] > 0), sig[sel], 1e-12 * ms) + 1e-12 * ms
-    w = ms / ss  # 1 / sigma of log m
-    deg = 2 if fs.size >= 5 else 1
-    design = np.vander(fs, deg + 1, increasing=True)
-    beta, *_ = np.linalg.lstsq(design * w[:, None], np.log(ms) * w, rcond=None)
-    resid = (np.log(ms) - design @ beta) * w
-    chi2 = float(np.sum(resid**2) / max(fs.size - deg - 1, 1))
-    cov = np.linalg.pinv((design * w[:, None]).T @ (design * w[:, None])) * max(chi2, 1.0)
-    m0 = float(np.exp(beta[0]))
-    return m0, float(m0 * np.sqrt(cov[0, 0]))
+    m0, s0 = _log_quadratic_m0(f, mod, sig, 2.0 * f.min())
+    hi, s_hi = _log_quadratic_m0(f, mod, sig, 3.0 * f.min())
+    model = np.sqrt(max((hi - m0) ** 2 - abs(s0**2 - s_hi**2), 0.0))  # nested fits: noise part removed
+    return m0, float(np.hypot(s0, 2.0 * model))
 
 
 def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
-    """Centre (x, y), its 1-sigma (sx, sy) or None, and how it was obtained."""
+    """Centre (x, y), its 1-sigma (sx, sy) or None, and how it was obtained.  Without a given centre the
+    start is the centre of point symmetry; the claimed cycles are checked there before the refinement."""
     if not refine:
+        _check_cycles(data, n, start[0], start[1], r_in, r_out)
         return start, None, "given"
+    if not given:
+        start = symmetry_center(data)
+        ny, nx = data.shape
+        r_out = min(r_out, start[0], start[1], nx - 1 - start[0], ny - 1 - start[1])
+        _check_extent(n, r_in, r_out, 1.0, n / (2 * np.pi * r_in))
+    _check_cycles(data, n, start[0], start[1], r_in, r_out)
     r_lo = max(r_in, n / (2 * np.pi * 0.35))
     if r_out - r_lo < 6:
         r_lo = r_in
-    search = 1.0 if given else float(np.clip(r_out / 10, 2.0, 6.0))
-    x, y, cov = fit_center(data, n, start, r_lo, r_out, search_px=search)
+    x, y, cov = fit_center(data, n, start, r_lo, r_out, search_px=1.0)
     if cov is None:
         raise InputError(f"image: the star centre cannot be determined (no star with {n} cycles near {start})")
+    if np.hypot(x - start[0], y - start[1]) > 3.0:
+        raise InputError(
+            f"center: the fitted star centre ({x:.2f}, {y:.2f}) is {np.hypot(x - start[0], y - start[1]):.1f} px "
+            f"from the start ({start[0]:.2f}, {start[1]:.2f}); give a centre within 1 px"
+        )
     return (x, y), (float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))), "refined" if given else "estimated"
 
 
@@ -181,7 +202,7 @@ def measure_star(
     input_modulation : float, optional
         Modulation (max - min) / (max + min) of the star itself. When not given it is extrapolated to zero
         frequency from the outer radii by a weighted fit of ``log m = c0 + c1 f + c2 f^2`` (see the module
-        docstring); a flag is raised when the outer MTF is below 0.85 (far extrapolation).
+        docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
     annulus_px : float
         Radial width of the annuli whose pixels are fitted together.
     f_max_cy_per_px : float
@@ -218,12 +239,16 @@ def measure_star(
     ny, nx = data.shape
     r_out = min(r_out, xc, yc, nx - 1 - xc, ny - 1 - yc)
     _check_extent(n, r_in, r_out, annulus_px, f_max)
-    _check_cycles(data, n, xc, yc, r_in, r_out)
-    radii, mods, sigs, levels, noise = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
+    radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
     f = n / (2 * np.pi * radii)
     if input_modulation is None:
         m0, m0_std = _extrapolated_modulation(f, mods["all"], sigs["all"])
         m0_from = "extrapolated from the outer radii"
+        if not m0_std <= 0.25 * m0:
+            raise InputError(
+                f"input_modulation: cannot be extrapolated from the outer radii ({m0:.3g} +- {m0_std:.2g}; the "
+                "MTF there is far below 1): give the star's own modulation"
+            )
     else:
         m0 = check_range("input_modulation", input_modulation, 0.0, None, lo_open=True)
         m0_std, m0_from = 0.0, "given"
@@ -241,7 +266,7 @@ def measure_star(
     nyq_std = {k: (float(np.interp(0.5, f, std[k])) if nyq[k] is not None else None) for k in STAR_DIRECTIONS}
     amp_outer = float(np.nanmedian(mods["all"][order][:5] * levels[order][:5]))
     cnr = amp_outer / noise if noise > 0 else None
-    flags = _flags(data, levels, c_std, cnr, float(mtf["all"][0]), input_modulation is None, noise)
+    flags = _flags(data, levels, c_std, cnr, float(mtf["all"][0]), input_modulation is None, noise, gradient)
     return StarResult(
         f_cy_per_px=f,
         radius_px=radii[order],
@@ -266,7 +291,8 @@ def measure_star(
 
 
 def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
-    """Per-annulus modulation and 1-sigma, all angles and per direction; mean level; pooled noise sigma."""
+    """Per-annulus modulation and 1-sigma, all angles and per direction; mean level; pooled noise sigma;
+    relative peak-to-peak illumination change across the outer circles."""
     ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
     rr = np.hypot(x - xc, y - yc).ravel()
@@ -277,24 +303,26 @@ def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
     mods = {k: np.full(radii.size, np.nan) for k in [*STAR_DIRECTIONS, "all"]}
     sigs = {k: np.full(radii.size, np.nan) for k in mods}
     levels = np.empty(radii.size)
-    res = []
+    res, grads = [], []
     for i, r in enumerate(radii):
         sel = np.abs(rr - r) <= annulus_px / 2
         t, val = th[sel], v[sel]
-        a, amp, sb, s = annulus_fit(t, val, n)
+        a, amp, sb, s, g = annulus_fit(t, val, n)
         if a <= 0:
             raise InputError("image: the star's mean level must be positive to define a modulation")
         levels[i], mods["all"][i], sigs["all"][i] = a, amp / a, sb / a
         res.append(s)
+        grads.append(g)
         for k, ang in sector.items():
             dist = np.abs(np.angle(np.exp(2j * (t - ang)))) / 2  # angle to the sector axis, both opposite sides
             m = dist <= np.pi / 8
             if np.count_nonzero(m) >= 8:
-                ak, ampk, sbk, _ = annulus_fit(t[m], val[m], n)
+                ak, ampk, sbk, *_ = annulus_fit(t[m], val[m], n)
                 if ak > 0:
                     mods[k][i], sigs[k][i] = ampk / ak, sbk / ak
-    outer = np.asarray(res)[: max(3, radii.size // 3)]  # outer radii: residual = noise, little model error
-    return radii, mods, sigs, levels, float(np.median(outer))
+    third = max(3, radii.size // 3)  # outer radii: residual = noise, little model error
+    gradient = 2 * float(np.median(grads[:third]))  # peak-to-peak relative level change across a circle
+    return radii, mods, sigs, levels, float(np.median(res[:third])), gradient
 
 
 def _check_range_of_mtf(mtf: dict, f: np.ndarray, m0: float, m0_from: str) -> None:
@@ -307,7 +335,7 @@ def _check_range_of_mtf(mtf: dict, f: np.ndarray, m0: float, m0_from: str) -> No
         )
 
 
-def _flags(data, levels, c_std, cnr, mtf_outer: float, extrapolated: bool, noise: float) -> list[str]:
+def _flags(data, levels, c_std, cnr, mtf_outer: float, extrapolated: bool, noise: float, gradient: float) -> list[str]:
     """Quality warnings (strings) for the JSON and the tables."""
     flags = []
     clip = clipping_flag(data, noise_std=noise)
@@ -316,13 +344,15 @@ def _flags(data, levels, c_std, cnr, mtf_outer: float, extrapolated: bool, noise
     spread = (levels.max() - levels.min()) / np.mean(levels)
     if spread > 0.05:
         flags.append(f"non-uniform illumination: the mean level varies by {100 * spread:.0f} % across radii")
+    if gradient > 0.05:
+        flags.append(f"non-uniform illumination: the mean level varies by {100 * gradient:.0f} % across the star")
     if c_std is not None and max(c_std) > 0.1:
         flags.append(f"uncertain centre: 1-sigma ({c_std[0]:.2f}, {c_std[1]:.2f}) px > 0.1 px")
     if cnr is not None and cnr < 10:
         flags.append(f"low contrast-to-noise: star amplitude / noise = {cnr:.1f} < 10")
-    if extrapolated and mtf_outer < 0.85:
+    if extrapolated and mtf_outer < 0.8:
         flags.append(
-            f"input modulation extrapolated from an outer MTF of {mtf_outer:.2f} < 0.85: "
+            f"input modulation extrapolated from an outer MTF of {mtf_outer:.2f} < 0.8: "
             "give the star's own modulation for an accurate curve"
         )
     return flags
