@@ -6,6 +6,9 @@ import json
 
 import numpy as np
 import pytest
+from _render import annular_mtf
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from satchain.errors import InputError
 from satchain.measure.star import measure_star
@@ -74,11 +77,6 @@ def test_star_bad_inputs():
 
 
 # ---------------------------------------------------------------- issue 10: centre, cycles, input modulation, 1-sigma
-
-from hypothesis import given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from _render import annular_mtf  # noqa: E402
 
 DIRS = {"ACT": 0.0, "D45": 45.0, "ALT": 90.0, "D135": 135.0}
 SUB = 4  # sub-samples per pixel side
