@@ -22,7 +22,7 @@ F_HARMONIC_MAX = 1.5
 
 @dataclass(frozen=True)
 class GroupFit:
-    """Fitted mean ``a``, signed amplitudes ``amps`` (for ``harmonics``), bar-centre phase ``x0`` (px), the
+    """Fitted mean ``a``, amplitudes ``amps`` (for ``harmonics``), bright-bar-centre phase ``x0`` (px), the
     modulation ``|sum amps| / a`` and its 1-sigma, the profile noise used and the rms misfit."""
 
     a: float
@@ -130,6 +130,8 @@ def fit_group(profile: np.ndarray, period: float, noise: float | None) -> GroupF
         grad[0] = -abs(total) / a**2
         grad[1 : 1 + kk.size] = np.sign(total) / a
         std = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
+    if total < 0:  # x0 on a dark bar: move it to a bright one (odd harmonics change sign)
+        x0, amps = (x0 + period / 2) % period, -amps
     return GroupFit(a, ks, amps, x0, float(mod), std, float(s), misfit)
 
 
