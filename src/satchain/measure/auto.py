@@ -34,6 +34,7 @@ are listed there too.  Nothing is dropped silently.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -507,11 +508,23 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
         rois.append(roi)
     if not keep:
         raise _Skip(f"no bar group is measurable at {p:g} m pixels (see the bar_group entries)")
-    groups = [it["groups"][k] for k in keep]
-    periods_px = [float(g["period_m"]) / p for g in groups]
     levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
     direction = "ACT" if orientation == "act" else "ALT"
-    r = measure_bars(refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p)
+    while True:  # a group refused (no bars at its period, ...) is listed and the others measured
+        groups = [it["groups"][k] for k in keep]
+        periods_px = [float(g["period_m"]) / p for g in groups]
+        try:
+            r = measure_bars(
+                refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p
+            )
+            break
+        except InputError as exc:
+            bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))
+            if bad is None or len(keep) < 2:
+                raise
+            j = int(bad.group(1))
+            skipped.append(_skip(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {exc}"))
+            del keep[j], rois[j]
     rows = [
         {
             "group": k,

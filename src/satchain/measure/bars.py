@@ -13,12 +13,15 @@ centre, ``|sum_k A_k| / a`` (Coltman's definition), divided by the large-area co
 
 Validation.  A group must cover 1.5 periods, its profile's dominant period must be the claimed one, the
 periodic model must explain the profile, and the fitted modulation must stand above the noise; otherwise
-the call is refused.  Without ``levels`` the large-area levels are the peak and trough of the widest group,
-only if its bars are flat-topped (else refused: the CTF would be inflated); a single group cannot be its own
-reference.  The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied
-here to the measured, discrete CTF (linear interpolation between groups, zero above the highest measured
-frequency; so the groups should reach the frequency where the CTF vanishes).  ``satchain.ctf`` has the same
-series for continuous CTF functions; this module keeps its own so measurement stays independent of prediction.
+the call is refused.  Without ``levels`` the large-area levels are the plateaus of the widest group (its
+samples near bar and gap centres), only if they are flat (else refused: the CTF would be inflated, the old
+default's 7.8 %); a single group cannot be its own reference.  The fitted CTF is kept within [the samples'
+own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.
+
+The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
+discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
+should reach the frequency where the CTF vanishes). ``satchain.ctf`` has the same series for continuous CTF
+functions; this module keeps its own so measurement stays independent of prediction.
 """
 
 from __future__ import annotations
@@ -172,8 +175,38 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> 
     return flags
 
 
-def _levels(fits, periods, levels):
-    """Large-area contrast, its 1-sigma, where it came from, flags."""
+def _sampled_floor(prof: np.ndarray, noise: float) -> float:
+    """Modulation of the samples themselves, less twice the expected noise excess of a max - min: a lower
+    bound of the continuous profile's modulation (the samples are values of it)."""
+    z = np.sqrt(2 * np.log(max(prof.size, 2)))
+    span = float(prof.max() - prof.min()) - 2 * z * (noise if np.isfinite(noise) else 0.0)
+    return max(span, 0.0) / float(prof.max() + prof.min())
+
+
+def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags):
+    """The fitted CTF kept within [sampled modulation, 1]: the samples bound it from below, and a blurred
+    profile (non-negative PSF) stays within the target's levels.  A fit outside (aliased harmonics of a
+    sharp system) is clipped and flagged."""
+    ctf = np.asarray(ctf, dtype=float).copy()
+    std = np.sqrt((mod_std / c_large) ** 2 + (ctf * c_std / c_large) ** 2)
+    for i in range(ctf.size):
+        lo, hi = floor[i], 1.0
+        if ctf[i] < lo - max(2 * std[i], 0.005):
+            flags.append(f"group {i}: fitted CTF {ctf[i]:.3f} below the sampled modulation: raised to {lo:.3f}")
+            std[i] = max(std[i], ctf[i] - lo)
+            ctf[i] = lo
+        elif ctf[i] > hi + max(2 * std[i], 0.01):
+            flags.append(
+                f"group {i}: fitted CTF {ctf[i]:.3f} > 1 (harmonics of a sharp system aliased at "
+                f"{periods[i]:g} px): clipped to 1, the bound of a non-negative PSF"
+            )
+            std[i] = max(std[i], abs(1.0 - max(lo, 0.0)) / 2)
+            ctf[i] = hi
+    return ctf, std
+
+
+def _levels(fits, periods, levels, profiles):
+    """Large-area contrast, its 1-sigma and where it came from."""
     if levels is not None:
         dark, bright = (float(v) for v in levels)
         if not (bright > dark and bright + dark > 0):
@@ -185,15 +218,33 @@ def _levels(fits, periods, levels):
             "(dark, bright) levels"
         )
     i = int(np.argmax(periods))
-    fit = fits[i]
-    flat = fit.flatness(periods[i])
-    if flat > 0.02:
+    return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
+
+
+def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
+    """Large-area contrast from the samples within P/8 of the widest group's bar and gap centres, which must
+    be flat (a plateau: the bars wide enough for the blur) -- else refused, as the CTF would be inflated."""
+    x = np.arange(prof.size, dtype=float)
+    u = (x - fit.x0) % period
+    bright = prof[np.minimum(u, period - u) <= period / 8]
+    dark = prof[np.abs(u - period / 2) <= period / 8]
+    if bright.size < 2 or dark.size < 2:
         raise InputError(
-            f"levels: not given, and the widest group (period {periods[i]:g} px) has no flat bar tops "
-            f"(the profile changes by {flat:.0%} of its amplitude within P/8 of a bar centre): its modulation "
-            "is below the large-area contrast and would inflate every CTF; give the (dark, bright) levels"
+            f"levels: not given, and the widest group (period {period:g} px) is too narrow to show its "
+            "plateaus (need 2 samples within P/8 of a bar and of a gap centre); give the (dark, bright) levels"
         )
-    return fit.modulation, fit.modulation_std, f"widest group (period {periods[i]:g} px, flat-topped)"
+    b, d = float(np.mean(bright)), float(np.mean(dark))
+    spread = max(float(np.ptp(bright)), float(np.ptp(dark))) - 3 * fit.noise
+    if not b > d or spread > 0.02 * (b - d):
+        raise InputError(
+            f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops "
+            f"(the samples near a bar or gap centre spread by {spread / max(b - d, 1e-300):.0%} of the bar "
+            "amplitude): its modulation is below the large-area contrast and would inflate every CTF; "
+            "give the (dark, bright) levels"
+        )
+    c = (b - d) / (b + d)
+    sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
+    return c, sd, f"plateaus of the widest group (period {period:g} px)"
 
 
 def measure_bars(
@@ -219,8 +270,8 @@ def measure_bars(
     direction : {"ACT", "ALT"}
         ``ACT``: bars parallel to y, profile along x (the ACT CTF); ``ALT``: bars parallel to x.
     levels : (dark, bright), optional
-        Large-area dark and bright levels.  By default the fitted peak and trough of the widest group, which
-        must then be flat-topped (refused otherwise) and be one of at least two groups.
+        Large-area dark and bright levels.  By default the plateaus of the widest group, which must then be
+        flat-topped (refused otherwise) and be one of at least two groups.
     pixel_m : float, optional
         Ground sample distance; adds ``f_cy_per_m_ground``.
 
@@ -248,23 +299,25 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    fits, flags = [], []
+    fits, floors, profiles, flags = [], [], [], []
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
         prof, noise, fl = _profile(image, roi, direction, p, i)
         fit = fit_group(prof, p, noise)
         flags += fl + _check_group(fit, prof, p, i)
         fits.append(fit)
-    c_large, c_std, levels_from = _levels(fits, periods, levels)
+        floors.append(_sampled_floor(prof, fit.noise))
+        profiles.append(prof)
+    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
-    ctf = mod / c_large
-    ctf_std = np.sqrt((mod_std / c_large) ** 2 + (ctf * c_std / c_large) ** 2)
-    if np.nanmax(ctf) > CTF_MAX:
-        k = int(np.nanargmax(ctf))
+    floor = np.array(floors) / c_large
+    if np.nanmax(floor) > CTF_MAX:
+        k = int(np.nanargmax(floor))
         raise InputError(
-            f"levels = {levels!r}: the CTF of the {periods[k]:g} px group would be {ctf[k]:.3g} > {CTF_MAX}; "
-            "the large-area contrast is too small (wrong levels?)"
+            f"levels = {levels!r}: the sampled CTF of the {periods[k]:g} px group is already {floor[k]:.3g} > "
+            f"{CTF_MAX}; the large-area contrast is too small (wrong levels?)"
         )
+    ctf, ctf_std = _bounded_ctf(mod / c_large, mod_std, c_large, c_std, floor, periods, flags)
     f = 1.0 / periods
     mtf, mtf_std = _mtf_with_std(f, ctf, ctf_std)
     bad = ~((mtf >= 0) & (mtf <= CTF_MAX))
