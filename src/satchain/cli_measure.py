@@ -244,7 +244,7 @@ def star(
         con = _console()
         ox, oy = (region[0], region[1]) if region is not None else (0, 0)
         cx, cy = r.center_xy_px[0] + ox, r.center_xy_px[1] + oy
-        csd = "" if r.center_std_px is None else f" ± ({r.center_std_px[0]:.3f}, {r.center_std_px[1]:.3f})"
+        csd = "" if r.center_std_px is None else f" ± ({r.center_std_px[0]:.2g}, {r.center_std_px[1]:.2g})"
         rows = [
             ("cycles (checked)", r.cycles),
             (f"centre X,Y px ({r.center_from})", f"{cx:.3f}, {cy:.3f}{csd}"),

@@ -46,7 +46,8 @@ def test_ctf_and_inverse_coltman():
     r = measure_bars(img, periods_px=periods, group_rois=rois, levels=(40.0, 160.0))
     f = 1 / periods
     even = (periods % 2 == 0) & (periods >= 4)  # samples hit the peaks and the troughs exactly
-    np.testing.assert_allclose(r.ctf[even], _ctf_true(f[even]), atol=1e-6)
+    # wide groups: plateau means (within 0.5 % flat); narrower ones: the fit at the known period
+    np.testing.assert_allclose(r.ctf[even], _ctf_true(f[even]), atol=2e-3)
     assert r.large_area_contrast == pytest.approx(0.6)
     low = even & (f <= 0.25)  # sampled peaks exact, and the groups cover k f well enough for the series
     np.testing.assert_allclose(r.mtf[low], _mtf(f[low]), atol=0.03)

@@ -16,7 +16,9 @@ periodic model must explain the profile, and the fitted modulation must stand ab
 the call is refused.  Without ``levels`` the large-area levels are the plateaus of the widest group (its
 samples near bar and gap centres), only if they are flat (else refused: the CTF would be inflated, the old
 default's 7.8 %); a single group cannot be its own reference.  The fitted CTF is kept within [the samples'
-own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.
+own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.  Where a
+group's samples within P/8 of its bar and gap centres are flat (wide bars), their means are the peak and
+trough themselves and give the CTF directly (no truncated series).
 
 The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
 discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
@@ -221,30 +223,40 @@ def _levels(fits, periods, levels, profiles):
     return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
 
 
-def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
-    """Large-area contrast from the samples within P/8 of the widest group's bar and gap centres, which must
-    be flat (a plateau: the bars wide enough for the blur) -- else refused, as the CTF would be inflated."""
+def _plateau(prof: np.ndarray, fit: GroupFit, period: float):
+    """Modulation and 1-sigma from the samples within P/8 of the bar and gap centres, when those are flat
+    (a plateau: bars wide enough for the blur; the samples then are the peak and trough themselves), else
+    None; and the relative spread found.  Needs P >= 8 px (two or more samples at distinct offsets within
+    +-P/8 of each centre, so flatness is seen within one bar, not across bars at the same phase)."""
+    if period < 8.0:
+        return None, np.inf
     x = np.arange(prof.size, dtype=float)
     u = (x - fit.x0) % period
     bright = prof[np.minimum(u, period - u) <= period / 8]
     dark = prof[np.abs(u - period / 2) <= period / 8]
     if bright.size < 2 or dark.size < 2:
-        raise InputError(
-            f"levels: not given, and the widest group (period {period:g} px) is too narrow to show its "
-            "plateaus (need 2 samples within P/8 of a bar and of a gap centre); give the (dark, bright) levels"
-        )
+        return None, np.inf
     b, d = float(np.mean(bright)), float(np.mean(dark))
-    spread = max(float(np.ptp(bright)), float(np.ptp(dark))) - 3 * fit.noise
-    if not b > d or spread > 0.02 * (b - d):
-        raise InputError(
-            f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops "
-            f"(the samples near a bar or gap centre spread by {spread / max(b - d, 1e-300):.0%} of the bar "
-            "amplitude): its modulation is below the large-area contrast and would inflate every CTF; "
-            "give the (dark, bright) levels"
-        )
-    c = (b - d) / (b + d)
+    if not b > d:
+        return None, np.inf
+    spread = (max(float(np.ptp(bright)), float(np.ptp(dark))) - 3 * fit.noise) / (b - d)
+    if spread > 0.005:
+        return None, spread
     sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
-    return c, sd, f"plateaus of the widest group (period {period:g} px)"
+    return ((b - d) / (b + d), sd), spread
+
+
+def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
+    """Large-area contrast from the widest group's plateaus; refused when it has none (the CTF would be
+    inflated)."""
+    found, spread = _plateau(prof, fit, period)
+    if found is None:
+        raise InputError(
+            f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops (period under "
+            f"8 px, or samples within P/8 of a bar or gap centre spread by {spread:.0%} of the amplitude): its "
+            "modulation is below the large-area contrast and would inflate every CTF; give the (dark, bright) levels"
+        )
+    return found[0], found[1], f"plateaus of the widest group (period {period:g} px)"
 
 
 def measure_bars(
@@ -310,6 +322,10 @@ def measure_bars(
     c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
+    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
+        found, _ = _plateau(prof, fit, float(p))
+        if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
+            mod[i], mod_std[i] = found
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
