@@ -33,6 +33,7 @@ class GroupFit:
     modulation_std: float
     noise: float
     misfit: float
+    unobserved: tuple = ()
 
     def peak_trough(self) -> tuple[float, float]:
         """Fitted continuous profile at a bar centre and at a gap centre (bright first)."""
@@ -130,9 +131,12 @@ def fit_group(profile: np.ndarray, period: float, noise: float | None) -> GroupF
         grad[0] = -abs(total) / a**2
         grad[1 : 1 + kk.size] = np.sign(total) / a
         std = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
+    # a harmonic folded to 0.5 cy/px whose samples all sit near its zero crossings cannot be estimated
+    norms = np.sqrt(np.mean(d[:, 1:] ** 2, axis=0)) / np.sqrt(0.5)
+    unobserved = tuple(int(k) for k, nrm in zip(ks, norms, strict=True) if nrm < 0.3)
     if total < 0:  # x0 on a dark bar: move it to a bright one (odd harmonics change sign)
         x0, amps = (x0 + period / 2) % period, -amps
-    return GroupFit(a, ks, amps, x0, float(mod), std, float(s), misfit)
+    return GroupFit(a, ks, amps, x0, float(mod), std, float(s), misfit, unobserved)
 
 
 def period_gain(profile: np.ndarray, period: float) -> tuple[float, float, float]:

@@ -169,6 +169,12 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> 
             f"fitted (last fitted harmonic {fit.harmonics[-1]}: {last:.0%} of the modulation): the CTF may be off "
             "by a few % for a sharp system"
         )
+    if fit.unobserved:
+        flags.append(
+            f"group {index}: harmonic(s) {list(fit.unobserved)} of the {period:g} px period alias to 0.5 cy/px and "
+            "are sampled at their zero crossings at this phase (unobserved, not in the CTF): a sharp system's CTF "
+            "may be off by a few %"
+        )
     if period < 2.5:
         flags.append(
             f"group {index}: period {period:g} px < 2.5 px: the CTF depends on the sampling phase "
