@@ -269,7 +269,11 @@ def bars(
     periods_px: Annotated[str, typer.Option("--periods-px", help="period of each group (px), P1,P2,...")],
     group_roi: Annotated[
         list[str] | None,
-        typer.Option("--group-roi", help="X0,Y0,X1,Y1 of one group (repeat, one per period)"),
+        typer.Option(
+            "--group-roi",
+            help="X0,Y0,X1,Y1 of one group, across the bars from the first to the last bar centre, no plate "
+            "(repeat, one per period)",
+        ),
     ] = None,
     direction: Annotated[str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")] = "ACT",
     levels: Annotated[

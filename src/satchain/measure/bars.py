@@ -162,12 +162,16 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> 
         )
     flags = []
     last = abs(float(fit.amps[-1])) / abs(float(np.sum(fit.amps)))
-    if len(fit.harmonics) == 1 or last > 0.02:
-        k_next = fit.harmonics[-1] + 2
+    if len(fit.harmonics) == 1:
         flags.append(
-            f"group {index}: harmonics {k_next}+ of the {period:g} px period alias onto fitted ones and are not "
-            f"fitted (last fitted harmonic {fit.harmonics[-1]}: {last:.0%} of the modulation): the CTF may be off "
-            "by a few % for a sharp system"
+            f"group {index}: only the fundamental is separable at {period:g} px; harmonics 3+ alias onto it: a "
+            "sharp system's CTF may be off by a few %"
+        )
+    elif last > 0.02:
+        flags.append(
+            f"group {index}: harmonics {fit.harmonics[-1] + 2}+ of the {period:g} px period alias onto fitted ones "
+            f"and are not fitted (last fitted harmonic {fit.harmonics[-1]}: {last:.0%} of the modulation): the "
+            "CTF may be off by a few % for a sharp system"
         )
     if fit.unobserved:
         flags.append(
@@ -332,6 +336,7 @@ def measure_bars(
         found, _ = _plateau(prof, fit, float(p))
         if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
             mod[i], mod_std[i] = found
+            flags = [f for f in flags if not (f.startswith(f"group {i}: ") and "alias" in f)]
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
