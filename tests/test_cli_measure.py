@@ -140,13 +140,14 @@ def test_star_center_in_image_pixels_with_roi_and_plot(tmp_path):
 
 
 def _bars_image():
-    """Two bar groups (period 8 px, levels 50/150; period 4 px, levels 75/125): CTF 1 and 0.5."""
+    """Two bar groups: period 8 px, levels 50/150 (flat plateaus: the reference); period 4 px blurred to its
+    fundamental, 100 +- 25 with the peaks between samples (the old sampled max - min gave 0.354): CTF 1 and 0.5."""
     x = np.arange(120)
     row = np.full(120, 100.0)
     g1 = x < 56
     row[g1] = np.where((x[g1] // 4) % 2 == 0, 150.0, 50.0)
     g2 = (x >= 60) & (x < 116)
-    row[g2] = np.where(((x[g2] - 60) // 2) % 2 == 0, 125.0, 75.0)
+    row[g2] = 100 + 25 * np.cos(2 * np.pi * (x[g2] - 60.5) / 4)
     return np.tile(row, (40, 1))
 
 

@@ -181,12 +181,32 @@ def edge(
     _emit(payload, as_json, out, "edge", plot, table)
 
 
+def _pm(value, std) -> str:
+    """``value ± std`` (4 significant digits), ``-`` for None."""
+    if value is None:
+        return "-"
+    if std is None or not isinstance(std, float) or std != std:
+        return _fmt(float(value))
+    return f"{value:.4g} ± {std:.2g}"
+
+
+def _target_flags(flags) -> None:
+    """Quality flags of a star/bars/wedge measurement, one yellow line each."""
+    for f in flags:
+        _console().print(f"[yellow]flag: {f}[/]", highlight=False)
+
+
 @measure_app.command()
 @_handle_errors
 def star(
     image: ImageArg,
     cycles: Annotated[int, typer.Option("--cycles", help="periods per revolution of the sinusoidal star")],
-    center: Annotated[str | None, typer.Option("--center", help="star centre X,Y in image pixels")] = None,
+    center: Annotated[
+        str | None, typer.Option("--center", help="approximate star centre X,Y in image pixels (refined)")
+    ] = None,
+    refine_center: Annotated[
+        bool, typer.Option("--refine-center/--no-refine-center", help="estimate/refine the centre from the data")
+    ] = True,
     radius: Annotated[float | None, typer.Option("--radius", help="outer radius used (px)")] = None,
     input_modulation: Annotated[
         float | None,
@@ -216,6 +236,7 @@ def star(
         roi=region,
         input_modulation=input_modulation,
         pixel_m=p,
+        refine_center=refine_center,
     )
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
 
@@ -225,10 +246,22 @@ def star(
 
     def table():
         con = _console()
-        rows = [("cycles", r.cycles), ("input modulation", r.input_modulation)]
-        rows += [(f"MTF at Nyquist, {k}", r.mtf_at_nyquist[k]) for k in STAR_DIRECTIONS]
+        ox, oy = (region[0], region[1]) if region is not None else (0, 0)
+        cx, cy = r.center_xy_px[0] + ox, r.center_xy_px[1] + oy
+        csd = "" if r.center_std_px is None else f" ± ({r.center_std_px[0]:.2g}, {r.center_std_px[1]:.2g})"
+        rows = [
+            ("cycles (checked)", r.cycles),
+            (f"centre X,Y px ({r.center_from})", f"{cx:.3f}, {cy:.3f}{csd}"),
+            (f"input modulation ({r.input_modulation_from})", _pm(r.input_modulation, r.input_modulation_std)),
+        ]
+        rows += [
+            (f"MTF at Nyquist, {k}", _pm(r.mtf_at_nyquist[k], (r.mtf_at_nyquist_std or {}).get(k)))
+            for k in STAR_DIRECTIONS
+        ]
         con.print(_kv_table(f"Siemens star: {image.name}", rows))
-        con.print(_curve_table("MTF per direction", r.f_cy_per_px, r.mtf, p, step=0.05))
+        cols = {**r.mtf, "± (all)": r.mtf_all_std}
+        con.print(_curve_table("MTF per direction (1-sigma of the all-angle curve)", r.f_cy_per_px, cols, p, 0.05))
+        _target_flags(r.flags)
 
     _emit(payload, as_json, out, "star", plot, table)
 
@@ -240,11 +273,16 @@ def bars(
     periods_px: Annotated[str, typer.Option("--periods-px", help="period of each group (px), P1,P2,...")],
     group_roi: Annotated[
         list[str] | None,
-        typer.Option("--group-roi", help="X0,Y0,X1,Y1 of one group (repeat, one per period)"),
+        typer.Option(
+            "--group-roi",
+            help="X0,Y0,X1,Y1 of one group, across the bars from the first to the last bar centre, no plate "
+            "(repeat, one per period)",
+        ),
     ] = None,
     direction: Annotated[str, typer.Option("--direction", help="ACT: bars along y; ALT: bars along x")] = "ACT",
     levels: Annotated[
-        str | None, typer.Option("--levels", help="large-area DARK,BRIGHT levels; default: the widest group")
+        str | None,
+        typer.Option("--levels", help="large-area DARK,BRIGHT levels; default: the widest group if flat-topped"),
     ] = None,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
@@ -280,20 +318,28 @@ def bars(
             "period px",
             "f cy/px",
             *(["f cy/m ground"] if p else []),
-            "CTF",
-            "MTF (Coltman inverse)",
+            "CTF ± 1σ",
+            "MTF (Coltman inverse) ± 1σ",
+            "bar phase px",
         ):
             t.add_column(col, justify="right")
         for k in range(r.f_cy_per_px.size):
             ground = [f"{r.f_cy_per_px[k] / p:.3f}"] if p else []
+            mtf = None if r.mtf[k] != r.mtf[k] else float(r.mtf[k])
             t.add_row(
                 f"{r.periods_px[k]:.3g}",
                 f"{r.f_cy_per_px[k]:.4f}",
                 *ground,
-                f"{r.ctf[k]:.4f}",
-                f"{r.mtf[k]:.4f}",
+                _pm(float(r.ctf[k]), float(r.ctf_std[k])),
+                _pm(mtf, float(r.mtf_std[k])),
+                f"{r.phase_px[k]:.3f}",
             )
         _console().print(t)
+        _console().print(
+            f"large-area contrast {_pm(r.large_area_contrast, r.large_area_contrast_std)} ({r.levels_from})",
+            highlight=False,
+        )
+        _target_flags(r.flags)
 
     _emit(payload, as_json, out, "bars", plot, table)
 
@@ -411,14 +457,13 @@ def wedge(
         rows = [
             ("direction (resolution)", r.direction),
             ("threshold", r.threshold),
-            ("resolved line width (px)", r.resolved_line_width_px),
-            ("resolved line width (m)", r.resolved_line_width_m),
+            ("resolved line width (px)", _pm(r.resolved_line_width_px, r.resolved_line_width_px_std)),
+            ("resolved line width (m)", _pm(r.resolved_line_width_m, r.resolved_line_width_m_std)),
             ("resolved frequency (cy/px)", r.resolved_f_cy_per_px),
             ("resolved frequency (cy/m ground)", r.resolved_f_cy_per_m_ground),
         ]
         _console().print(_kv_table(f"hyperbolic wedge: {image.name}", rows))
-        if r.resolved_line_width_px is None:
-            _console().print("[yellow]the contrast never falls to the threshold in this region[/]")
+        _target_flags(r.flags)
 
     _emit(payload, as_json, out, "wedge", plot, table)
 

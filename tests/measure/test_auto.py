@@ -65,9 +65,7 @@ def test_every_item_is_measured_or_skipped_with_a_reason(pipeline):
     d = res.to_dict()
     json.dumps(d, allow_nan=False)  # JSON-ready
     assert {"slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge", "skipped"} <= set(d)
-    measured = {
-        e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]
-    }
+    measured = {e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]}
     skipped = {s["id"]: s for s in d["skipped"]}
     assert measured == {"edge_act", "edge_alt", "star", "bars", "wedge"}
     assert {it["id"] for it in truth["items"]} <= measured | set(skipped)
@@ -114,6 +112,11 @@ def test_star_mtf_per_direction(pipeline):
 
 def _bars_1d(truth_item, group, background):
     """Exact 1-D model of a row through the bars: the same render/blur/block chain done along x only."""
+    return _bars_1d_blurred(truth_item, group, background).reshape(-1, F).mean(axis=1)
+
+
+def _bars_1d_blurred(truth_item, group, background):
+    """The render/blur part of :func:`_bars_1d` (render grid)."""
     fine = 0.005  # every bar and plate edge lies on this grid (multiples of 1/8 m)
     x = np.arange(0.0, 80.0, fine) + fine / 2
     r = np.full(x.size, background)
@@ -122,8 +125,7 @@ def _bars_1d(truth_item, group, background):
     for b in group["bars_m"]:
         r[(x >= b[0]) & (x < b[2])] = truth_item["bright"]
     render = r.reshape(-1, round(P_SCENE / fine)).mean(axis=1)
-    blurred = gaussian_filter1d(render, SIGMA, mode="nearest")
-    return blurred.reshape(-1, F).mean(axis=1)
+    return gaussian_filter1d(render, SIGMA, mode="nearest")
 
 
 def test_bars_ctf_matches_an_independent_1d_model(pipeline):
@@ -139,10 +141,18 @@ def test_bars_ctf_matches_an_independent_1d_model(pipeline):
         cols = np.arange(160)
         inside = cols[((cols + 0.5) * P >= centres[0]) & ((cols + 0.5) * P <= centres[-1])]
         assert g["roi_px"][0] == inside[0] and g["roi_px"][2] == inside[-1] + 1  # bar centre to bar centre
-        prof = _bars_1d(item, group, truth["background"])[inside]
-        expected = (prof.max() - prof.min()) / (prof.max() + prof.min()) / c_large
-        # the 1-D model ignores the blur from the bar ends (>= 0.5 px outside the rows used; ~1e-4 here)
-        assert g["ctf"] == pytest.approx(expected, abs=0.005), group["period_m"]
+        # the continuous (pixel-integrated) profile at every 1/F px: pixel means of F render pixels at any offset
+        fine = np.convolve(_bars_1d_blurred(item, group, truth["background"]), np.ones(F) / F, mode="valid")
+        xs = (np.arange(fine.size) + F / 2) / F  # output-pixel coordinate of each window's centre
+        span = fine[(xs * P >= centres[0] - 1e-9) & (xs * P <= centres[-1] + 1e-9)]
+        expected = (span.max() - span.min()) / (span.max() + span.min()) / c_large
+        if g["period_px"] < 2.5:  # the phase is not identifiable near 2 px: the sampled modulation, a lower bound
+            assert g["ctf"] <= expected + 0.005 and any("lower bound" in f for f in g["flags"])
+        elif any("alias" in f for f in g["flags"]):  # a sharp system (sigma 0.4 px): aliased harmonics, flagged
+            assert g["ctf"] == pytest.approx(expected, abs=0.08), group["period_m"]
+        else:
+            assert g["ctf"] == pytest.approx(expected, abs=0.03), group["period_m"]
+        assert 0 <= g["ctf_std"] < 0.01  # noise-free apart from the simulation's own rounding
     assert np.all(np.asarray(b["mtf"]) <= np.asarray(b["ctf"]) + 1e-9)
 
 
@@ -177,13 +187,9 @@ def test_radiometric_offset_and_gain_are_calibrated_out(pipeline):
     assert res2.calibration["offset"] == pytest.approx(100.0, abs=1e-3)
     assert res2.calibration["gain"] == pytest.approx(1000.0, rel=1e-6)
     a, b = res.to_dict(), res2.to_dict()
-    np.testing.assert_allclose(
-        a["siemens_star"][0]["mtf"]["ACT"], b["siemens_star"][0]["mtf"]["ACT"], atol=1e-6
-    )
+    np.testing.assert_allclose(a["siemens_star"][0]["mtf"]["ACT"], b["siemens_star"][0]["mtf"]["ACT"], atol=1e-6)
     np.testing.assert_allclose(a["bar_targets"][0]["ctf"], b["bar_targets"][0]["ctf"], atol=1e-6)
-    np.testing.assert_allclose(
-        a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-6
-    )
+    np.testing.assert_allclose(a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-6)
     np.testing.assert_allclose(a["slanted_edges"][0]["mtf"], b["slanted_edges"][0]["mtf"], atol=1e-6)
 
 
@@ -237,9 +243,7 @@ def test_transposed_image_swaps_act_and_alt(pipeline):
     assert b["bar_targets"][0]["direction"] == "ALT"
     np.testing.assert_allclose(a["bar_targets"][0]["ctf"], b["bar_targets"][0]["ctf"], atol=1e-12)
     assert b["hyperbolic_wedge"][0]["direction"] == "ACT"
-    np.testing.assert_allclose(
-        a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-12
-    )
+    np.testing.assert_allclose(a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-12)
 
 
 def test_too_coarse_pixels_skip_everything_with_reasons(pipeline):

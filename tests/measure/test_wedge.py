@@ -47,9 +47,7 @@ def test_threshold_line_width_matches_ctf_prediction():
 def test_act_orientation_and_unresolved():
     img = _render()
     r = measure_wedge(img.T, line_width_px=_lw, direction="ACT")
-    assert r.resolved_line_width_px == pytest.approx(
-        measure_wedge(img, line_width_px=_lw).resolved_line_width_px
-    )
+    assert r.resolved_line_width_px == pytest.approx(measure_wedge(img, line_width_px=_lw).resolved_line_width_px)
     none = measure_wedge(img, line_width_px=_lw, threshold=0.01)
     assert none.resolved_line_width_px is None and none.to_dict()["resolved_f_cy_per_px"] is None
 
@@ -59,3 +57,33 @@ def test_wedge_bad_inputs():
         measure_wedge(_render(), line_width_px=np.ones(5))
     with pytest.raises(ValueError):
         measure_wedge(_render(), line_width_px=_lw, threshold=1.5)
+
+
+def test_wedge_refuses_no_wedge():
+    """Issue 10: a constant image reported a resolution (1.249 m); now refused, as is pure noise."""
+    with pytest.raises(InputError, match="no wedge"):
+        measure_wedge(np.full((64, 200), 0.5), line_width_px=_lw, pixel_m=0.49)
+    noise = 0.5 + np.random.default_rng(0).normal(0, 0.02, (64, 200))
+    with pytest.raises(InputError, match="no wedge"):
+        measure_wedge(noise, line_width_px=_lw)
+    with pytest.raises(InputError, match="already"):  # the wide end below the threshold
+        measure_wedge(_render(), line_width_px=_lw, threshold=0.99)
+
+
+def test_wedge_uncertainty_covers_the_noise():
+    """Across noisy realisations the noise-free resolution lies within +-2 sigma (>= 85 %), and sigma is not
+    wildly inflated (under 3x the scatter); a noise floor near the threshold is flagged."""
+    img = _render()
+    ref = measure_wedge(img, line_width_px=_lw).resolved_line_width_px
+    rng = np.random.default_rng(3)
+    vals, sds = [], []
+    for _ in range(30):
+        r = measure_wedge(img + rng.normal(0, 0.02, img.shape), line_width_px=_lw, average_px=5)
+        assert r.noise_std == pytest.approx(0.02, rel=0.3)
+        vals.append(r.resolved_line_width_px)
+        sds.append(r.resolved_line_width_px_std)
+    vals, sds = np.array(vals), np.array(sds)
+    assert np.mean(np.abs(vals - ref) <= 2 * sds) >= 0.85
+    assert np.median(sds) < 3 * max(np.std(vals), 0.005)
+    noisy = measure_wedge(img + rng.normal(0, 0.03, img.shape), line_width_px=_lw)
+    assert any("noise floor" in f for f in noisy.flags)

@@ -10,7 +10,7 @@ import numpy as np
 from satchain._validate import as_float_array
 from satchain.errors import InputError
 
-__all__ = ["crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing"]
+__all__ = ["crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing", "clipping_flag"]
 
 
 def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarray:
@@ -59,6 +59,29 @@ def robust_sigma(values) -> float:
     if v.size == 0:
         return 0.0
     return float(1.482602218505602 * np.median(np.abs(v - np.median(v))))
+
+
+def clipping_flag(data, *, max_fraction: float = 0.005, noise_std: float | None = None) -> str | None:
+    """A quality flag when more than ``max_fraction`` of the pixels sit at the region's maximum or minimum.
+
+    With ``noise_std`` given and zero (noise-free synthetic data, whose plateaus repeat exact values) there is
+    no flag.
+
+    Examples
+    --------
+    >>> clipping_flag(np.minimum(np.arange(100.0), 90.0))
+    'clipping: 10.0 % of the pixels at the region maximum (90)'
+    >>> clipping_flag(np.arange(1000.0)) is None
+    True
+    """
+    d = np.asarray(data, dtype=float)
+    if d.size == 0 or d.max() == d.min() or (noise_std is not None and noise_std <= 1e-9 * (d.max() - d.min())):
+        return None
+    hi, lo = float(np.mean(d == d.max())), float(np.mean(d == d.min()))
+    frac, which, val = (hi, "maximum", d.max()) if hi >= lo else (lo, "minimum", d.min())
+    if frac <= max_fraction:
+        return None
+    return f"clipping: {100 * frac:.1f} % of the pixels at the region {which} ({val:g})"
 
 
 def first_crossing(x, y, level: float):

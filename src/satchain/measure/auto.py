@@ -9,8 +9,9 @@ its borders, so the surround never enters a measurement:
 * **slanted edge** -- the square shrunk by ``max(3 px, 10 %)`` on every side (away from its corners and from
   the square's own borders, which are edges too).  Angles are reported in the truth's convention (``act``:
   tilt of the edge from +y towards +x; ``alt``: from +x towards +y), measured and true side by side.
-* **Siemens star** -- centre and radius from the truth; the outer 2 px of the disc and the uniform centre are
-  left out.  ``cycles`` from the truth.
+* **Siemens star** -- centre and radius from the truth (the centre then refined from the data, reported as
+  ``center_xy_px_measured`` with its 1-sigma); the outer 2 px of the disc and the uniform centre are left
+  out.  ``cycles`` from the truth (and checked against the data).
 * **bar groups** -- across the bars, from the centre of the first bar to the centre of the last (so the
   profile holds the bars and the gaps between them, never the plate around them); along the bars, the middle
   with one bar width left out at each end.  Periods in px = ``period_m / pixel_m``; groups finer than 2 px
@@ -33,6 +34,7 @@ are listed there too.  Nothing is dropped silently.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -451,12 +453,18 @@ def _star_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool) -> A
         "center_xy_px": [xc, yc],
         "radius_px": [float(r.radius_px.min()), float(r.radius_px.max())],
         "input_modulation": r.input_modulation,
-        "input_modulation_from": "truth" if m0 is not None else "outer radii",
+        "input_modulation_from": "truth" if m0 is not None else r.input_modulation_from,
+        "center_xy_px_measured": [r.center_xy_px[0] + roi[0], r.center_xy_px[1] + roi[1]],
+        "center_std_px": r.center_std_px,
+        "input_modulation_std": r.input_modulation_std,
         "mtf_at_nyquist": r.mtf_at_nyquist,
+        "mtf_at_nyquist_std": r.mtf_at_nyquist_std,
         "f_cy_per_px": r.f_cy_per_px,
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
         "mtf": r.mtf,
+        "mtf_std": r.mtf_std,
         "mtf_all": r.mtf_all,
+        "flags": list(r.flags),
     }
     return AutoItem(str(it["id"]), "siemens_star", r, to_jsonable(summary))
 
@@ -500,11 +508,23 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
         rois.append(roi)
     if not keep:
         raise _Skip(f"no bar group is measurable at {p:g} m pixels (see the bar_group entries)")
-    groups = [it["groups"][k] for k in keep]
-    periods_px = [float(g["period_m"]) / p for g in groups]
     levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
     direction = "ACT" if orientation == "act" else "ALT"
-    r = measure_bars(refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p)
+    while True:  # a group refused (no bars at its period, ...) is listed and the others measured
+        groups = [it["groups"][k] for k in keep]
+        periods_px = [float(g["period_m"]) / p for g in groups]
+        try:
+            r = measure_bars(
+                refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p
+            )
+            break
+        except InputError as exc:
+            bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))
+            if bad is None or len(keep) < 2:
+                raise
+            j = int(bad.group(1))
+            skipped.append(_skip(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {exc}"))
+            del keep[j], rois[j]
     rows = [
         {
             "group": k,
@@ -512,9 +532,14 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
             "period_px": pp,
             "roi_px": list(roi),
             "ctf": c,
+            "ctf_std": cs,
             "mtf": m,
+            "phase_px": ph,
+            "flags": [f for f in r.flags if f.startswith(f"group {j}:")],
         }
-        for k, g, pp, roi, c, m in zip(keep, groups, periods_px, rois, r.ctf, r.mtf, strict=True)
+        for j, (k, g, pp, roi, c, cs, m, ph) in enumerate(
+            zip(keep, groups, periods_px, rois, r.ctf, r.ctf_std, r.mtf, r.phase_px, strict=True)
+        )
     ]
     summary = {
         "id": it["id"],
@@ -524,9 +549,12 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
         "f_cy_per_px": r.f_cy_per_px,
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
         "ctf": r.ctf,
+        "ctf_std": r.ctf_std,
         "mtf": r.mtf,
+        "mtf_std": r.mtf_std,
         "large_area_contrast": r.large_area_contrast,
-        "levels_from": "truth" if levels is not None else "largest group",
+        "levels_from": "truth" if levels is not None else r.levels_from,
+        "flags": list(r.flags),
         "groups": rows,
     }
     return AutoItem(str(it["id"]), "bar_target", r, to_jsonable(summary)), skipped
@@ -610,7 +638,10 @@ def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> Au
         "roi_px": None if roi is None else list(roi),
         "threshold": r.threshold,
         "resolution_m": r.resolved_line_width_m,
+        "resolution_m_std": r.resolved_line_width_m_std,
         "resolved_line_width_px": r.resolved_line_width_px,
+        "resolved_line_width_px_std": r.resolved_line_width_px_std,
+        "flags": list(r.flags),
         "resolved_position_px": r.resolved_position_px,
         "resolved_f_cy_per_px": r.resolved_f_cy_per_px,
         "resolved_f_cy_per_m_ground": r.resolved_f_cy_per_m_ground,

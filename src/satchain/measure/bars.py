@@ -1,12 +1,29 @@
 """Bar-target CTF and the MTF derived from it by the inverse Coltman series.
 
 Each bar group is a square wave of known period (``periods_px``, one bright + one dark bar).  Its profile
-across the bars is averaged along the bars; the contrast transfer is ``(max - min) / (max + min)`` of that
-profile, divided by the large-area contrast of the target (``(bright - dark) / (bright + dark)`` of large
-uniform areas).  The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied
-here to the measured, discrete CTF (linear interpolation between groups, zero above the highest measured
-frequency; so the groups should reach the frequency where the CTF vanishes).  ``satchain.ctf`` has the same
-series for continuous CTF functions; this module keeps its own so measurement stays independent of prediction.
+across the bars is averaged along the bars and fitted, by least squares at the known period, with the
+blurred square wave's Fourier series ``a + sum_k A_k cos(2 pi k (x - x0) / P)`` (odd ``k``; the phase
+``x0`` free, so the result does not depend on where the bars fall on the pixel grid).  Harmonics above the
+sampling Nyquist are fitted at their true frequency -- the samples are exact values of the continuous
+profile, so an aliased harmonic is identifiable as long as its folded frequency differs from the others'.
+The contrast transfer is the modulation of the fitted continuous profile between a bar centre and a gap
+centre, ``|sum_k A_k| / a`` (Coltman's definition), divided by the large-area contrast of the target
+(``(bright - dark) / (bright + dark)`` of large uniform areas).  Each CTF carries a 1-sigma from the noise
+(estimated from the rows along the bars, or from the fit residual) propagated through the fit.
+
+Validation.  A group must cover 1.5 periods, its profile's dominant period must be the claimed one, the
+periodic model must explain the profile, and the fitted modulation must stand above the noise; otherwise
+the call is refused.  Without ``levels`` the large-area levels are the plateaus of the widest group (its
+samples near bar and gap centres), only if they are flat (else refused: the CTF would be inflated, the old
+default's 7.8 %); a single group cannot be its own reference.  The fitted CTF is kept within [the samples'
+own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.  Where a
+group's samples within P/8 of its bar and gap centres are flat (wide bars), their means are the peak and
+trough themselves and give the CTF directly (no truncated series).
+
+The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
+discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
+should reach the frequency where the CTF vanishes). ``satchain.ctf`` has the same series for continuous CTF
+functions; this module keeps its own so measurement stays independent of prediction.
 """
 
 from __future__ import annotations
@@ -17,7 +34,8 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, crop_roi
+from satchain.measure._barfit import GroupFit, fit_group
+from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_from_ctf_samples"]
@@ -25,7 +43,12 @@ __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_fr
 
 @dataclass(frozen=True)
 class BarsResult(ResultMixin):
-    """CTF per bar group and the MTF from the inverse Coltman series, at ``f_cy_per_px = 1 / period``."""
+    """CTF per bar group and the MTF from the inverse Coltman series, at ``f_cy_per_px = 1 / period``.
+
+    ``ctf_std`` / ``mtf_std`` are 1-sigma (noise); ``phase_px`` the fitted position of a bar centre in each
+    group's region (px along the profile); ``noise_std`` the profile noise per group; ``flags`` warnings.
+    MTF values outside [0, 1.2] (noise in the inverse series) are reported as NaN and flagged.
+    """
 
     f_cy_per_px: np.ndarray
     periods_px: np.ndarray
@@ -34,6 +57,13 @@ class BarsResult(ResultMixin):
     large_area_contrast: float
     direction: str
     f_cy_per_m_ground: np.ndarray | None = None
+    ctf_std: np.ndarray | None = None
+    mtf_std: np.ndarray | None = None
+    phase_px: np.ndarray | None = None
+    large_area_contrast_std: float = 0.0
+    levels_from: str = "given"
+    noise_std: np.ndarray | None = None
+    flags: tuple = ()
 
 
 def coltman_inverse_coefficients(n_terms: int = 40) -> list[tuple[int, float]]:
@@ -87,6 +117,158 @@ def mtf_from_ctf_samples(f_cy_per_px, ctf, *, n_terms: int = 40) -> np.ndarray:
     return np.pi / 4 * out
 
 
+#: Largest CTF reported; anything above is refused (levels wrong, or not bars).
+CTF_MAX = 1.2
+
+
+def _profile(image, roi, direction: str, period: float, index: int):
+    """Profile across the bars (mean along them), its noise (from the rows' scatter about it) and flags."""
+    data = crop_roi(image, roi, min_size=2)
+    work = data if direction == "ACT" else data.T  # rows run along the bars' profile
+    prof = work.mean(axis=0)
+    if prof.size < 1.5 * period or prof.size < 4:
+        raise InputError(
+            f"group_rois[{index}] = {tuple(roi)!r}: {prof.size} px across the bars covers "
+            f"{prof.size / period:.2f} periods of {period:g} px; need at least 1.5 (two bars) and 4 px"
+        )
+    rows = work.shape[0]
+    noise = None
+    if rows >= 2:
+        noise = float(np.std(work - prof[None, :], ddof=0) * np.sqrt(rows / (rows - 1)) / np.sqrt(rows))
+    clip = clipping_flag(work, noise_std=None if noise is None else noise * np.sqrt(rows))
+    return prof, noise, ([f"group {index}: {clip}"] if clip else [])
+
+
+def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> list[str]:
+    """Refuse profiles that are not bars at ``period``; return flags."""
+    from satchain.measure._barfit import period_gain
+
+    g_claim, g_other, f_other = period_gain(prof, period)
+    if prof.size >= 2.5 * period and not g_claim > g_other:  # shorter: too few bins (misfit check below)
+        raise InputError(
+            f"periods_px[{index}] = {period:g}: the profile's dominant period is {1 / f_other:.3g} px "
+            f"(frequency {f_other:.3f} cy/px), not {period:g} px: no bars at that period in the region"
+        )
+    amp = abs(float(np.sum(fit.amps)))
+    if not (np.isfinite(fit.modulation_std) and fit.modulation > 5 * fit.modulation_std) or amp <= 0:
+        raise InputError(
+            f"group_rois[{index}]: no significant bar modulation at period {period:g} px "
+            f"({fit.modulation:.3g} +- {fit.modulation_std:.2g})"
+        )
+    if fit.misfit > 0.25 * amp:
+        raise InputError(
+            f"group_rois[{index}]: the profile is not a bar pattern of period {period:g} px "
+            f"(rms misfit {fit.misfit:.3g} = {fit.misfit / amp:.0%} of the bar amplitude; a single bar or edge?)"
+        )
+    flags = []
+    last = abs(float(fit.amps[-1])) / abs(float(np.sum(fit.amps)))
+    if len(fit.harmonics) == 1:
+        flags.append(
+            f"group {index}: only the fundamental is separable at {period:g} px; harmonics 3+ alias onto it: a "
+            "sharp system's CTF may be off by a few %"
+        )
+    elif last > 0.02:
+        flags.append(
+            f"group {index}: harmonics {fit.harmonics[-1] + 2}+ of the {period:g} px period alias onto fitted ones "
+            f"and are not fitted (last fitted harmonic {fit.harmonics[-1]}: {last:.0%} of the modulation): the "
+            "CTF may be off by a few % for a sharp system"
+        )
+    if fit.unobserved:
+        flags.append(
+            f"group {index}: harmonic(s) {list(fit.unobserved)} of the {period:g} px period alias to 0.5 cy/px and "
+            "are sampled at their zero crossings at this phase (unobserved, not in the CTF): a sharp system's CTF "
+            "may be off by a few %"
+        )
+    if period < 2.5:
+        flags.append(
+            f"group {index}: period {period:g} px < 2.5 px: the CTF depends on the sampling phase "
+            "(near 2 px: the sampled modulation, a lower bound)"
+        )
+    return flags
+
+
+def _sampled_floor(prof: np.ndarray, noise: float) -> float:
+    """Modulation of the samples themselves, less twice the expected noise excess of a max - min: a lower
+    bound of the continuous profile's modulation (the samples are values of it)."""
+    z = np.sqrt(2 * np.log(max(prof.size, 2)))
+    span = float(prof.max() - prof.min()) - 2 * z * (noise if np.isfinite(noise) else 0.0)
+    return max(span, 0.0) / float(prof.max() + prof.min())
+
+
+def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags):
+    """The fitted CTF kept within [sampled modulation, 1]: the samples bound it from below, and a blurred
+    profile (non-negative PSF) stays within the target's levels.  A fit outside (aliased harmonics of a
+    sharp system) is clipped and flagged."""
+    ctf = np.asarray(ctf, dtype=float).copy()
+    std = np.sqrt((mod_std / c_large) ** 2 + (ctf * c_std / c_large) ** 2)
+    for i in range(ctf.size):
+        lo, hi = floor[i], 1.0
+        if ctf[i] < lo - max(2 * std[i], 0.005):
+            flags.append(f"group {i}: fitted CTF {ctf[i]:.3f} below the sampled modulation: raised to {lo:.3f}")
+            std[i] = max(std[i], ctf[i] - lo)
+            ctf[i] = lo
+        elif ctf[i] > hi + max(2 * std[i], 0.01):
+            flags.append(
+                f"group {i}: fitted CTF {ctf[i]:.3f} > 1 (harmonics of a sharp system aliased at "
+                f"{periods[i]:g} px): clipped to 1, the bound of a non-negative PSF"
+            )
+            std[i] = max(std[i], abs(1.0 - max(lo, 0.0)) / 2)
+            ctf[i] = hi
+    return ctf, std
+
+
+def _levels(fits, periods, levels, profiles):
+    """Large-area contrast, its 1-sigma and where it came from."""
+    if levels is not None:
+        dark, bright = (float(v) for v in levels)
+        if not (bright > dark and bright + dark > 0):
+            raise InputError(f"levels = ({dark:g}, {bright:g}): need bright > dark and a positive mean")
+        return (bright - dark) / (bright + dark), 0.0, "given"
+    if len(fits) < 2:
+        raise InputError(
+            "levels: not given and only one group: a group cannot be its own reference; give the large-area "
+            "(dark, bright) levels"
+        )
+    i = int(np.argmax(periods))
+    return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
+
+
+def _plateau(prof: np.ndarray, fit: GroupFit, period: float):
+    """Modulation and 1-sigma from the samples within P/8 of the bar and gap centres, when those are flat
+    (a plateau: bars wide enough for the blur; the samples then are the peak and trough themselves), else
+    None; and the relative spread found.  Needs P >= 8 px (two or more samples at distinct offsets within
+    +-P/8 of each centre, so flatness is seen within one bar, not across bars at the same phase)."""
+    if period < 8.0:
+        return None, np.inf
+    x = np.arange(prof.size, dtype=float)
+    u = (x - fit.x0) % period
+    bright = prof[np.minimum(u, period - u) <= period / 8]
+    dark = prof[np.abs(u - period / 2) <= period / 8]
+    if bright.size < 2 or dark.size < 2:
+        return None, np.inf
+    b, d = float(np.mean(bright)), float(np.mean(dark))
+    if not b > d:
+        return None, np.inf
+    spread = (max(float(np.ptp(bright)), float(np.ptp(dark))) - 3 * fit.noise) / (b - d)
+    if spread > 0.005:
+        return None, spread
+    sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
+    return ((b - d) / (b + d), sd), spread
+
+
+def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
+    """Large-area contrast from the widest group's plateaus; refused when it has none (the CTF would be
+    inflated)."""
+    found, spread = _plateau(prof, fit, period)
+    if found is None:
+        raise InputError(
+            f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops (period under "
+            f"8 px, or samples within P/8 of a bar or gap centre spread by {spread:.0%} of the amplitude): its "
+            "modulation is below the large-area contrast and would inflate every CTF; give the (dark, bright) levels"
+        )
+    return found[0], found[1], f"plateaus of the widest group (period {period:g} px)"
+
+
 def measure_bars(
     image,
     *,
@@ -96,57 +278,100 @@ def measure_bars(
     levels=None,
     pixel_m: float | None = None,
 ) -> BarsResult:
-    """CTF of bar groups and the MTF from the inverse Coltman series.
+    """CTF of bar groups (fitted at the known period, any grid phase) and the MTF from the inverse Coltman
+    series.
 
     Parameters
     ----------
     image : array_like, 2-D
     periods_px : sequence of float
-        Period (bright + dark bar) of each group, px.
+        Period (bright + dark bar) of each group, px (>= 2).
     group_rois : sequence of (x0, y0, x1, y1)
-        One region per group, covering whole bars.
+        One region per group, covering whole bars (at least 1.5 periods across them) and no plate around
+        them (e.g. from the first to the last bar centre).
     direction : {"ACT", "ALT"}
         ``ACT``: bars parallel to y, profile along x (the ACT CTF); ``ALT``: bars parallel to x.
     levels : (dark, bright), optional
-        Large-area dark and bright levels; by default the 2nd and 98th percentiles of the lowest-frequency
-        group.
+        Large-area dark and bright levels.  By default the plateaus of the widest group, which must then be
+        flat-topped (refused otherwise) and be one of at least two groups.
     pixel_m : float, optional
         Ground sample distance; adds ``f_cy_per_m_ground``.
 
+    Raises
+    ------
+    InputError
+        A region with no bars at its period (another period dominates, the modulation is not above the
+        noise, or the profile is not periodic: a single bar or edge), default levels that cannot be
+        trusted, or a CTF above 1.2.
+
     Examples
     --------
-    >>> x = np.arange(64)
-    >>> img = np.tile(np.where((x // 4) % 2 == 0, 200.0, 50.0), (20, 1))
+    A grating blurred down to its fundamental, bars off the pixel grid: modulation 37.5 / 125 = 0.3 over the
+    large-area contrast 0.6.
+
+    >>> x = np.arange(64.0)
+    >>> img = np.tile(125 + 37.5 * np.cos(2 * np.pi * (x - 1.3) / 8), (20, 1))
     >>> r = measure_bars(img, periods_px=[8.0], group_rois=[(0, 0, 64, 20)], levels=(50.0, 200.0))
-    >>> float(r.ctf[0])
-    1.0
+    >>> round(float(r.ctf[0]), 3), round(float(r.phase_px[0]), 3)
+    (0.5, 1.3)
     """
     check_choice("direction", direction, ("ACT", "ALT"))
     periods = np.array([check_positive("periods_px", p) for p in periods_px], dtype=float)
     if len(group_rois) != periods.size or periods.size == 0:
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
-    profiles = []
-    for roi in group_rois:
-        data = crop_roi(image, roi, min_size=2)
-        profiles.append(data.mean(axis=0) if direction == "ACT" else data.mean(axis=1))
-    for p, prof in zip(periods, profiles, strict=True):
-        if prof.size < p:
-            raise InputError(f"group_rois: a region of {prof.size} px across the bars is shorter than its period {p:g}")
-    if levels is None:
-        dark, bright = np.percentile(profiles[int(np.argmax(periods))], [2, 98])
-    else:
-        dark, bright = (float(v) for v in levels)
-    if not (bright > dark and bright + dark > 0):
-        raise InputError(f"levels = ({dark:g}, {bright:g}): need bright > dark and a positive mean")
-    c_large = (bright - dark) / (bright + dark)
-    ctf = np.array([(p.max() - p.min()) / (p.max() + p.min()) for p in profiles]) / c_large
+    if np.any(periods < 2.0):
+        raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
+    fits, floors, profiles, flags = [], [], [], []
+    for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
+        prof, noise, fl = _profile(image, roi, direction, p, i)
+        fit = fit_group(prof, p, noise)
+        flags += fl + _check_group(fit, prof, p, i)
+        fits.append(fit)
+        floors.append(_sampled_floor(prof, fit.noise))
+        profiles.append(prof)
+    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
+    mod = np.array([ft.modulation for ft in fits])
+    mod_std = np.array([ft.modulation_std for ft in fits])
+    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
+        found, _ = _plateau(prof, fit, float(p))
+        if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
+            mod[i], mod_std[i] = found
+            flags = [f for f in flags if not (f.startswith(f"group {i}: ") and "alias" in f)]
+    floor = np.array(floors) / c_large
+    if np.nanmax(floor) > CTF_MAX:
+        k = int(np.nanargmax(floor))
+        raise InputError(
+            f"levels = {levels!r}: the sampled CTF of the {periods[k]:g} px group is already {floor[k]:.3g} > "
+            f"{CTF_MAX}; the large-area contrast is too small (wrong levels?)"
+        )
+    ctf, ctf_std = _bounded_ctf(mod / c_large, mod_std, c_large, c_std, floor, periods, flags)
     f = 1.0 / periods
+    mtf, mtf_std = _mtf_with_std(f, ctf, ctf_std)
+    bad = ~((mtf >= 0) & (mtf <= CTF_MAX))
+    if np.any(bad):
+        flags.append(f"MTF outside [0, {CTF_MAX}] at {np.round(f[bad], 4).tolist()} cy/px (noise): set to NaN")
+        mtf = np.where(bad, np.nan, mtf)
     return BarsResult(
         f_cy_per_px=f,
         periods_px=periods,
         ctf=ctf,
-        mtf=mtf_from_ctf_samples(f, ctf),
+        mtf=mtf,
         large_area_contrast=float(c_large),
         direction=direction,
         f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
+        ctf_std=ctf_std,
+        mtf_std=mtf_std,
+        phase_px=np.array([ft.x0 for ft in fits]),
+        large_area_contrast_std=float(c_std),
+        levels_from=levels_from,
+        noise_std=np.array([ft.noise for ft in fits]),
+        flags=tuple(flags),
     )
+
+
+def _mtf_with_std(f, ctf, ctf_std):
+    """Inverse Coltman series and its 1-sigma (the series is linear in the CTF samples; groups independent)."""
+    mtf = mtf_from_ctf_samples(f, ctf)
+    gain = np.array([mtf_from_ctf_samples(f, np.eye(f.size)[j]) for j in range(f.size)])  # [group j, f]
+    std = np.sqrt(np.nansum((gain * np.nan_to_num(ctf_std)[:, None]) ** 2, axis=0))
+    return mtf, np.where(np.isfinite(ctf_std).all(), std, np.nan)

@@ -10,6 +10,17 @@ Directions.  The fit is done separately in pairs of opposite 45-deg sectors, one
 *frequency* (the tangent): ``ACT`` (x; sectors above and below the centre), ``ALT`` (y; sectors left and
 right), ``D45`` (the diagonal along which x and y increase together) and ``D135`` (the other diagonal).
 Angles are measured in image axes (x = column to the right, y = row downwards).
+
+Validation and estimation (issue 10).  The centre is estimated to sub-pixel from the data (or a given
+approximate centre refined): the per-annulus fits' residual is minimised over the centre (see
+:mod:`satchain.measure._starfit`), with its covariance.  The claimed ``cycles`` must be the dominant angular
+harmonic of the outer radii and stand well above the other harmonics (the noise), otherwise the call is
+refused naming the count found.  The input (zero-frequency) modulation is, unless given, extrapolated from
+the outer radii by a weighted fit of ``log m(f) = c0 + c1 f + c2 f^2`` (exact for a Gaussian MTF, and
+within a few 0.1 % for diffraction, whose MTF is linear at 0: no MTF shape is assumed beyond smoothness).
+Every MTF value carries a 1-sigma from the per-annulus fit residuals and the input-modulation fit; the
+amplitude is debiased for noise.  ``flags`` lists quality warnings (clipping, non-uniform illumination, low
+contrast-to-noise, uncertain centre, far extrapolation); an MTF above 1.2 is refused, never reported.
 """
 
 from __future__ import annotations
@@ -20,7 +31,8 @@ import numpy as np
 
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, crop_roi
+from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
+from satchain.measure._starfit import annulus_fit, fit_center, harmonic_spectrum, symmetry_center
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["StarResult", "measure_star", "STAR_DIRECTIONS"]
@@ -35,6 +47,8 @@ class StarResult(ResultMixin):
 
     ``mtf`` maps each of ``ACT, ALT, D45, D135`` to an array aligned with ``f_cy_per_px``; ``mtf_all`` uses
     every angle.  ``mtf_at_nyquist`` per direction is None where the star does not reach 0.5 cy/px.
+    ``*_std`` are 1-sigma uncertainties (noise); ``center_xy_px`` is the centre used (estimated or refined
+    unless ``center_from == "given"``), ``center_std_px`` its 1-sigma in x and y; ``flags`` quality warnings.
     """
 
     f_cy_per_px: np.ndarray
@@ -46,19 +60,117 @@ class StarResult(ResultMixin):
     center_xy_px: tuple[float, float]
     cycles: int
     f_cy_per_m_ground: np.ndarray | None = None
+    mtf_std: dict | None = None
+    mtf_all_std: np.ndarray | None = None
+    mtf_at_nyquist_std: dict | None = None
+    input_modulation_std: float = 0.0
+    input_modulation_from: str = "given"
+    center_std_px: tuple[float, float] | None = None
+    center_from: str = "given"
+    noise_std: float = 0.0
+    contrast_to_noise: float | None = None
+    flags: tuple = ()
 
 
-def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray) -> float:
-    """Modulation at zero frequency: a straight line through the lowest-frequency points (>= 3)."""
-    ok = np.isfinite(mod)
-    f, mod = f[ok], mod[ok]
+#: Largest MTF value reported; anything above is refused (wrong input modulation or not a star).
+MTF_MAX = 1.2
+
+
+def _log_quadratic_m0(f, mod, sig, f_hi: float) -> tuple[float, float]:
+    """``exp(c0)`` and its 1-sigma from the weighted fit ``log m = c0 + c1 f + c2 f^2`` over ``f <= f_hi``."""
+    sel = f <= f_hi
+    if np.count_nonzero(sel) < 6:
+        sel = np.argsort(f)[: min(6, f.size)]
+    fs, ms = f[sel], mod[sel]
+    ss = np.where(np.isfinite(sig[sel]) & (sig[sel] > 0), sig[sel], 0.0) + 1e-12 * ms
+    w = ms / ss  # 1 / sigma of log m
+    deg = 2 if fs.size >= 5 else 1
+    design = np.vander(fs, deg + 1, increasing=True) * w[:, None]
+    beta, *_ = np.linalg.lstsq(design, np.log(ms) * w, rcond=None)
+    chi2 = float(np.sum((np.log(ms) * w - design @ beta) ** 2) / max(fs.size - deg - 1, 1))
+    cov = np.linalg.pinv(design.T @ design) * max(chi2, 1.0)
+    m0 = float(np.exp(beta[0]))
+    return m0, float(m0 * np.sqrt(cov[0, 0]))
+
+
+def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray, sig: np.ndarray | None = None) -> tuple[float, float]:
+    """Modulation at zero frequency and its 1-sigma, from the outer radii (no MTF shape assumed beyond
+    smoothness): the weighted fit of ``log m = c0 + c1 f + c2 f^2`` over ``f <= 2 f_min``.
+
+    Gaussian blur is exactly quadratic in ``log m``; diffraction (linear at 0) is caught by ``c1``.  The
+    1-sigma adds, to the fit's noise, the change of ``m0`` when the range grows to ``f <= 3 f_min``,
+    beyond its noise, doubled (the model error of the extrapolation, large when the outer MTF is far below 1).
+    """
+    sig = np.full_like(mod, np.nan) if sig is None else sig
+    ok = np.isfinite(mod) & (mod > 0)
+    f, mod, sig = f[ok], mod[ok], sig[ok]
     if f.size < 3:
-        return float(np.median(mod)) if f.size else float("nan")
-    low = f <= 2.5 * f.min()
-    if np.count_nonzero(low) < 3:
-        low = np.argsort(f)[:3]
-    slope, intercept = np.polyfit(f[low], mod[low], 1)
-    return float(intercept) if slope <= 0 else float(np.median(mod[low]))
+        return (float(np.median(mod)) if f.size else float("nan")), float("nan")
+    m0, s0 = _log_quadratic_m0(f, mod, sig, 2.0 * f.min())
+    hi, s_hi = _log_quadratic_m0(f, mod, sig, 3.0 * f.min())
+    model = np.sqrt(max((hi - m0) ** 2 - abs(s0**2 - s_hi**2), 0.0))  # nested fits: noise part removed
+    return m0, float(np.hypot(s0, 2.0 * model))
+
+
+def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
+    """Centre (x, y), its 1-sigma (sx, sy) or None, and how it was obtained.  Without a given centre the
+    start is the centre of point symmetry; the claimed cycles are checked there before the refinement."""
+    if not refine:
+        _check_cycles(data, n, start[0], start[1], r_in, r_out)
+        return start, None, "given"
+    if not given:
+        start = symmetry_center(data)
+        ny, nx = data.shape
+        r_out = min(r_out, start[0], start[1], nx - 1 - start[0], ny - 1 - start[1])
+        _check_extent(n, r_in, r_out, 1.0, n / (2 * np.pi * r_in))
+    _check_cycles(data, n, start[0], start[1], r_in, r_out)
+    r_lo = max(r_in, n / (2 * np.pi * 0.35))
+    if r_out - r_lo < 6:
+        r_lo = r_in
+    x, y, cov = fit_center(data, n, start, r_lo, r_out, search_px=1.0)
+    if cov is None:
+        raise InputError(f"image: the star centre cannot be determined (no star with {n} cycles near {start})")
+    if np.hypot(x - start[0], y - start[1]) > 3.0:
+        raise InputError(
+            f"center: the fitted star centre ({x:.2f}, {y:.2f}) is {np.hypot(x - start[0], y - start[1]):.1f} px "
+            f"from the start ({start[0]:.2f}, {start[1]:.2f}); give a centre within 1 px"
+        )
+    return (x, y), (float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))), "refined" if given else "estimated"
+
+
+def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
+    """Refuse when ``n`` is not the dominant angular harmonic of the outer radii, or does not stand out."""
+    r_lo = max(r_in, 0.6 * r_out)
+    m_max = int(max(3 * n, n + 10))
+    m_max = min(m_max, int(np.pi * r_lo)) if np.pi * r_lo > n + 2 else m_max
+    m, amp, noise = harmonic_spectrum(data, xc, yc, r_lo, r_out, m_max)
+    top = int(m[np.argmax(amp)])
+    if top != n:
+        raise InputError(
+            f"cycles = {n}: the dominant angular harmonic at radii {r_lo:.0f}-{r_out:.0f} px about "
+            f"({xc:.1f}, {yc:.1f}) is {top} cycles per revolution, not {n} (wrong --cycles or no star there)"
+        )
+    if not amp[n - 1] > 6 * noise:
+        raise InputError(
+            f"image: no star found: the {n}-cycle harmonic ({amp[n - 1]:.3g}) is not above the other "
+            f"harmonics (median {noise:.3g}) at radii {r_lo:.0f}-{r_out:.0f} px"
+        )
+
+
+def _geometry(data, n, center, radius_px, f_max):
+    """Start centre, outer and inner radius (checked)."""
+    ny, nx = data.shape
+    xc, yc = ((nx - 1) / 2, (ny - 1) / 2) if center is None else (float(center[0]), float(center[1]))
+    r_out = min(xc, yc, nx - 1 - xc, ny - 1 - yc) if radius_px is None else float(radius_px)
+    return xc, yc, r_out, max(n / (2 * np.pi * f_max), 2.0)
+
+
+def _check_extent(n, r_in, r_out, annulus_px, f_max) -> None:
+    if not r_out > r_in + 3 * annulus_px:
+        raise InputError(
+            f"radius_px = {r_out:g}: the star must extend beyond {r_in + 3 * annulus_px:g} px "
+            f"(the radius where {n} cycles reach f_max = {f_max:g} cy/px)"
+        )
 
 
 def measure_star(
@@ -72,6 +184,7 @@ def measure_star(
     annulus_px: float = 1.0,
     f_max_cy_per_px: float = 0.75,
     pixel_m: float | None = None,
+    refine_center: bool = True,
 ) -> StarResult:
     """Measure the MTF per direction from a sinusoidal Siemens star.
 
@@ -79,31 +192,40 @@ def measure_star(
     ----------
     image : array_like, 2-D
     cycles : int
-        Periods per revolution of the star (>= 4).
+        Periods per revolution of the star (>= 4); checked against the data.
     center : (x, y), optional
-        Star centre in pixels of the (cropped) image; its geometric centre by default.
+        Approximate star centre in pixels of the (cropped) image (refined from the data unless
+        ``refine_center=False``); by default estimated from the data, starting at the region's centre.
     radius_px : float, optional
         Outer radius used; the largest circle inside the region by default.
     roi : (x0, y0, x1, y1), optional
     input_modulation : float, optional
-        Modulation (max - min) / (max + min) of the star itself. When not given it is estimated by
-        extrapolating the all-direction modulation of the outer radii (the lowest frequencies, up to 2.5 times
-        the lowest) linearly to zero frequency -- the MTF of a band-limited system falls linearly there -- so
-        the blur at the outer radius does not inflate the whole curve.
+        Modulation (max - min) / (max + min) of the star itself. When not given it is extrapolated to zero
+        frequency from the outer radii by a weighted fit of ``log m = c0 + c1 f + c2 f^2`` (see the module
+        docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
     annulus_px : float
         Radial width of the annuli whose pixels are fitted together.
     f_max_cy_per_px : float
         Smallest radius used is ``cycles / (2 pi f_max)``.
     pixel_m : float, optional
         Ground sample distance; adds ``f_cy_per_m_ground``.
+    refine_center : bool
+        Estimate/refine the centre from the data (default).  With False, ``center`` (or the region's centre)
+        is used as it is.
+
+    Raises
+    ------
+    InputError
+        No star with ``cycles`` periods (another harmonic dominates, or none stands above the noise), an
+        undeterminable centre, a region too small, or an MTF above 1.2 (wrong ``input_modulation``).
 
     Examples
     --------
-    >>> y, x = np.mgrid[0:121, 0:121] - 60.0
+    >>> y, x = np.mgrid[0:121, 0:121] - 60.3
     >>> star = 100 + 50 * np.cos(16 * np.arctan2(y, x))
     >>> r = measure_star(star, cycles=16)
-    >>> round(float(r.mtf["ACT"][0]), 3), round(r.input_modulation, 6)
-    (1.0, 0.5)
+    >>> round(float(r.mtf["ACT"][0]), 3), round(r.input_modulation, 6), np.round(r.center_xy_px, 3).tolist()
+    (1.0, 0.5, [60.3, 60.3])
     """
     n = int(check_range("cycles", cycles, 4, 10000))
     check_positive("annulus_px", annulus_px)
@@ -111,59 +233,126 @@ def measure_star(
     data = crop_roi(image, roi, min_size=16)
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
+    xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max)
+    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
     ny, nx = data.shape
-    xc, yc = ((nx - 1) / 2, (ny - 1) / 2) if center is None else (float(center[0]), float(center[1]))
-    r_out = min(xc, yc, nx - 1 - xc, ny - 1 - yc) if radius_px is None else float(radius_px)
-    r_in = max(n / (2 * np.pi * f_max), 2.0)
-    if not r_out > r_in + 3 * annulus_px:
-        raise InputError(
-            f"radius_px = {r_out:g}: the star must extend beyond {r_in + 3 * annulus_px:g} px "
-            f"(the radius where {n} cycles reach f_max = {f_max:g} cy/px)"
-        )
+    r_out = min(r_out, xc, yc, nx - 1 - xc, ny - 1 - yc)
+    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
+    f = n / (2 * np.pi * radii)
+    if input_modulation is None:
+        m0, m0_std = _extrapolated_modulation(f, mods["all"], sigs["all"])
+        m0_from = "extrapolated from the outer radii"
+        if not m0_std <= 0.25 * m0:
+            raise InputError(
+                f"input_modulation: cannot be extrapolated from the outer radii ({m0:.3g} +- {m0_std:.2g}; the "
+                "MTF there is far below 1): give the star's own modulation"
+            )
+    else:
+        m0 = check_range("input_modulation", input_modulation, 0.0, None, lo_open=True)
+        m0_std, m0_from = 0.0, "given"
+    if not m0 > 1e-4:
+        raise InputError("image: no star modulation found at the outer radii (flat region or wrong cycles?)")
+    order = np.argsort(f)
+    f = f[order]
+    rel = m0_std / m0 if np.isfinite(m0_std) else 0.0
+    mtf, std = {}, {}
+    for k in [*STAR_DIRECTIONS, "all"]:
+        mtf[k] = mods[k][order] / m0
+        std[k] = np.sqrt((sigs[k][order] / m0) ** 2 + (mtf[k] * rel) ** 2)
+    _check_range_of_mtf(mtf, f, m0, m0_from)
+    nyq = {k: (float(np.interp(0.5, f, mtf[k])) if f[0] <= 0.5 <= f[-1] else None) for k in STAR_DIRECTIONS}
+    nyq_std = {k: (float(np.interp(0.5, f, std[k])) if nyq[k] is not None else None) for k in STAR_DIRECTIONS}
+    amp_outer = float(np.nanmedian(mods["all"][order][:5] * levels[order][:5]))
+    cnr = amp_outer / noise if noise > 0 else None
+    flags = _flags(data, levels, c_std, cnr, float(mtf["all"][0]), input_modulation is None, noise, gradient)
+    return StarResult(
+        f_cy_per_px=f,
+        radius_px=radii[order],
+        mtf={k: mtf[k] for k in STAR_DIRECTIONS},
+        mtf_all=mtf["all"],
+        mtf_at_nyquist=nyq,
+        input_modulation=m0,
+        center_xy_px=(float(xc), float(yc)),
+        cycles=n,
+        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
+        mtf_std={k: std[k] for k in STAR_DIRECTIONS},
+        mtf_all_std=std["all"],
+        mtf_at_nyquist_std=nyq_std,
+        input_modulation_std=float(m0_std),
+        input_modulation_from=m0_from,
+        center_std_px=c_std,
+        center_from=c_from,
+        noise_std=float(noise),
+        contrast_to_noise=cnr,
+        flags=tuple(flags),
+    )
+
+
+def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
+    """Per-annulus modulation and 1-sigma, all angles and per direction; mean level; pooled noise sigma;
+    relative peak-to-peak illumination change across the outer circles."""
+    ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
     rr = np.hypot(x - xc, y - yc).ravel()
     th = np.arctan2(y - yc, x - xc).ravel()
     v = data.ravel()
     radii = np.arange(r_out - annulus_px / 2, r_in, -annulus_px)
-    # position angle of the sectors: tangent (frequency direction) = position + 90 deg
     sector = {k: np.deg2rad(a + 90.0) for k, a in STAR_DIRECTIONS.items()}
-    mods = {k: np.empty(radii.size) for k in [*STAR_DIRECTIONS, "all"]}
+    mods = {k: np.full(radii.size, np.nan) for k in [*STAR_DIRECTIONS, "all"]}
+    sigs = {k: np.full(radii.size, np.nan) for k in mods}
+    levels = np.empty(radii.size)
+    res, grads = [], []
     for i, r in enumerate(radii):
         sel = np.abs(rr - r) <= annulus_px / 2
         t, val = th[sel], v[sel]
-        mods["all"][i] = _modulation(t, val, n)
-        for k, a in sector.items():
-            dist = np.abs(np.angle(np.exp(2j * (t - a)))) / 2  # angle to the sector axis, both opposite sides
+        a, amp, sb, s, g = annulus_fit(t, val, n)
+        if a <= 0:
+            raise InputError("image: the star's mean level must be positive to define a modulation")
+        levels[i], mods["all"][i], sigs["all"][i] = a, amp / a, sb / a
+        res.append(s)
+        grads.append(g)
+        for k, ang in sector.items():
+            dist = np.abs(np.angle(np.exp(2j * (t - ang)))) / 2  # angle to the sector axis, both opposite sides
             m = dist <= np.pi / 8
-            mods[k][i] = _modulation(t[m], val[m], n) if np.count_nonzero(m) >= 8 else np.nan
-    if input_modulation is None:
-        m0 = _extrapolated_modulation(n / (2 * np.pi * radii), mods["all"])
-    else:
-        m0 = check_range("input_modulation", input_modulation, 0.0, None, lo_open=True)
-    if not m0 > 1e-4:
-        raise InputError("image: no star modulation found at the outer radii (flat region or wrong cycles?)")
-    f = n / (2 * np.pi * radii)
-    order = np.argsort(f)
-    f = f[order]
-    mtf = {k: mods[k][order] / m0 for k in STAR_DIRECTIONS}
-    nyq = {k: (float(np.interp(0.5, f, m)) if f[0] <= 0.5 <= f[-1] else None) for k, m in mtf.items()}
-    return StarResult(
-        f_cy_per_px=f,
-        radius_px=radii[order],
-        mtf=mtf,
-        mtf_all=mods["all"][order] / m0,
-        mtf_at_nyquist=nyq,
-        input_modulation=m0,
-        center_xy_px=(xc, yc),
-        cycles=n,
-        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
-    )
+            if np.count_nonzero(m) >= 8:
+                ak, ampk, sbk, *_ = annulus_fit(t[m], val[m], n)
+                if ak > 0:
+                    mods[k][i], sigs[k][i] = ampk / ak, sbk / ak
+    third = max(3, radii.size // 3)  # outer radii: residual = noise, little model error
+    gradient = 2 * float(np.median(grads[:third]))  # peak-to-peak relative level change across a circle
+    return radii, mods, sigs, levels, float(np.median(res[:third])), gradient
 
 
-def _modulation(theta: np.ndarray, values: np.ndarray, n: int) -> float:
-    """Least-squares ``a + b cos(n th) + c sin(n th)``; returns ``sqrt(b^2 + c^2) / a``."""
-    design = np.column_stack([np.ones_like(theta), np.cos(n * theta), np.sin(n * theta)])
-    (a, b, c), *_ = np.linalg.lstsq(design, values, rcond=None)
-    if a <= 0:
-        raise InputError("image: the star's mean level must be positive to define a modulation")
-    return float(np.hypot(b, c) / a)
+def _check_range_of_mtf(mtf: dict, f: np.ndarray, m0: float, m0_from: str) -> None:
+    worst = max(float(np.nanmax(m)) for m in mtf.values())
+    if worst > MTF_MAX:
+        k = int(np.nanargmax(mtf["all"]))
+        raise InputError(
+            f"input_modulation = {m0:.4g} ({m0_from}): the MTF would reach {worst:.3g} > {MTF_MAX} "
+            f"(all-angle {mtf['all'][k]:.3g} at {f[k]:.3f} cy/px); the input modulation is too small"
+        )
+
+
+def _flags(data, levels, c_std, cnr, mtf_outer: float, extrapolated: bool, noise: float, gradient: float) -> list[str]:
+    """Quality warnings (strings) for the JSON and the tables."""
+    flags = []
+    clip = clipping_flag(data, noise_std=noise)
+    if clip:
+        flags.append(clip)
+    spread = (levels.max() - levels.min()) / np.mean(levels)
+    if spread > 0.05:
+        flags.append(f"non-uniform illumination: the mean level varies by {100 * spread:.0f} % across radii")
+    if gradient > 0.05:
+        flags.append(f"non-uniform illumination: the mean level varies by {100 * gradient:.0f} % across the star")
+    if c_std is not None and max(c_std) > 0.1:
+        flags.append(f"uncertain centre: 1-sigma ({c_std[0]:.2f}, {c_std[1]:.2f}) px > 0.1 px")
+    if cnr is not None and cnr < 10:
+        flags.append(f"low contrast-to-noise: star amplitude / noise = {cnr:.1f} < 10")
+    if extrapolated and mtf_outer < 0.8:
+        flags.append(
+            f"input modulation extrapolated from an outer MTF of {mtf_outer:.2f} < 0.8: "
+            "give the star's own modulation for an accurate curve"
+        )
+    return flags

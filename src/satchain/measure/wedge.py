@@ -9,6 +9,14 @@ width* there is the stripe width (half a period, a "line"); the corresponding fr
 
 Geometry is explicit: ``line_width_px`` gives the stripe width at each position along the axis (the scene
 module's truth JSON records it), so the function works on any wedge, hyperbolic or linear.
+
+Validation and uncertainty (issue 10).  The pixel noise is estimated from the second differences between
+neighbouring profiles (the stripes change slowly along the axis); a region whose wide end has no contrast
+above the noise (a constant image, no wedge) or already below the threshold is refused.  The contrast at
+each position carries a 1-sigma from the noise, and the resolved position a 1-sigma from the contrast
+scatter at the crossing over the local slope of the curve (converted to line width and metres).  ``flags``
+report clipping, low contrast-to-noise, a noise floor near the threshold, and a contrast that climbs back
+above the threshold after the crossing (spurious resolution / aliasing).
 """
 
 from __future__ import annotations
@@ -19,7 +27,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, crop_roi, first_crossing
+from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, first_crossing, robust_sigma
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["WedgeResult", "measure_wedge"]
@@ -31,7 +39,8 @@ class WedgeResult(ResultMixin):
 
     ``position_px`` are positions along the wedge axis (columns for an ``ALT`` wedge, rows for ``ACT``) in the
     region, ordered from the widest stripes; ``line_width_px`` the stripe width there; ``contrast`` the curve.
-    The ``resolved_*`` fields are None when the contrast never falls to the threshold.
+    The ``resolved_*`` fields are None when the contrast never falls to the threshold; ``*_std`` are 1-sigma
+    (noise); ``noise_std`` the pixel noise estimated; ``flags`` quality warnings.
     """
 
     position_px: np.ndarray
@@ -44,6 +53,12 @@ class WedgeResult(ResultMixin):
     resolved_f_cy_per_px: float | None
     resolved_line_width_m: float | None = None
     resolved_f_cy_per_m_ground: float | None = None
+    contrast_std: np.ndarray | None = None
+    resolved_position_px_std: float | None = None
+    resolved_line_width_px_std: float | None = None
+    resolved_line_width_m_std: float | None = None
+    noise_std: float = 0.0
+    flags: tuple = ()
 
 
 def measure_wedge(
@@ -97,6 +112,9 @@ def measure_wedge(
             f"line_width_px: need {pos.size} finite positive widths (one per position along the wedge), "
             f"got shape {lw.shape}"
         )
+    # second differences along the axis: a stripe pattern that shifts linearly from profile to profile cancels
+    noise = float(robust_sigma(np.diff(work, n=2, axis=1)) / np.sqrt(6)) if work.shape[1] > 2 else 0.0
+    flags = [f for f in [clipping_flag(work, noise_std=noise)] if f]
     if avg > 1:
         kernel = np.ones(avg) / avg
         work = np.apply_along_axis(lambda r: np.convolve(r, kernel, mode="same"), 1, work)
@@ -104,15 +122,31 @@ def measure_wedge(
     if np.any(hi + lo <= 0):
         raise InputError("image: contrast needs positive levels (max + min > 0) in every profile")
     contrast = (hi - lo) / (hi + lo)
+    s_eff = noise / np.sqrt(avg)
+    c_std = s_eff * np.sqrt(2 * (1 + contrast**2)) / (hi + lo)
     order = np.argsort(-lw, kind="stable")  # from the widest stripes
-    pos, lw, contrast = pos[order], lw[order], contrast[order]
-    p_res = first_crossing(np.arange(pos.size, dtype=float), contrast, thr)
+    pos, lw, contrast, c_std = pos[order], lw[order], contrast[order], c_std[order]
+    c_noise = 2 * s_eff * np.sqrt(2 * np.log(max(work.shape[0], 2))) / float(np.median(hi + lo))
+    _check_wide_end(contrast, c_std, c_noise, thr, flags)
+    idx = np.arange(pos.size, dtype=float)
+    p_res = first_crossing(idx, contrast, thr)
     res_pos = res_lw = res_f = None
+    sd_pos = sd_lw = None
     if p_res is not None:
-        idx = np.arange(pos.size, dtype=float)
         res_pos = float(np.interp(p_res, idx, pos))
         res_lw = float(np.interp(p_res, idx, lw))
         res_f = 1.0 / (2.0 * res_lw)
+        sd_idx = _crossing_std(idx, contrast, c_std, p_res)
+        step = np.gradient(pos), np.gradient(lw)
+        sd_pos = float(sd_idx * abs(np.interp(p_res, idx, step[0])))
+        sd_lw = float(sd_idx * abs(np.interp(p_res, idx, step[1])))
+        after = contrast[int(np.ceil(p_res)) + 2 :]
+        if after.size and np.max(after - 2 * c_std[int(np.ceil(p_res)) + 2 :]) > thr:
+            flags.append("the contrast climbs back above the threshold after the crossing (spurious resolution)")
+    else:
+        flags.append("the contrast never falls to the threshold in this region")
+    if c_noise > 0.5 * thr:
+        flags.append(f"noise floor: pure noise alone gives a contrast of ~{c_noise:.3f} (threshold {thr:g})")
     return WedgeResult(
         position_px=pos,
         line_width_px=lw,
@@ -126,4 +160,41 @@ def measure_wedge(
         resolved_f_cy_per_m_ground=(
             None if (pixel_m is None or res_f is None) else float(cy_per_px_to_cy_per_m_ground(res_f, gsd_m=pixel_m))
         ),
+        contrast_std=c_std,
+        resolved_position_px_std=sd_pos,
+        resolved_line_width_px_std=sd_lw,
+        resolved_line_width_m_std=None if (pixel_m is None or sd_lw is None) else sd_lw * pixel_m,
+        noise_std=noise,
+        flags=tuple(flags),
     )
+
+
+def _check_wide_end(contrast, c_std, c_noise: float, thr: float, flags: list) -> None:
+    """Refuse a region without a wedge (no contrast above the noise at the wide end) or one whose wide end is
+    already below the threshold; flag a low contrast-to-noise."""
+    wide = float(np.median(contrast[: min(5, contrast.size)]))
+    sd = float(np.median(c_std[: min(5, contrast.size)]))
+    if not (wide > 3 * c_noise and wide > 5 * sd and wide > 0):
+        raise InputError(
+            f"image: no wedge: the contrast at the wide end ({wide:.3g}) is not above the noise "
+            f"(noise contrast ~{c_noise:.2g}); a constant or stripe-free region"
+        )
+    if wide <= thr:
+        raise InputError(
+            f"threshold = {thr:g}: the contrast at the wide end is already {wide:.3g}; no resolution to find "
+            "(a blurred or wrongly framed wedge)"
+        )
+    if sd > 0 and wide / sd < 10:
+        flags.append(f"low contrast-to-noise: wide-end contrast / its 1-sigma = {wide / sd:.1f} < 10")
+
+
+def _crossing_std(idx, contrast, c_std, p_res: float) -> float:
+    """1-sigma (in positions) of the threshold crossing: contrast scatter over the local slope (+-5 positions)."""
+    sel = np.abs(idx - p_res) <= 5
+    if np.count_nonzero(sel) < 3:
+        return float("nan")
+    slope, icpt = np.polyfit(idx[sel], contrast[sel], 1)
+    resid = contrast[sel] - (slope * idx[sel] + icpt)
+    dof = max(np.count_nonzero(sel) - 2, 1)
+    sc = max(float(np.interp(p_res, idx, c_std)), float(np.sqrt(np.sum(resid**2) / dof)))
+    return float(sc / abs(slope)) if slope != 0 else float("inf")

@@ -1,0 +1,164 @@
+"""Siemens-star fitting helpers: sub-pixel centre, angular harmonic spectrum, per-annulus harmonic fits.
+
+Centre.  For a trial centre ``c`` every pixel of a band of radii is given its polar angle about ``c``; the
+pixels are grouped in annuli (membership fixed by the starting centre, so the cost is smooth in ``c``) and in
+each annulus ``a + b cos(n th) + c sin(n th)`` is fitted by least squares.  The residual sum of squares
+``J(c)`` is minimised (coarse grid, then Nelder-Mead); a wrong centre mixes the n-th harmonic into its
+neighbours ``n +- 1`` and raises ``J``.  This is an ordinary non-linear least-squares problem in the centre
+(the linear coefficients profiled out), so its covariance is ``2 s^2 H^-1`` with ``H`` the Hessian of ``J``
+and ``s^2 = J / (N - p)`` the residual variance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize
+
+__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit", "symmetry_center"]
+
+
+def _band(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, width: float):
+    """Pixels of the band ``r_lo <= r < r_hi`` about (xc, yc): x, y, values, annulus index, count."""
+    ny, nx = data.shape
+    y, x = np.mgrid[0:ny, 0:nx]
+    r = np.hypot(x - xc, y - yc)
+    sel = (r >= r_lo) & (r < r_hi)
+    k = ((r[sel] - r_lo) // width).astype(int)
+    return x[sel].astype(float), y[sel].astype(float), data[sel], k, int(k.max()) + 1 if k.size else 0
+
+
+def _rss(c, x, y, v, k, nk: int, n: int) -> float:
+    """Residual sum of squares of the per-annulus fits a + b cos(n th) + c sin(n th) about centre c."""
+    th = np.arctan2(y - c[1], x - c[0])
+    co, si = np.cos(n * th), np.sin(n * th)
+    cols = (np.ones_like(co), co, si)
+    g = np.empty((nk, 3, 3))
+    rhs = np.empty((nk, 3))
+    for i in range(3):
+        rhs[:, i] = np.bincount(k, cols[i] * v, nk)
+        for j in range(i, 3):
+            g[:, i, j] = g[:, j, i] = np.bincount(k, cols[i] * cols[j], nk)
+    ok = np.linalg.det(g) > 1e-9
+    beta = np.linalg.solve(g[ok], rhs[ok][..., None])[..., 0]
+    return float(np.sum(v * v) - np.sum(beta * rhs[ok]))
+
+
+class _Cost:
+    """``J(c)`` over a fixed band of pixels (a callable for the optimiser)."""
+
+    def __init__(self, x, y, v, k, nk: int, n: int):
+        self.args = (x, y, v, k, nk, n)
+        self.size = v.size
+
+    def __call__(self, c) -> float:
+        return _rss(c, *self.args)
+
+
+def symmetry_center(data: np.ndarray) -> tuple[float, float]:
+    """Centre of point symmetry (any star, odd or even cycles): the peak of ``|d * d|`` (self-convolution of
+    the mean-removed region) is at twice the centre; within the middle half of the region, parabolic
+    sub-pixel.  A start for :func:`fit_center`, good to a fraction of a pixel on a star.
+    """
+    ny, nx = data.shape
+    d = data - data.mean()
+    big = (2 * ny, 2 * nx)
+    conv = np.abs(np.fft.irfft2(np.fft.rfft2(d, big) ** 2, big))
+    y0, y1, x0, x1 = ny // 2, ny + ny // 2 - 1, nx // 2, nx + nx // 2 - 1  # centre in the middle half
+    win = conv[y0:y1, x0:x1]
+    iy, ix = np.unravel_index(int(np.argmax(win)), win.shape)
+    iy, ix = iy + y0, ix + x0
+
+    def vertex(a, b, c):
+        den = a - 2 * b + c
+        return 0.0 if den == 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+
+    sy = iy + (vertex(conv[iy - 1, ix], conv[iy, ix], conv[iy + 1, ix]) if 0 < iy < big[0] - 1 else 0.0)
+    sx = ix + (vertex(conv[iy, ix - 1], conv[iy, ix], conv[iy, ix + 1]) if 0 < ix < big[1] - 1 else 0.0)
+    return sx / 2.0, sy / 2.0
+
+
+def fit_center(
+    data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float, width_px: float = 2.0
+):
+    """Sub-pixel star centre near ``start_xy``: grid search within ``search_px``, then Nelder-Mead.
+
+    Returns ``(x, y, cov)`` with ``cov`` the 2x2 covariance (px^2), or None where the Hessian is not
+    positive definite (a flat cost: no star, or no information on the centre).
+    """
+    cx, cy = float(start_xy[0]), float(start_xy[1])
+    best = (cx, cy)
+    for round_ in range(2):  # second round: annulus membership about the improved centre
+        x, y, v, k, nk = _band(data, best[0], best[1], r_lo, r_hi, width_px)
+        if nk < 2:
+            return cx, cy, None
+        cost = _Cost(x, y, v, k, nk, n)
+        if search_px > 0:
+            offs = np.arange(-search_px, search_px + 1e-9, 0.5)
+            grid = [(best[0] + dx, best[1] + dy) for dy in offs for dx in offs]
+            best = min(grid, key=cost)
+            search_px = 0.0
+        b0 = np.array(best)
+        simplex = np.array([b0, b0 + (0.25, 0.0), b0 + (0.0, 0.25)])
+        opts = {"xatol": 1e-3, "fatol": 1e-12, "initial_simplex": simplex}
+        res = minimize(cost, b0, method="Nelder-Mead", options=opts)
+        moved = float(np.hypot(res.x[0] - best[0], res.x[1] - best[1]))
+        best = (float(res.x[0]), float(res.x[1]))
+        if round_ == 0 and moved < 0.25:  # membership barely changes: no second round needed
+            break
+    j0 = cost(np.array(best))
+    h = 0.05
+    hess = np.empty((2, 2))
+    e = np.eye(2) * h
+    b = np.array(best)
+    for i in range(2):
+        for jj in range(2):
+            hess[i, jj] = (
+                cost(b + e[i] + e[jj]) - cost(b + e[i] - e[jj]) - cost(b - e[i] + e[jj]) + cost(b - e[i] - e[jj])
+            ) / (4 * h * h)
+    s2 = j0 / max(cost.size - 3 * cost.args[4] - 2, 1)
+    try:
+        ev = np.linalg.eigvalsh(hess)
+        cov = 2.0 * s2 * np.linalg.inv(hess) if np.all(ev > 0) else None
+    except np.linalg.LinAlgError:
+        cov = None
+    return best[0], best[1], cov
+
+
+def harmonic_spectrum(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, m_max: int):
+    """Amplitude of angular harmonics m = 1..m_max in the band (annulus means removed, 2-px annuli).
+
+    Returns (m, amplitude, noise amplitude) where the noise amplitude is the 1-sigma of one harmonic's
+    amplitude estimated from the harmonics' median power (most harmonics hold noise only).
+    """
+    x, y, v, k, nk = _band(data, xc, yc, r_lo, r_hi, 2.0)
+    mean = np.bincount(k, v, nk) / np.maximum(np.bincount(k, None, nk), 1)
+    d = v - mean[k]
+    th = np.arctan2(y - yc, x - xc)
+    m = np.arange(1, m_max + 1)
+    amp = np.empty(m.size)
+    for i0 in range(0, m.size, 64):  # blocks keep the (pixels x harmonics) matrix small
+        mm = m[i0 : i0 + 64]
+        amp[i0 : i0 + 64] = 2 * np.abs(np.exp(-1j * np.outer(th, mm)).T @ d) / max(d.size, 1)
+    return m, amp, float(np.median(amp))
+
+
+def annulus_fit(theta: np.ndarray, values: np.ndarray, n: int):
+    """Least-squares ``a + g1 cos th + g2 sin th + b cos(n th) + c sin(n th)`` (the ``g`` terms take a linear
+    illumination gradient out of the fit and of the noise): (a, amplitude, amplitude sigma, residual sigma,
+    relative gradient ``|g| / a``).  The amplitude is debiased for the noise (Rice: E[A^2] = A^2 + 2 s_b^2),
+    so pure noise gives ~0.
+    """
+    cols = [np.ones_like(theta), np.cos(n * theta), np.sin(n * theta)]
+    if n != 1:
+        cols += [np.cos(theta), np.sin(theta)]
+    design = np.column_stack(cols)
+    beta, *_ = np.linalg.lstsq(design, values, rcond=None)
+    resid = values - design @ beta
+    dof = max(values.size - design.shape[1], 1)
+    s = float(np.sqrt(np.sum(resid**2) / dof))
+    cov = s * s * np.linalg.pinv(design.T @ design)
+    sb = float(np.sqrt(0.5 * (cov[1, 1] + cov[2, 2])))
+    a2 = float(beta[1] ** 2 + beta[2] ** 2)
+    amp = float(np.sqrt(max(a2 - 2 * sb * sb, 0.0)))
+    grad = float(np.hypot(beta[3], beta[4]) / beta[0]) if n != 1 and beta[0] > 0 else 0.0
+    return float(beta[0]), amp, sb, s, grad
