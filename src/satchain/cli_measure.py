@@ -18,7 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from satchain._cli_common import handle_errors, parse_numbers
+from satchain._cli_common import handle_errors, parse_numbers, print_warning
 from satchain._safety import check_dir_outputs, check_star_radius
 from satchain.errors import ConfigError, SatchainIOError
 
@@ -176,7 +176,7 @@ def edge(
         c.print(_kv_table(f"slanted edge: {image.name}", rows))
         c.print(_curve_table("MTF along the edge normal", r.f_cy_per_px, {"MTF": r.mtf}, p))
         for w in r.warnings:
-            c.print(f"[yellow]warning:[/] {w}", highlight=False)
+            print_warning(w, c)
 
     _emit(payload, as_json, out, "edge", plot, table)
 
@@ -530,7 +530,7 @@ def _auto_tables(d: dict) -> None:
             t.add_row(s["id"], s["kind"], s["reason"])
         c.print(t)
     for w in d.get("warnings", []):
-        c.print(f"[yellow]warning:[/] {w}", highlight=False)
+        print_warning(w, c)
 
 
 @measure_app.command()
