@@ -13,11 +13,19 @@ from scipy.ndimage import gaussian_filter1d
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
 
-__all__ = ["check_saturation", "fit_plateaus", "check_single_edge", "critical_angle_flags", "CRITICAL_TILTS_DEG"]
+__all__ = [
+    "check_model",
+    "check_saturation",
+    "fit_plateaus",
+    "check_single_edge",
+    "critical_angle_flags",
+    "CRITICAL_TILTS_DEG",
+]
 
 #: Tilts from the nearest axis, atan(1/n), where the rows' sub-pixel phases repeat after n rows.
 CRITICAL_TILTS_DEG = (0.0, 45.0, 26.565, 18.435, 14.036)
 _SAT_REFUSE_FRACTION = 0.01  # pixels at the saturation level above this fraction: refuse
+_MODEL_MISS_FRACTION = 0.03  # pixels the edge model misses by > 1/4 step above this fraction: refuse
 _FLAT_PLATEAU_TOL = 0.15  # a plateau departing from a straight line by this much of the step: a second edge
 
 
@@ -134,3 +142,21 @@ def critical_angle_flags(slope: float, n_lines: int, mode: str, width: float) ->
             )
         )
     return out
+
+
+def check_model(work, d_all, x, esf, model, sigma) -> None:
+    """Refuse when the fitted edge model misses many pixels of the whole region (a corner, another target).
+
+    ``d_all`` are the distances of every pixel of ``work`` to the fitted edge (extended to every line),
+    ``model = (a, b, c, e)`` the levels and gradients of ``a + b d + (c + e d) E(d)``.
+    """
+    a, b, c, e = model
+    pred = a + b * d_all + (c + e * d_all) * np.interp(d_all, x, esf)
+    miss = np.abs(work.ravel() - pred) > 0.25 * abs(c) + 5 * sigma
+    frac = np.count_nonzero(miss) / miss.size
+    if frac > _MODEL_MISS_FRACTION:
+        raise InputError(
+            f"image: {100 * frac:.0f} % of the region's pixels differ from the fitted edge by more than a quarter "
+            "of the step: the region holds more than one straight edge (a corner, a stripe, another target); "
+            "give an ROI around one straight edge"
+        )

@@ -51,6 +51,7 @@ from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, crop_roi, first_crossing, robust_sigma
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
+    check_model,
     check_saturation,
     check_single_edge,
     critical_angle_flags,
@@ -204,10 +205,13 @@ def measure_edge(
             f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
             f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
         )
+    v, r_flags = _flatten_rows(d, v, len(rows))
+    flags += r_flags
     x, esf_raw, counts = bin_esf(d, v, w, origin)
     sigma = robust_sigma(v - np.interp(d, x, esf_raw))
-    esf_n, contrast, grad, g_flags = _normalise(x, esf_raw, counts, sigma, len(rows))
+    esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
+    check_model(work, _project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
     f = np.arange(0.0, min(f_max, 0.5 / w) + _NU_STEP / 2, _NU_STEP)
     if f[-1] < f_max - _NU_STEP / 2:
         flags.append(
@@ -272,7 +276,7 @@ def _normalise(x, esf, counts, sigma, n_lines):
     """Validate one edge, remove a linear illumination gradient along the normal and normalise to 0..1.
 
     Model: ``esf = a + b x + (c + e x) E(x)`` from straight-line fits of the two plateaus (beyond
-    max(4 px, 2 rise distances)); returns (E, c, e / c, flags).
+    max(4 px, 2 rise distances)); returns (E, c, e / c, flags, (a, b, c, e)).
     """
     lim = max(4.0, 2.0 * rise_width(x, esf))
     (a, b), (a_hi, b_hi) = fit_plateaus(x, esf, lim)
@@ -297,7 +301,44 @@ def _normalise(x, esf, counts, sigma, n_lines):
                 "the step across the region (removed as a linear gradient along the normal)",
             )
         )
-    return (esf - a - b * x) / denom, float(c), float(e / c), flags
+    return (esf - a - b * x) / denom, float(c), float(e / c), flags, (a, b, c, e)
+
+
+def _flatten_rows(d, v, n_rows: int, lim: float = 4.0):
+    """Remove illumination changes along the edge: per-line dark/bright levels, fitted linearly in the line.
+
+    Each line's levels are the means of its pixels beyond ``lim`` px on each side; straight-line fits of
+    these over the lines give ``dark(r)``, ``bright(r)``; every line is mapped affinely onto the levels of
+    the middle line.  Returns (values, flags).
+    """
+    dd, vv = d.reshape(n_rows, -1), v.reshape(n_rows, -1)
+    lo_m, hi_m = dd < -lim, dd > lim
+    n_lo, n_hi = lo_m.sum(axis=1), hi_m.sum(axis=1)
+    ok = (n_lo >= 3) & (n_hi >= 3)
+    if np.count_nonzero(ok) < _MIN_ROWS:
+        return v, []
+    r = np.arange(n_rows, dtype=float)
+    lo = np.where(lo_m, vv, 0).sum(axis=1)[ok] / n_lo[ok]
+    hi = np.where(hi_m, vv, 0).sum(axis=1)[ok] / n_hi[ok]
+    p_lo, p_hi = np.polyfit(r[ok], lo, 1), np.polyfit(r[ok], hi, 1)
+    dark, bright = np.polyval(p_lo, r), np.polyval(p_hi, r)
+    r0 = 0.5 * (n_rows - 1)
+    d0, c0 = np.polyval(p_lo, r0), np.polyval(p_hi, r0) - np.polyval(p_lo, r0)
+    c = bright - dark
+    if np.any(c <= 0.1 * c0):
+        return v, []
+    out = d0 + (vv - dark[:, None]) * (c0 / c)[:, None]
+    change = float(max(np.ptp(dark), np.ptp(c)) / c0)
+    flags = []
+    if change > 0.02:
+        flags.append(
+            (
+                "illumination_gradient",
+                f"non-uniform illumination along the edge: levels change by {100 * change:.1f} % of the step "
+                "over the lines (removed line by line)",
+            )
+        )
+    return out.ravel(), flags
 
 
 def _check_mtf(f, mtf, sig, flags):
