@@ -90,9 +90,7 @@ def _distances(shape, angle_deg, offset_px):
     return (x - xc) * np.cos(t) - (y - yc) * np.sin(t)
 
 
-def render_edge(
-    shape, angle_deg: float, *, q: float, eps: float, offset_px: float = 0.137, low=0.0, high=1.0
-):
+def render_edge(shape, angle_deg: float, *, q: float, eps: float, offset_px: float = 0.137, low=0.0, high=1.0):
     """Diffraction (annular) x square-pixel edge, exact at pixel centres (dense table + cubic spline)."""
     d = _distances(shape, angle_deg, offset_px)
     lim = np.abs(d).max() + 1.0

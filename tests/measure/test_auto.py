@@ -65,9 +65,7 @@ def test_every_item_is_measured_or_skipped_with_a_reason(pipeline):
     d = res.to_dict()
     json.dumps(d, allow_nan=False)  # JSON-ready
     assert {"slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge", "skipped"} <= set(d)
-    measured = {
-        e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]
-    }
+    measured = {e["id"] for k in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge") for e in d[k]}
     skipped = {s["id"]: s for s in d["skipped"]}
     assert measured == {"edge_act", "edge_alt", "star", "bars", "wedge"}
     assert {it["id"] for it in truth["items"]} <= measured | set(skipped)
@@ -177,13 +175,9 @@ def test_radiometric_offset_and_gain_are_calibrated_out(pipeline):
     assert res2.calibration["offset"] == pytest.approx(100.0, abs=1e-3)
     assert res2.calibration["gain"] == pytest.approx(1000.0, rel=1e-6)
     a, b = res.to_dict(), res2.to_dict()
-    np.testing.assert_allclose(
-        a["siemens_star"][0]["mtf"]["ACT"], b["siemens_star"][0]["mtf"]["ACT"], atol=1e-6
-    )
+    np.testing.assert_allclose(a["siemens_star"][0]["mtf"]["ACT"], b["siemens_star"][0]["mtf"]["ACT"], atol=1e-6)
     np.testing.assert_allclose(a["bar_targets"][0]["ctf"], b["bar_targets"][0]["ctf"], atol=1e-6)
-    np.testing.assert_allclose(
-        a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-6
-    )
+    np.testing.assert_allclose(a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-6)
     np.testing.assert_allclose(a["slanted_edges"][0]["mtf"], b["slanted_edges"][0]["mtf"], atol=1e-6)
 
 
@@ -237,9 +231,7 @@ def test_transposed_image_swaps_act_and_alt(pipeline):
     assert b["bar_targets"][0]["direction"] == "ALT"
     np.testing.assert_allclose(a["bar_targets"][0]["ctf"], b["bar_targets"][0]["ctf"], atol=1e-12)
     assert b["hyperbolic_wedge"][0]["direction"] == "ACT"
-    np.testing.assert_allclose(
-        a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-12
-    )
+    np.testing.assert_allclose(a["hyperbolic_wedge"][0]["contrast"], b["hyperbolic_wedge"][0]["contrast"], atol=1e-12)
 
 
 def test_too_coarse_pixels_skip_everything_with_reasons(pipeline):

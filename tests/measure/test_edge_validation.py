@@ -6,7 +6,7 @@ Targets are rendered exactly and independently of satchain.measure (_render.py, 
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -23,7 +23,7 @@ BLUR = 0.3
 CRITICAL = (45.0, 26.565051, 18.434949, 14.036243, 11.309932, 33.690068)  # atan(1/n), atan(2/3)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _iso_edge(shape, angle, offset=0.137, radius=None, blur=BLUR, q=Q):
     return render_iso_edge(shape, angle, q=q, blur_px=blur, offset_px=offset, radius_px=radius)
 

@@ -47,9 +47,7 @@ def test_threshold_line_width_matches_ctf_prediction():
 def test_act_orientation_and_unresolved():
     img = _render()
     r = measure_wedge(img.T, line_width_px=_lw, direction="ACT")
-    assert r.resolved_line_width_px == pytest.approx(
-        measure_wedge(img, line_width_px=_lw).resolved_line_width_px
-    )
+    assert r.resolved_line_width_px == pytest.approx(measure_wedge(img, line_width_px=_lw).resolved_line_width_px)
     none = measure_wedge(img, line_width_px=_lw, threshold=0.01)
     assert none.resolved_line_width_px is None and none.to_dict()["resolved_f_cy_per_px"] is None
 

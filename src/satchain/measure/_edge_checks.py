@@ -85,17 +85,31 @@ def fit_plateaus(x: np.ndarray, esf: np.ndarray, lim: float):
         use = min(lim, 0.5 * ax.max())
         sel = ax >= use
         xs, es = x[side][sel], esf[side][sel]
-        ax_s = np.abs(xs)
-        if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
-            # a + b x + k / |x|: the k term takes the slow 1/x approach of diffraction tails, b the gradient
-            m = np.stack([np.ones_like(xs), xs, 1.0 / ax_s], axis=1)
-            a, b, _ = np.linalg.lstsq(m, es, rcond=None)[0]
-        elif xs.size >= 8 and np.ptp(xs) > 2.0:
-            b, a = np.polyfit(xs, es, 1)
-        else:
-            a, b = float(es.mean()), 0.0
+        a, b = _plateau_line(xs, es)
         fits.append((float(a), float(b)))
     return fits[0], fits[1]
+
+
+def _plateau_line(xs: np.ndarray, es: np.ndarray):
+    """Level and slope of one plateau: ``a + b x + k / |x|``, dropping the terms not resolved (|t| < 3)."""
+    ax_s = np.abs(xs)
+    cols = [np.ones_like(xs)]
+    if xs.size >= 8 and np.ptp(xs) > 2.0:
+        cols.append(xs)
+        if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
+            cols.append(1.0 / ax_s)
+    while True:
+        m = np.stack(cols, axis=1)
+        coef, *_ = np.linalg.lstsq(m, es, rcond=None)
+        if len(cols) == 1:
+            return float(coef[0]), 0.0
+        dof = max(xs.size - len(cols), 1)
+        s2 = float(np.sum((es - m @ coef) ** 2)) / dof
+        se = np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))
+        t = np.abs(coef[1:]) / se[1:]
+        if np.all(t >= 3.0):
+            return float(coef[0]), float(coef[1]) if len(cols) > 1 and cols[1] is xs else 0.0
+        cols.pop(1 + int(np.argmin(t)))
 
 
 def check_single_edge(x, esf, counts, sigma, fits, lim) -> None:
@@ -113,10 +127,9 @@ def check_single_edge(x, esf, counts, sigma, fits, lim) -> None:
         k = int(np.argmax(dev))
         if dev[k] > _FLAT_PLATEAU_TOL * abs(step):
             raise InputError(
-                f"image: the {name} side of the edge is not flat (it changes by "
-                f"{(dev[k] + 6 * noise[side][k]) / abs(step):.0%} of the step {abs(x[side][k]):.0f} px from the edge): "
-                "the region holds more than one edge (a stripe, a corner or another edge); give an ROI around "
-                "one straight edge"
+                f"image: the {name} side of the edge is not flat ({abs(x[side][k]):.0f} px from the edge it departs "
+                f"from its plateau by {dev[k] + 6 * noise[side][k]:.3g} while the step is {abs(step):.3g}): the region "
+                "holds more than one edge (a stripe, a corner or another edge); give an ROI around one straight edge"
             )
 
 
@@ -129,9 +142,9 @@ def critical_angle_flags(slope: float, n_lines: int, mode: str, width: float) ->
             out.append(
                 (
                     "angle_near_critical",
-                    f"unreliable angle: edge tilt {tilt:.2f} deg is within 1 deg of {a:g} deg, where the sub-pixel "
-                    f"phases repeat; ESF sampled on a {width:.3f} px lattice ({mode}); a tilt of about 3-10 deg "
-                    "is best",
+                    f"near-critical angle: edge tilt {tilt:.2f} deg is within 1 deg of {a:g} deg, where the "
+                    f"sub-pixel phases repeat; the ESF is sampled on a {width:.3f} px lattice ({mode} bins), with "
+                    "less phase diversity and more noise; a tilt of about 3-10 deg is best",
                 )
             )
     if n_lines * abs(slope) < 1.0:

@@ -453,8 +453,8 @@ def _locate_edge(work: np.ndarray, deg: int | None):
     bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
     if bad > 0.2 * n_keep:
         raise InputError(
-            f"image: the edge positions or steps of {bad} of {n_keep} lines do not match one straight edge "
-            "(a corner, a second edge or no edge there); give an ROI around one straight edge"
+            f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
+            "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
         )
     used = r_used[inl & ~odd].astype(int)
     flags = []
