@@ -49,13 +49,16 @@ def choose_bins(row_phase: np.ndarray, cos_t: float, oversampling: int):
     p = np.sort(np.mod(row_phase, 1.0))
     gaps = np.diff(np.concatenate([p, [p[0] + 1.0]]))
     g_max = float(gaps.max())
-    if g_max * cos_t <= 0.8 * w_iso:
-        return w_iso, 0.0, "iso"
-    n = int(np.count_nonzero(gaps >= 0.5 * g_max))
-    if abs(n * g_max - 1.0) < 0.25 * n * g_max:
+    big = gaps >= 0.5 * g_max
+    n = int(np.count_nonzero(big))
+    # n clusters (each narrower than half their spacing, gaps alike): the natural lattice
+    tight = (1.0 - gaps[big].sum()) < 0.5 and np.ptp(gaps[big]) < 0.5 / n
+    if n <= 2 * oversampling and tight and p.size >= 2 * n:
         z = np.mean(np.exp(2j * np.pi * n * p))
         phi0 = float(np.angle(z) / (2 * np.pi * n)) % (1.0 / n)
         return cos_t / n, phi0 * cos_t, "lattice"
+    if g_max * cos_t <= 0.8 * w_iso:
+        return w_iso, 0.0, "iso"
     return 1.05 * g_max * cos_t, 0.0, "gap"
 
 

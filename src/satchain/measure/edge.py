@@ -205,9 +205,11 @@ def measure_edge(
             f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
             f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
         )
-    v, r_flags = _flatten_rows(d, v, len(rows))
-    flags += r_flags
     x, esf_raw, counts = bin_esf(d, v, w, origin)
+    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw)
+    if r_flags:
+        flags += r_flags
+        x, esf_raw, counts = bin_esf(d, v, w, origin)
     sigma = robust_sigma(v - np.interp(d, x, esf_raw))
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
@@ -304,31 +306,36 @@ def _normalise(x, esf, counts, sigma, n_lines):
     return (esf - a - b * x) / denom, float(c), float(e / c), flags, (a, b, c, e)
 
 
-def _flatten_rows(d, v, n_rows: int, lim: float = 4.0):
-    """Remove illumination changes along the edge: per-line dark/bright levels, fitted linearly in the line.
+def _flatten_rows(d, v, n_rows: int, x, esf):
+    """Remove illumination changes along the edge, line by line.
 
-    Each line's levels are the means of its pixels beyond ``lim`` px on each side; straight-line fits of
-    these over the lines give ``dark(r)``, ``bright(r)``; every line is mapped affinely onto the levels of
-    the middle line.  Returns (values, flags).
+    Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
+    ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
+    on a uniformly lit edge, whatever its tails or the region's shape).  Returns (values, flags).
     """
-    dd, vv = d.reshape(n_rows, -1), v.reshape(n_rows, -1)
-    lo_m, hi_m = dd < -lim, dd > lim
-    n_lo, n_hi = lo_m.sum(axis=1), hi_m.sum(axis=1)
-    ok = (n_lo >= 3) & (n_hi >= 3)
+    q = max(2, esf.size // 8)
+    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    if not hi > lo:
+        return v, []
+    e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
+    vv = v.reshape(n_rows, -1)
+    n = e.shape[1]
+    se, sv = e.sum(axis=1), vv.sum(axis=1)
+    see, sev = (e * e).sum(axis=1), (e * vv).sum(axis=1)
+    det = n * see - se * se
+    ok = det > 1e-6 * n * n
     if np.count_nonzero(ok) < _MIN_ROWS:
         return v, []
+    beta = (n * sev - se * sv)[ok] / det[ok]
+    alpha = (sv[ok] - beta * se[ok]) / n
     r = np.arange(n_rows, dtype=float)
-    lo = np.where(lo_m, vv, 0).sum(axis=1)[ok] / n_lo[ok]
-    hi = np.where(hi_m, vv, 0).sum(axis=1)[ok] / n_hi[ok]
-    p_lo, p_hi = np.polyfit(r[ok], lo, 1), np.polyfit(r[ok], hi, 1)
-    dark, bright = np.polyval(p_lo, r), np.polyval(p_hi, r)
-    r0 = 0.5 * (n_rows - 1)
-    d0, c0 = np.polyval(p_lo, r0), np.polyval(p_hi, r0) - np.polyval(p_lo, r0)
-    c = bright - dark
-    if np.any(c <= 0.1 * c0):
+    alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
+    beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
+    mid = n_rows // 2
+    if np.any(beta_r <= 0.1 * beta_r[mid]):
         return v, []
-    out = d0 + (vv - dark[:, None]) * (c0 / c)[:, None]
-    change = float(max(np.ptp(dark), np.ptp(c)) / c0)
+    out = alpha_r[mid] + (vv - alpha_r[:, None]) * (beta_r[mid] / beta_r)[:, None]
+    change = float(max(np.ptp(alpha_r), np.ptp(beta_r)) / beta_r[mid])
     flags = []
     if change > 0.02:
         flags.append(
