@@ -109,6 +109,37 @@ def _diff_adjoint(y: np.ndarray, w: float) -> np.ndarray:
     return out / w
 
 
+def _gauss_kernel(sigma_bins: float) -> np.ndarray:
+    """Normalised Gaussian kernel truncated at 4 sigma (odd length)."""
+    r = max(1, int(4.0 * sigma_bins + 0.5))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma_bins) ** 2)
+    return k / k.sum()
+
+
+def _smooth(e: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """Gaussian smoothing along the last axis, ends extended with their edge values."""
+    r = kernel.size // 2
+    pad = np.concatenate([np.repeat(e[..., :1], r, axis=-1), e, np.repeat(e[..., -1:], r, axis=-1)], axis=-1)
+    return (
+        np.apply_along_axis(np.convolve, -1, pad, kernel, mode="valid")
+        if e.ndim > 1
+        else np.convolve(pad, kernel, mode="valid")
+    )
+
+
+def _smooth_adjoint(y: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """Exact transpose of :func:`_smooth` along the last axis (the kernel is symmetric)."""
+    r = kernel.size // 2
+    yy = np.atleast_2d(y)
+    full = np.stack([np.convolve(row, kernel, mode="full") for row in yy.real]) + 1j * np.stack(
+        [np.convolve(row, kernel, mode="full") for row in yy.imag]
+    )
+    out = full[:, r:-r].copy()
+    out[:, 0] += full[:, :r].sum(axis=1)
+    out[:, -1] += full[:, -r:].sum(axis=1)
+    return out.reshape(y.shape) if np.iscomplexobj(y) else out.real.reshape(y.shape)
+
+
 class _Lsf:
     """The linear map bin ESF -> windowed LSF at the bin midpoints, and its spectrum's sensitivities."""
 
@@ -116,12 +147,11 @@ class _Lsf:
         self.w = w
         self.xm = 0.5 * (x[1:] + x[:-1])
         self.win = _tukey(self.xm, half_w)
-        # the tail smoothing as an explicit matrix (its exact transpose is needed for the noise)
-        self.g = gaussian_filter1d(np.eye(x.size), _TAIL_SMOOTH_PX / w, axis=0, mode="nearest")
+        self.kernel = _gauss_kernel(_TAIL_SMOOTH_PX / w)
 
     def apply(self, esf: np.ndarray) -> np.ndarray:
         g_raw = np.diff(esf) / self.w
-        g_s = np.diff(self.g @ esf) / self.w
+        g_s = np.diff(_smooth(esf, self.kernel)) / self.w
         return self.win * g_raw + (1 - self.win) * g_s
 
     def spectrum(self, lsf: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -132,7 +162,7 @@ class _Lsf:
         e = np.exp(-2j * np.pi * np.outer(np.atleast_1d(f), self.xm)) * self.w
         a = _diff_adjoint(self.win * e, self.w)
         b = _diff_adjoint((1 - self.win) * e, self.w)
-        return a + b @ self.g
+        return a + _smooth_adjoint(b, self.kernel)
 
 
 def _mtf_sigma(op: _Lsf, lsf, f, var_bins, corr):
