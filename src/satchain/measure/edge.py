@@ -211,6 +211,7 @@ def measure_edge(
         flags += r_flags
         x, esf_raw, counts = bin_esf(d, v, w, origin)
     sigma = robust_sigma(v - np.interp(d, x, esf_raw))
+    x, esf_raw, counts = _trim_ends(x, esf_raw, counts)
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
     check_model(work, _project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
@@ -258,6 +259,19 @@ def measure_edge(
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
     )
+
+
+def _trim_ends(x, esf, counts, frac: float = 0.3):
+    """Keep the central run of bins holding >= ``frac`` x the typical count (the region's corners cut the
+    outer bins to a few samples, whose noise would otherwise dominate the smoothed tails)."""
+    typical = float(np.median(counts[np.abs(x) < 5])) if np.any(np.abs(x) < 5) else float(np.median(counts))
+    low = counts < frac * typical
+    i0 = int(np.argmin(np.abs(x)))
+    left = np.nonzero(low[:i0])[0]
+    right = np.nonzero(low[i0:])[0]
+    a = int(left[-1]) + 1 if left.size else 0
+    b = i0 + int(right[0]) if right.size else x.size
+    return x[a:b], esf[a:b], counts[a:b]
 
 
 def _check_degree(fit_degree) -> int | None:
