@@ -30,10 +30,17 @@ _FLAT_PLATEAU_TOL = 0.15  # a plateau departing from a straight line by this muc
 
 
 def _pixel_noise(data: np.ndarray) -> float:
-    """Pixel noise from second differences along both axes (robust; edges are a minority of pixels)."""
-    sx = robust_sigma(data[:, 2:] - 2 * data[:, 1:-1] + data[:, :-2]) / np.sqrt(6.0)
-    sy = robust_sigma(data[2:, :] - 2 * data[1:-1, :] + data[:-2, :]) / np.sqrt(6.0)
-    return float(min(sx, sy))
+    """Pixel noise from second differences along both axes (robust; edges are a minority of pixels).
+
+    Pixels at the region's extreme values are left out, so that a plateau clipped flat does not hide the
+    noise of the rest."""
+    lo, hi = data.min(), data.max()
+    out = []
+    for a in (data, data.T):
+        c = a[:, 1:-1]
+        sd = (a[:, 2:] - 2 * c + a[:, :-2])[(c != lo) & (c != hi)]
+        out.append(robust_sigma(sd) / np.sqrt(6.0) if sd.size else 0.0)
+    return float(min(out))
 
 
 def check_saturation(data: np.ndarray, level: float | None) -> list[tuple[str, str]]:
