@@ -196,22 +196,8 @@ def measure_edge(
     data = crop_roi(image, roi, min_size=12)
     flags = check_saturation(data, saturation_level)
     work, direction, transposed, sign = _orient(data)
-    coef, rows, loc_flags = _locate_edge(work, deg)
-    flags += loc_flags
-    d, v, slope, phase = _project(work[rows], rows, coef)
-    w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
-    if w > 0.75:
-        raise InputError(
-            f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
-            f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
-        )
-    x, esf_raw, counts = bin_esf(d, v, w, origin)
-    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw)
-    if r_flags:
-        flags += r_flags
-        x, esf_raw, counts = bin_esf(d, v, w, origin)
-    sigma = robust_sigma(v - np.interp(d, x, esf_raw))
-    x, esf_raw, counts = _trim_ends(x, esf_raw, counts)
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags = _binned_esf(work, deg, os_)
+    flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
     check_model(work, _project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
@@ -259,6 +245,25 @@ def measure_edge(
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
     )
+
+
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
+    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags)."""
+    coef, rows, flags = _locate_edge(work, deg)
+    d, v, slope, phase = _project(work[rows], rows, coef)
+    w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
+    if w > 0.75:
+        raise InputError(
+            f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
+            f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
+        )
+    x, esf_raw, counts = bin_esf(d, v, w, origin)
+    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw)
+    if r_flags:
+        flags += r_flags
+        x, esf_raw, counts = bin_esf(d, v, w, origin)
+    sigma = robust_sigma(v - np.interp(d, x, esf_raw))
+    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags
 
 
 def _trim_ends(x, esf, counts, frac: float = 0.3):
