@@ -224,3 +224,48 @@ def test_flags_and_sigma_in_json():
     assert d["mtf_at_nyquist_sigma"] == pytest.approx(d["mtf_at_nyquist_std"])
     assert 0 < d["mtf_at_nyquist_sigma"] < 0.05
     assert d["fit_degree"] == 1 and d["cnr"] == pytest.approx(0.6 / 0.005, rel=0.1)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    kind=st.sampled_from(["noise", "stripe", "two_edges", "blob", "noisy_edge", "ramp"]),
+    seed=st.integers(0, 2**31 - 1),
+    snr=st.floats(2.0, 400.0),
+)
+def test_never_an_mtf_outside_0_1_2(kind, seed, snr):
+    """Whatever the region holds, the result is a refusal or an MTF inside [0, 1.2] up to its band's end;
+    noise, a ramp, a blob and a stripe (tilt up to 20 deg, 7-24 px wide) are always refused."""
+    rng = np.random.default_rng(seed)
+    n = 64
+    yy, xx = np.mgrid[0:n, 0:n].astype(float)
+    a = rng.uniform(-40, 40)
+    e1 = _iso_edge((n, n), round(a, 1), offset=float(rng.integers(-20, 20)), blur=0.6, q=None)
+    e2 = _iso_edge((n, n), round(a + rng.uniform(-60, 60), 1), offset=float(rng.integers(-20, 20)), blur=0.6, q=None)
+    img = {
+        "noise": np.zeros((n, n)),
+        "stripe": _iso_edge((n, n), round(a / 2, 1), offset=float(rng.integers(-12, -3)), blur=0.6, q=None)
+        - _iso_edge((n, n), round(a / 2, 1), offset=float(rng.integers(4, 13)), blur=0.6, q=None),
+        "two_edges": e1 + e2,
+        "blob": np.exp(-((xx - rng.uniform(10, 54)) ** 2 + (yy - rng.uniform(10, 54)) ** 2) / 50.0),
+        "noisy_edge": e1,
+        "ramp": xx / n,
+    }[kind]
+    img = img + rng.normal(0, 1.0 / snr, img.shape)
+    if kind in ("noise", "stripe", "blob", "ramp"):  # no single edge there: always refused
+        with pytest.raises(InputError):
+            measure_edge(img)
+        return
+    try:
+        r = measure_edge(img)
+    except InputError:
+        return
+    assert np.all(np.isfinite(r.mtf)) and np.all((r.mtf >= 0) & (r.mtf <= 1.2))
+    assert r.f_cy_per_px[-1] >= 0.5 and np.isfinite(r.mtf_at_nyquist_sigma)
+
+
+def test_low_contrast_to_noise_is_flagged():
+    rng = np.random.default_rng(9)
+    img = 0.2 + 0.6 * _iso_edge((100, 100), 6.0) + rng.normal(0, 0.6 / 12.0, (100, 100))
+    r = measure_edge(img)
+    assert "low_cnr" in r.flags and r.cnr == pytest.approx(12.0, rel=0.15)
+    assert r.mtf_at_nyquist_sigma > 0.02  # and the uncertainty says so
