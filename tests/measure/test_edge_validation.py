@@ -31,7 +31,7 @@ def _iso_edge(shape, angle, offset=0.137, radius=None, blur=BLUR, q=Q):
 # ------------------------------------------------------------------------------------------ every angle
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     tilt=st.one_of(st.sampled_from(CRITICAL), st.floats(1.0, 45.0)),
     size=st.sampled_from([60, 100]),
