@@ -142,15 +142,29 @@ def edge(
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    fit_degree: Annotated[
+        str,
+        typer.Option(
+            "--fit-degree",
+            help="degree of the edge-position fit: auto (chosen from the data; follows curved edges), 1, 2 or 3",
+        ),
+    ] = "auto",
 ) -> None:
-    """Slanted-edge MTF (ISO 12233 e-SFR, improved): MTF, MTF at Nyquist, MTF50, RER, overshoot."""
+    """Slanted-edge MTF (ISO 12233 e-SFR, improved): MTF +- 1 sigma, MTF at Nyquist, MTF50, RER, overshoot.
+
+    The region must hold one straight (or gently curved) edge; stripes, corners, no edge and clipped
+    plateaus are refused (exit 2).  Quality flags (near-critical angle, curvature, illumination gradient,
+    low contrast-to-noise, clipping) are printed and listed in the JSON (``flags``, ``warnings``).
+    """
     from satchain.measure.edge import measure_edge
     from satchain.report.measure_plots import plot_edge
 
     check_dir_outputs(out, ["edge.json", "edge.png"], {"IMAGE": image})
     data, p, _ = _load(image, pixel_m)
     region = _roi("--roi", roi)
-    r = measure_edge(data, roi=region, pixel_m=p)
+    if fit_degree.strip().lower() not in ("auto", "1", "2", "3"):
+        raise ConfigError(f"--fit-degree = {fit_degree!r}: must be auto, 1, 2 or 3")
+    r = measure_edge(data, roi=region, pixel_m=p, fit_degree=fit_degree.strip().lower())
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
 
     def plot(d: Path):
@@ -162,19 +176,24 @@ def edge(
         rows = [
             ("edge angle (deg from y/ALT)", r.angle_deg),
             ("MTF direction", r.direction),
-            ("MTF at Nyquist", r.mtf_at_nyquist),
-            ("  predicted noise (1 sigma)", r.mtf_at_nyquist_std),
+            ("MTF at Nyquist", f"{r.mtf_at_nyquist:.4f} +- {r.mtf_at_nyquist_sigma:.4f} (1 sigma, noise)"),
             ("MTF50 (cy/px)", r.mtf50_cy_per_px),
             ("RER", r.rer),
             ("overshoot H", r.overshoot),
             ("edge contrast", r.contrast),
             ("noise sigma", r.noise_sigma),
+            ("contrast-to-noise", r.cnr),
             ("lines used", r.n_lines),
+            ("edge fit degree", r.fit_degree),
+            ("edge curvature (1/px)", r.curvature_per_px),
+            ("ESF sample spacing (px)", r.bin_width_px),
+            ("quality flags", ", ".join(r.flags) if r.flags else "none"),
         ]
         if p and r.mtf50_cy_per_px is not None:
-            rows.insert(5, ("MTF50 (cy/m ground)", r.mtf50_cy_per_px / p))
+            rows.insert(4, ("MTF50 (cy/m ground)", r.mtf50_cy_per_px / p))
         c.print(_kv_table(f"slanted edge: {image.name}", rows))
-        c.print(_curve_table("MTF along the edge normal", r.f_cy_per_px, {"MTF": r.mtf}, p))
+        sig = r.mtf_sigma if r.mtf_sigma is not None else 0 * r.mtf
+        c.print(_curve_table("MTF along the edge normal", r.f_cy_per_px, {"MTF": r.mtf, "1 sigma": sig}, p))
         for w in r.warnings:
             print_warning(w, c)
 

@@ -154,11 +154,11 @@ def test_to_dict_is_json_ready(diffraction_edges):
 
 def test_warnings_degenerate_and_short():
     r = measure_edge(render_pixel_edge((100, 100), 26.57))
-    assert any("unreliable angle" in w for w in r.warnings)
+    assert "angle_near_critical" in r.flags and any("near-critical angle" in w for w in r.warnings)
     r = measure_edge(render_pixel_edge((100, 100), 0.3))
     assert any("within 1 deg of 0" in w for w in r.warnings)
     r = measure_edge(render_pixel_edge((14, 60), 8.0))
-    assert any("short edge" in w for w in r.warnings)
+    assert any("short edge" in w for w in r.warnings) and "short_edge" in r.flags
     assert measure_edge(render_pixel_edge((100, 100), 8.0)).warnings == ()
 
 

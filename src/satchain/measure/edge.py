@@ -14,18 +14,25 @@ Conventions
 Algorithm (ISO 12233:2017 annex D, plus the improvements marked *)
 -----------------------------------------------------------------
 1. Per-row (per-column for ALT) centroid of the [-1/2, 0, 1/2] derivative inside a window that follows the
-   edge, then a *robust (Tukey bisquare) polynomial fit over the whole ridge*, iterated twice.
-2. Projection of every pixel onto the exact edge normal; averaging in bins of ``1/oversampling`` px.
-3. Derivative [-1/2, 0, 1/2] of the binned ESF; the MTF is corrected for its transfer function
-   ``sinc(2 f w)`` (ISO) *and for the binning's own transfer function*, computed from the actual positions of
-   the samples inside their bins (``|<exp(2 pi i f u)>|``; about 2.5 % at Nyquist for 4x binning, which ISO
-   leaves in).
+   edge, then a *robust (Tukey bisquare) polynomial fit over the whole ridge*, iterated; *the degree (1-3) is
+   chosen from the data* (a higher degree only when it explains the positions far beyond their noise and moves
+   the edge by more than 0.1 px), so gently curved edges are followed.
+2. Projection of every pixel onto the local edge normal; averaging in bins of ``1/oversampling`` px, *or, where
+   the rows' sub-pixel phases gather in n clusters (tilts near atan(1/n), short edges), on the natural lattice
+   of spacing cos(t) / n* (no empty bins, no interpolation).  *Each bin is corrected for the positions of its
+   samples* (first and second moments; ISO leaves a 2.5 % loss at Nyquist).
+3. *The region is validated*: one edge (straight plateaus on both sides, per-line steps alike, edge positions
+   that line up), no clipped plateau; *a linear illumination gradient along the normal is removed*.
+   First difference of the binned ESF, corrected for its transfer function ``sinc(f w)``.
 4. *Noise-adaptive regularisation*: the LSF is kept raw inside a Tukey window of half-width ``W`` around the
    edge and taken from a Gaussian-smoothed ESF outside it.  The smoothed tails keep the low-frequency mass of
    long (e.g. diffraction) tails, so the normalisation at f = 0 is not biased by the window, while the tails
    add almost no high-frequency noise.  ``W`` is the largest half-width whose predicted noise on the MTF at
    Nyquist (propagated exactly from the per-bin noise) stays below ``noise_target``.
-5. MTF(f) = |DFT(LSF)(f)| / DFT(LSF)(0) / corrections, evaluated directly at the output frequencies.
+5. MTF(f) = |DFT(LSF)(f)| / DFT(LSF)(0) / corrections, evaluated directly at the output frequencies, with
+   its *standard deviation at every frequency propagated exactly (first order) from the measured noise*.
+   An MTF leaving [0, 1.2] up to Nyquist is refused; quality flags (``flags``: codes, ``warnings``: text)
+   report near-critical angles, curvature, illumination gradient, low contrast-to-noise and clipping.
 
 Edge metrics follow the GIQE (Leachtenauer et al. 1997, GIQE-4) definitions on the normalised ESF:
 ``rer = ESF(+0.5) - ESF(-0.5)`` and the overshoot ``H`` = the maximum of the ESF between 1.0 and 3.0 px on the
@@ -37,33 +44,48 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d, uniform_filter
+from scipy.ndimage import uniform_filter
 
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, crop_roi, first_crossing, robust_sigma
+from satchain.measure._edge_checks import (
+    CRITICAL_TILTS_DEG,
+    check_model,
+    check_saturation,
+    check_single_edge,
+    critical_angle_flags,
+    fit_plateaus,
+)
+from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
 
 __all__ = ["EdgeResult", "measure_edge", "DEGENERATE_ANGLES_DEG"]
 
-#: Edge tilts (from the nearest axis) where the per-row phases repeat after 1, 4, 2 or 1 rows.
-DEGENERATE_ANGLES_DEG = (0.0, 14.036, 26.565, 45.0)
+#: Edge tilts (from the nearest axis) where the per-row phases repeat after 1, 4, 3, 2 or 1 rows.
+DEGENERATE_ANGLES_DEG = tuple(sorted(CRITICAL_TILTS_DEG))
 _MIN_ROWS = 8
 _SHORT_ROWS = 20
 _NU_STEP = 0.005
-_W_MIN_PX = 5.0  # smallest half-width of the raw-LSF window (px)
-_W_MIN_RISE = 2.5  # ... and in units of the 10-90 % rise distance
-_TAIL_SMOOTH_PX = 0.75  # Gaussian smoothing of the ESF outside the window (px)
+_MTF_MAX = 1.2  # an MTF above this up to Nyquist is not a measurement
+_LOW_CNR = 25.0  # contrast-to-noise below which the result is flagged
+_F_DEGREE = 30.0  # F statistic a higher fit degree must beat ...
+_SAGITTA_PX = 0.1  # ... while moving the edge by more than this (px)
 
 
 @dataclass(frozen=True)
 class EdgeResult(ResultMixin):
     """Result of :func:`measure_edge`; frequencies are along the edge normal.
 
-    ``mtf_at_nyquist_std`` is the predicted noise standard deviation of ``mtf_at_nyquist`` (propagated from
-    the estimated pixel noise); ``noise_sigma`` is that pixel noise in image units; ``contrast`` the edge
-    step, positive when the image rises along +x (ACT edges) or +y (ALT edges).
+    ``mtf_at_nyquist_std`` (= ``mtf_at_nyquist_sigma``) is the predicted 1-sigma noise of ``mtf_at_nyquist``
+    (propagated from the measured pixel noise), ``mtf_sigma`` the same at every frequency; ``noise_sigma`` is
+    that pixel noise in image units; ``contrast`` the edge step, positive when the image rises along +x (ACT
+    edges) or +y (ALT edges); ``cnr`` = |contrast| / noise_sigma (inf without noise).
     ``mtf50_cy_per_px`` is None (JSON null) when the MTF stays above 0.5 in the output band.
+    ``flags`` are short machine-readable codes, ``warnings`` the matching sentences (same order).
+    ``fit_degree`` is the degree of the edge-position polynomial used, ``curvature_per_px`` the edge curvature
+    at the centre of the region (1 / radius, 0 for a straight fit), ``bin_width_px`` the ESF sample spacing,
+    ``illumination_gradient_per_px`` the relative change of the step per px along the normal (removed).
     """
 
     f_cy_per_px: np.ndarray
@@ -85,6 +107,14 @@ class EdgeResult(ResultMixin):
     warnings: tuple[str, ...]
     f_cy_per_m_ground: np.ndarray | None = None
     f_cy_per_mm: np.ndarray | None = None
+    mtf_sigma: np.ndarray | None = None
+    mtf_at_nyquist_sigma: float = float("nan")
+    flags: tuple[str, ...] = ()
+    fit_degree: int = 1
+    curvature_per_px: float = 0.0
+    cnr: float = float("nan")
+    bin_width_px: float = 0.25
+    illumination_gradient_per_px: float = 0.0
 
     @property
     def edge_angle_deg(self) -> float:
@@ -106,16 +136,16 @@ def measure_edge(
     oversampling: int = 4,
     f_max_cy_per_px: float = 1.0,
     noise_target: float = 0.004,
-    fit_degree: int = 1,
+    fit_degree: int | str = "auto",
     saturation_level: float | None = None,
     debias: bool = False,
 ) -> EdgeResult:
-    """Measure the MTF, ESF, LSF, RER and overshoot from a slanted edge.
+    """Measure the MTF (with its noise), ESF, LSF, RER and overshoot from a slanted edge.
 
     Parameters
     ----------
     image : array_like, 2-D
-        Image containing one straight (or gently curved, see ``fit_degree``) edge.
+        Image containing one straight or gently curved edge.
     roi : (x0, y0, x1, y1), optional
         Half-open pixel region to analyse; the whole image by default.
     pixel_m : float, optional
@@ -125,12 +155,14 @@ def measure_edge(
     oversampling : int
         ESF bins per pixel along the normal (ISO uses 4); >= 4.
     f_max_cy_per_px : float
-        Highest output frequency (cy/px along the normal), in (0.5, oversampling / 4].
+        Highest output frequency (cy/px along the normal), in [0.5, oversampling / 4].  Where the edge phases
+        only support a coarser ESF lattice (tilts near 45 deg) the output stops at that lattice's Nyquist
+        frequency (flag ``band_limited``).
     noise_target : float
         Predicted noise on the MTF at Nyquist that the adaptive window aims at.
-    fit_degree : int
-        Degree of the robust polynomial fitted to the edge positions (1 = straight edge, ISO 12233:2017 also
-        allows 2 or 3 for lens distortion).
+    fit_degree : int or "auto"
+        Degree of the robust polynomial fitted to the edge positions: 1 (straight), 2 or 3 (curved, ISO
+        12233:2017 allows them for lens distortion), or "auto" (default): chosen from the data.
     saturation_level : float, optional
         Values >= this are saturated; for integer images the dtype maximum is used by default.
     debias : bool
@@ -143,8 +175,8 @@ def measure_edge(
     Raises
     ------
     InputError
-        No edge, a flat, saturated or clipped region, NaN/inf, a region smaller than 12 px, or an edge shorter
-        than 8 lines.
+        No edge, more than one edge (a stripe, a corner), a flat, saturated or clipped region, NaN/inf, a
+        region smaller than 12 px, an edge shorter than 8 lines, or an MTF outside [0, 1.2] up to Nyquist.
 
     Examples
     --------
@@ -152,44 +184,48 @@ def measure_edge(
     >>> d = (x - 31.6) * np.cos(0.1) - (y - 31.5) * np.sin(0.1)
     >>> img = 0.1 + 0.8 / (1 + np.exp(-d / 0.6))  # a logistic edge tilted by 5.7 deg
     >>> r = measure_edge(img)
-    >>> r.direction, round(r.angle_deg, 2)
-    ('ACT', 5.73)
+    >>> r.direction, round(r.angle_deg, 2), r.flags
+    ('ACT', 5.73, ())
     """
     os_ = int(check_range("oversampling", oversampling, 4, 32))
     f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.5, os_ / 4.0)
     check_positive("noise_target", noise_target)
-    deg = int(check_range("fit_degree", fit_degree, 1, 3))
+    deg = _check_degree(fit_degree)
     if saturation_level is None and np.issubdtype(np.asarray(image).dtype, np.integer):
         saturation_level = float(np.iinfo(np.asarray(image).dtype).max)
     data = crop_roi(image, roi, min_size=12)
-    _check_saturation(data, saturation_level)
+    flags = check_saturation(data, saturation_level)
     work, direction, transposed, sign = _orient(data)
-    coef, rows, warn = _locate_edge(work, deg)
-    d, v, slope = _project(work[rows], rows, coef)
-    x, esf_raw, counts = _bin_esf(d, v, 1.0 / os_)
-    sigma = _noise_sigma(d, v, x, esf_raw)
-    lo, hi = _plateaus(x, esf_raw)
-    contrast = hi - lo
-    if not contrast > 5 * sigma / np.sqrt(max(len(rows), 1)) or contrast <= 0:
-        raise InputError("image: no edge found (step between the two sides is not above the noise)")
-    f = np.arange(0.0, f_max + _NU_STEP / 2, _NU_STEP)
-    mtf, std_nyq, half_w = _adaptive_mtf(x, esf_raw, counts, sigma, f, noise_target, debias)
-    esf = (esf_raw - lo) / contrast
-    lsf = np.gradient(esf, x)
-    angle = _angle_deg(slope, transposed)
-    warn += _angle_warnings(slope, len(rows), np.count_nonzero(counts == 0), counts.size)
-    rer, overshoot = _edge_metrics(x, esf)
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags = _binned_esf(work, deg, os_)
+    flags += esf_flags
+    esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
+    flags += g_flags
+    check_model(work, _project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
+    f = np.arange(0.0, min(f_max, 0.5 / w) + _NU_STEP / 2, _NU_STEP)
+    if f[-1] < f_max - _NU_STEP / 2:
+        flags.append(
+            ("band_limited", f"the edge phases sample the ESF every {w:.3f} px: MTF given to {f[-1]:.2f} cy/px")
+        )
+    mtf, mtf_sig, half_w, lsf, _ = adaptive_mtf(x, esf_n, counts, sigma / contrast, f, noise_target)
+    if debias:
+        mtf = np.sqrt(np.maximum(mtf**2 - mtf_sig**2, 0.0))
+        mtf[0] = 1.0
+    f, mtf, mtf_sig = _check_mtf(f, mtf, mtf_sig, flags)
+    flags += critical_angle_flags(slope, len(rows), mode, w)
+    if sigma > 0 and contrast / sigma < _LOW_CNR:
+        flags.append(("low_cnr", f"low contrast-to-noise {contrast / sigma:.1f} (< {_LOW_CNR:g}): MTF noise is large"))
+    rer, overshoot = _edge_metrics(x, esf_n)
     i_nyq = int(round(0.5 / _NU_STEP))
     return EdgeResult(
         f_cy_per_px=f,
         mtf=mtf,
         esf_x_px=x,
-        esf=esf,
-        lsf=lsf,
-        angle_deg=angle,
+        esf=esf_n,
+        lsf=np.gradient(esf_n, x),
+        angle_deg=_angle_deg(slope, transposed),
         direction=direction,
         mtf_at_nyquist=float(mtf[i_nyq]),
-        mtf_at_nyquist_std=float(std_nyq),
+        mtf_at_nyquist_std=float(mtf_sig[i_nyq]),
         mtf50_cy_per_px=first_crossing(f, mtf, 0.5),
         rer=rer,
         overshoot=overshoot,
@@ -197,30 +233,155 @@ def measure_edge(
         noise_sigma=float(sigma),
         window_half_width_px=float(half_w),
         n_lines=len(rows),
-        warnings=tuple(warn),
+        warnings=tuple(t for _, t in flags),
         f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
         f_cy_per_mm=None if pitch_m is None else cy_per_px_to_cy_per_mm(f, pitch_m=pitch_m),
+        mtf_sigma=mtf_sig,
+        mtf_at_nyquist_sigma=float(mtf_sig[i_nyq]),
+        flags=tuple(c for c, _ in flags),
+        fit_degree=len(coef) - 1,
+        curvature_per_px=_curvature(coef, rows),
+        cnr=float(contrast / sigma) if sigma > 0 else float("inf"),
+        bin_width_px=float(w),
+        illumination_gradient_per_px=float(grad),
     )
 
 
-def _check_saturation(data: np.ndarray, level: float | None) -> None:
-    """Refuse saturated pixels, and plateaus clipped flat while the rest of the region is noisy."""
-    if level is not None:
-        n = int(np.count_nonzero(data >= level))
-        if n:
-            raise InputError(f"image: {n} pixel(s) at or above the saturation level {level:g}; the edge is clipped")
-    lo, hi = float(data.min()), float(data.max())
-    if hi == lo:
-        raise InputError(f"image: the region is flat (every pixel = {lo:g}); no edge to measure")
-    n_hi = np.count_nonzero(data == hi)
-    n_lo = np.count_nonzero(data == lo)
-    for n_at, n_other, val, side in ((n_hi, n_lo, hi, "maximum"), (n_lo, n_hi, lo, "minimum")):
-        # one plateau cut flat while the other varies: clipping (an ideal noise-free edge is flat on both)
-        if n_at > 0.05 * data.size and n_other < 0.01 * data.size:
-            raise InputError(
-                f"image: {100 * n_at / data.size:.0f} % of the pixels equal the {side} {val:g} while "
-                "the other side varies; the region looks clipped (saturated)"
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
+    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags)."""
+    coef, rows, flags = _locate_edge(work, deg)
+    d, v, slope, phase = _project(work[rows], rows, coef)
+    w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
+    if w > 0.75:
+        raise InputError(
+            f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
+            f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
+        )
+    x, esf_raw, counts = bin_esf(d, v, w, origin)
+    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw)
+    if r_flags:
+        flags += r_flags
+        x, esf_raw, counts = bin_esf(d, v, w, origin)
+    sigma = robust_sigma(v - np.interp(d, x, esf_raw))
+    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags
+
+
+def _trim_ends(x, esf, counts, frac: float = 0.3):
+    """Keep the central run of bins holding >= ``frac`` x the typical count (the region's corners cut the
+    outer bins to a few samples, whose noise would otherwise dominate the smoothed tails)."""
+    typical = float(np.median(counts[np.abs(x) < 5])) if np.any(np.abs(x) < 5) else float(np.median(counts))
+    low = counts < frac * typical
+    i0 = int(np.argmin(np.abs(x)))
+    left = np.nonzero(low[:i0])[0]
+    right = np.nonzero(low[i0:])[0]
+    a = int(left[-1]) + 1 if left.size else 0
+    b = i0 + int(right[0]) if right.size else x.size
+    return x[a:b], esf[a:b], counts[a:b]
+
+
+def _check_degree(fit_degree) -> int | None:
+    """``"auto"`` -> None; else an int in 1..3."""
+    if isinstance(fit_degree, str):
+        if fit_degree.strip().lower() == "auto":
+            return None
+        try:
+            fit_degree = int(fit_degree)
+        except ValueError:
+            raise InputError(f"fit_degree = {fit_degree!r}: must be 'auto', 1, 2 or 3") from None
+    if isinstance(fit_degree, bool) or fit_degree not in (1, 2, 3):
+        raise InputError(f"fit_degree = {fit_degree!r}: must be 'auto', 1, 2 or 3")
+    return int(fit_degree)
+
+
+def _normalise(x, esf, counts, sigma, n_lines):
+    """Validate one edge, remove a linear illumination gradient along the normal and normalise to 0..1.
+
+    Model: ``esf = a + b x + (c + e x) E(x)`` from straight-line fits of the two plateaus (beyond
+    max(4 px, 2 rise distances)); returns (E, c, e / c, flags, (a, b, c, e)).
+    """
+    lim = max(4.0, 2.0 * rise_width(x, esf))
+    (a, b), (a_hi, b_hi) = fit_plateaus(x, esf, lim)
+    c, e = a_hi - a, b_hi - b
+    if not c > 5 * sigma / np.sqrt(max(n_lines, 1)) or c <= 0:
+        raise InputError("image: no edge found (step between the two sides is not above the noise)")
+    check_single_edge(x, esf, counts, sigma, ((a, b), (a_hi, b_hi)), lim)
+    span = float(x[-1] - x[0])
+    flags = []
+    # the gradient is removed only where it is resolved (its effect over the ESF above ~3 x its noise)
+    sig_slope = sigma / np.sqrt(max(counts.sum(), 1) / 2.0) * np.sqrt(12.0) / max(span / 2, 1.0)
+    if abs(b) * span < 3 * sig_slope * span and abs(e) * span < 3 * sig_slope * span:
+        b, e = 0.0, 0.0
+    denom = c + e * x
+    if np.any(denom <= 0.1 * c):
+        raise InputError("image: the edge step changes sign across the region; give an ROI around one edge")
+    if max(abs(b), abs(e)) * span > 0.02 * c:
+        flags.append(
+            (
+                "illumination_gradient",
+                f"non-uniform illumination: the plateaus slope by {100 * max(abs(b), abs(e)) * span / c:.1f} % of "
+                "the step across the region (removed as a linear gradient along the normal)",
             )
+        )
+    return (esf - a - b * x) / denom, float(c), float(e / c), flags, (a, b, c, e)
+
+
+def _flatten_rows(d, v, n_rows: int, x, esf):
+    """Remove illumination changes along the edge, line by line.
+
+    Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
+    ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
+    on a uniformly lit edge, whatever its tails or the region's shape).  Returns (values, flags).
+    """
+    q = max(2, esf.size // 8)
+    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    if not hi > lo:
+        return v, []
+    e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
+    vv = v.reshape(n_rows, -1)
+    n = e.shape[1]
+    se, sv = e.sum(axis=1), vv.sum(axis=1)
+    see, sev = (e * e).sum(axis=1), (e * vv).sum(axis=1)
+    det = n * see - se * se
+    ok = det > 1e-6 * n * n
+    if np.count_nonzero(ok) < _MIN_ROWS:
+        return v, []
+    beta = (n * sev - se * sv)[ok] / det[ok]
+    alpha = (sv[ok] - beta * se[ok]) / n
+    r = np.arange(n_rows, dtype=float)
+    alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
+    beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
+    mid = n_rows // 2
+    if np.any(beta_r <= 0.1 * beta_r[mid]):
+        return v, []
+    out = alpha_r[mid] + (vv - alpha_r[:, None]) * (beta_r[mid] / beta_r)[:, None]
+    change = float(max(np.ptp(alpha_r), np.ptp(beta_r)) / beta_r[mid])
+    flags = []
+    if change > 0.02:
+        flags.append(
+            (
+                "illumination_gradient",
+                f"non-uniform illumination along the edge: levels change by {100 * change:.1f} % of the step "
+                "over the lines (removed line by line)",
+            )
+        )
+    return out.ravel(), flags
+
+
+def _check_mtf(f, mtf, sig, flags):
+    """Refuse an MTF outside [0, 1.2] up to Nyquist; cut the output band where it leaves it beyond."""
+    bad = ~np.isfinite(mtf) | (mtf > _MTF_MAX)
+    up_to_nyq = f <= 0.5 + 1e-9
+    if np.any(bad & up_to_nyq):
+        k = int(np.argmax(bad))
+        raise InputError(
+            f"image: the measured MTF reaches {mtf[k]:.3g} at {f[k]:.3f} cy/px (outside [0, {_MTF_MAX:g}]); "
+            "the region does not hold one clean edge"
+        )
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        flags.append(("band_limited", f"MTF above {_MTF_MAX:g} beyond {f[k]:.2f} cy/px (noise): output stops there"))
+        return f[:k], mtf[:k], sig[:k]
+    return f, mtf, sig
 
 
 def _orient(data: np.ndarray):
@@ -249,182 +410,117 @@ def _robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
     return coef, w
 
 
-def _locate_edge(work: np.ndarray, deg: int):
-    """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated."""
+def _pick_degree(t, y, w):
+    """Degree 1-3 for the edge positions: a higher one must beat F > 30 and move the edge by > 0.1 px."""
+    use = w > 0
+    t, y = t[use], y[use]
+    tc = (t - t.mean()) / max(np.ptp(t), 1.0)
+    best = 1
+    fits = {k: np.polyfit(tc, y, k) for k in (1, 2, 3)}
+    rss = {k: float(np.sum((y - np.polyval(fits[k], tc)) ** 2)) for k in (1, 2, 3)}
+    for k in (2, 3):
+        dof = t.size - k - 1
+        if dof < 4:
+            break
+        f_stat = (rss[best] - rss[k]) / max(rss[k] / dof, 1e-30)
+        move = float(np.max(np.abs(np.polyval(fits[k], tc) - np.polyval(fits[best], tc))))
+        if f_stat > _F_DEGREE and move > _SAGITTA_PX:
+            best = k
+    return best
+
+
+def _ridge_centroids(work, g, coef, half):
+    """Windowed derivative centroids along the fitted ridge; returns (rows used, centroids, per-row steps)."""
+    ny, nx = work.shape
+    rows = np.arange(ny, dtype=float)
+    cols = np.arange(nx, dtype=float)
+    centre = np.polyval(coef, rows)
+    keep = (centre - half >= 1) & (centre + half <= nx - 2)
+    if np.count_nonzero(keep) < _MIN_ROWS:
+        raise InputError(
+            f"image: the edge crosses fewer than {_MIN_ROWS} lines inside the region "
+            f"(found {int(np.count_nonzero(keep))}); use a longer edge or a larger ROI"
+        )
+    win = np.abs(cols[None, :] - centre[:, None]) <= half
+    gw = np.where(win, g, 0.0)[keep]
+    tot = gw.sum(axis=1)
+    good = tot > 0
+    if np.count_nonzero(good) < _MIN_ROWS:
+        raise InputError("image: no edge found (the derivative has no consistent ridge)")
+    cen = (gw * cols).sum(axis=1)[good] / tot[good]
+    return rows[keep][good], cen, tot[good], int(np.count_nonzero(keep))
+
+
+def _locate_edge(work: np.ndarray, deg: int | None):
+    """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated.
+
+    ``deg`` None chooses the degree from the positions (:func:`_pick_degree`).  Refuses regions where the
+    positions of many lines do not line up or their steps differ (a corner, a second edge); returns
+    (coef, rows used, flags).
+    """
     ny, nx = work.shape
     g = np.zeros_like(work)
     g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
     gs = uniform_filter(g, size=(min(5, ny), 3), mode="nearest")
     rows = np.arange(ny, dtype=float)
-    pos = np.argmax(gs, axis=1).astype(float)
-    coef, _ = _robust_polyfit(rows, pos, min(deg, 1), scale_floor=1.0)
-    if deg > 1:
-        coef = np.concatenate([np.zeros(deg - 1), coef])
+    coef, _ = _robust_polyfit(rows, np.argmax(gs, axis=1).astype(float), 1, scale_floor=1.0)
     half = max(4, min(12, nx // 6))
-    cols = np.arange(nx, dtype=float)
-    for _ in range(3):
-        centre = np.polyval(coef, rows)
-        keep = (centre - half >= 1) & (centre + half <= nx - 2)
-        if np.count_nonzero(keep) < _MIN_ROWS:
-            raise InputError(
-                f"image: the edge crosses fewer than {_MIN_ROWS} lines inside the region "
-                f"(found {int(np.count_nonzero(keep))}); use a longer edge or a larger ROI"
-            )
-        win = np.abs(cols[None, :] - centre[:, None]) <= half
-        gw = np.where(win, g, 0.0)[keep]
-        tot = gw.sum(axis=1)
-        good = tot > 0
-        if np.count_nonzero(good) < _MIN_ROWS:
-            raise InputError("image: no edge found (the derivative has no consistent ridge)")
-        cen = (gw * cols).sum(axis=1)[good] / tot[good]
-        r_used = rows[keep][good]
-        coef, w = _robust_polyfit(r_used, cen, deg)
-    used = r_used[w > 0].astype(int)
-    warn = []
+    cur = deg or 1
+    for it in range(4):
+        if cur > 1 and len(coef) < cur + 1:
+            coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
+        r_used, cen, step, n_keep = _ridge_centroids(work, g, coef, half)
+        coef, w = _robust_polyfit(r_used, cen, cur)
+        if deg is None and it < 3:
+            cur = _pick_degree(r_used, cen, w)
+    inl = w > 0
+    med = float(np.median(step[inl]))
+    odd = inl & (np.abs(step - med) > 0.3 * abs(med))
+    bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
+    if bad > 0.2 * n_keep:
+        raise InputError(
+            f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
+            "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
+        )
+    used = r_used[inl & ~odd].astype(int)
+    flags = []
     if used.size < _SHORT_ROWS:
-        warn.append(f"short edge: {used.size} lines (< {_SHORT_ROWS}); MTF noise and angle error are large")
-    return coef, used, warn
+        flags.append(
+            ("short_edge", f"short edge: {used.size} lines (< {_SHORT_ROWS}); MTF noise and angle error are large")
+        )
+    if len(coef) > 2:
+        k = _curvature(coef, used)
+        flags.append(
+            (
+                "curved_edge",
+                f"curved edge: radius about {1 / max(abs(k), 1e-12):.0f} px; positions fitted with a degree-"
+                f"{len(coef) - 1} polynomial",
+            )
+        )
+    return coef, used, flags
+
+
+def _curvature(coef, rows) -> float:
+    """Curvature (1/px) of x(r) = polyval(coef, r) at the middle row."""
+    if len(coef) < 3:
+        return 0.0
+    r = float(np.mean(rows))
+    d1 = np.polyval(np.polyder(coef), r)
+    d2 = np.polyval(np.polyder(coef, 2), r)
+    return float(d2 / (1 + d1 * d1) ** 1.5)
 
 
 def _project(work: np.ndarray, rows: np.ndarray, coef):
-    """Signed distance of every pixel centre to the fitted edge, along its local normal."""
+    """Signed distance of every pixel centre to the fitted edge along its local normal.
+
+    Returns (distances, values, slope at the middle row, each row's sub-pixel phase frac(-x_e))."""
     nx = work.shape[1]
     xe = np.polyval(coef, rows.astype(float))
     slope_r = np.polyval(np.polyder(coef), rows.astype(float)) if len(coef) > 1 else np.zeros(rows.size)
     cos_t = 1.0 / np.sqrt(1.0 + slope_r**2)
     d = (np.arange(nx)[None, :] - xe[:, None]) * cos_t[:, None]
     slope = float(np.polyval(np.polyder(coef), rows.mean())) if len(coef) > 1 else 0.0
-    return d.ravel(), work.ravel(), slope
-
-
-def _bin_esf(d: np.ndarray, v: np.ndarray, w: float):
-    """ESF at the centres of bins of width ``w`` (multiples of ``w``), corrected for the sample positions.
-
-    A bin's plain average is the ESF at the bin centre plus ``E' <u> + E'' <u^2> / 2`` (``u`` = offsets of
-    its samples from the centre).  These terms vary from bin to bin with the row phases and are the main
-    error of ISO binning at 4x (and a 2.5 % loss at Nyquist from ``<u^2>``); they are removed here with
-    derivatives from the binned ESF itself (two fixed-point passes).  Empty bins are filled linearly.
-    Returns bin centres, ESF and counts.
-    """
-    k = np.rint(d / w).astype(int)
-    k0 = k.min()
-    idx = k - k0
-    counts = np.bincount(idx)
-    ok = counts > 0
-    n = np.maximum(counts, 1)
-    u = d - k * w
-    mean_v = np.bincount(idx, weights=v) / n
-    m1 = np.bincount(idx, weights=u) / n
-    m2 = np.bincount(idx, weights=u * u) / n
-    x = (np.arange(counts.size) + k0) * w
-    esf = mean_v.copy()
-    for _ in range(3):
-        if not np.all(ok):
-            esf[~ok] = np.interp(x[~ok], x[ok], esf[ok])
-        es = gaussian_filter1d(esf, 0.5, mode="nearest")
-        d1 = np.gradient(es, w)
-        d2 = np.gradient(d1, w)
-        esf = mean_v - d1 * m1 - 0.5 * d2 * m2
-    if not np.all(ok):
-        esf[~ok] = np.interp(x[~ok], x[ok], esf[ok])
-    return x, esf, counts
-
-
-def _noise_sigma(d, v, x, esf) -> float:
-    """Pixel noise from the scatter of the samples about the binned ESF (robust)."""
-    r = v - np.interp(d, x, esf)
-    return robust_sigma(r)
-
-
-def _plateaus(x: np.ndarray, esf: np.ndarray):
-    """Dark and bright levels: mean ESF beyond 4 px from the edge (each side; outer half if shorter)."""
-    levels = []
-    for side in (x < 0, x > 0):
-        ax = np.abs(x[side])
-        lim = min(4.0, 0.5 * ax.max()) if ax.size else 0.0
-        sel = esf[side][ax >= lim]
-        if sel.size == 0:
-            raise InputError("image: the edge lies at the border of the region; centre it in the ROI")
-        levels.append(float(sel.mean()))
-    return levels[0], levels[1]
-
-
-def _grad(e: np.ndarray, w: float) -> np.ndarray:
-    """Derivative per px: ISO's [-1/2, 0, 1/2] FIR on bins of width ``w`` (one-sided at the two ends)."""
-    return np.gradient(e, w)
-
-
-def _grad_adjoint(y: np.ndarray, w: float) -> np.ndarray:
-    """Transpose of :func:`_grad` along the last axis (for exact noise propagation)."""
-    out = np.zeros_like(y)
-    out[..., 2:] += 0.5 * y[..., 1:-1]
-    out[..., :-2] -= 0.5 * y[..., 1:-1]
-    out[..., 1] += y[..., 0]
-    out[..., 0] -= y[..., 0]
-    out[..., -1] += y[..., -1]
-    out[..., -2] -= y[..., -1]
-    return out / w
-
-
-def _tukey(x: np.ndarray, half_width: float) -> np.ndarray:
-    """Tukey window: 1 for |x| <= W/2, cosine taper to 0 at |x| = W."""
-    a = np.clip((np.abs(x) - 0.5 * half_width) / (0.5 * half_width), 0.0, 1.0)
-    return 0.5 * (1.0 + np.cos(np.pi * a))
-
-
-def _spectrum_variance(x, win, n_eff, sigma, f, smooth_bins):
-    """Complex variance E|noise|^2 of the LSF spectrum at ``f`` for independent bin noise ``sigma^2 / n``."""
-    w = x[1] - x[0]
-    e = np.exp(-2j * np.pi * np.outer(np.atleast_1d(f), x))
-    a = _grad_adjoint(win * e, w) + gaussian_filter1d(
-        _grad_adjoint((1 - win) * e, w), smooth_bins, axis=-1, mode="nearest"
-    )
-    return np.sum(np.abs(a * w) ** 2 / n_eff, axis=-1) * sigma**2
-
-
-def _adaptive_mtf(x, esf, counts, sigma, f, noise_target, debias):
-    """MTF from the binned ESF with the noise-adaptive window; returns (mtf, predicted std at Nyquist, W).
-
-    The window half-width ``W`` shrinks (by 15 % steps, down to the larger of 4 px and 2.5 rise distances)
-    until the predicted noise of the MTF at Nyquist is below ``noise_target``.  With ``debias`` the predicted
-    noise power is subtracted from ``|spectrum|^2`` (removes the Rician bias where the MTF is low).
-    """
-    w = x[1] - x[0]
-    smooth_bins = _TAIL_SMOOTH_PX / w
-    esf_s = gaussian_filter1d(esf, smooth_bins, mode="nearest")
-    g_raw, g_s = _grad(esf, w), _grad(esf_s, w)
-    corr = np.sinc(2 * f * w)
-    corr_nyq = float(np.sinc(2 * 0.5 * w))
-    n_eff = np.maximum(counts, 1).astype(float)
-    w_max = float(min(-x[0], x[-1]))
-    w_min = min(max(_W_MIN_PX, _W_MIN_RISE * _rise_width(x, esf)), w_max)
-    half_w = w_max
-    while True:
-        win = _tukey(x, half_w)
-        lsf = win * g_raw + (1 - win) * g_s
-        m0 = abs(lsf.sum() * w)
-        var_nyq = _spectrum_variance(x, win, n_eff, sigma, 0.5, smooth_bins)[0]
-        std = float(np.sqrt(0.5 * var_nyq) / m0 / corr_nyq)
-        if std <= noise_target or half_w <= w_min:
-            break
-        half_w = max(w_min, 0.85 * half_w)
-    power = np.abs(np.exp(-2j * np.pi * np.outer(f, x)) @ lsf * w) ** 2
-    if debias:
-        power = np.maximum(power - _spectrum_variance(x, win, n_eff, sigma, f, smooth_bins), 0.0)
-        power[0] = m0**2
-    mtf = np.sqrt(power) / m0 / corr
-    return mtf, std, half_w
-
-
-def _rise_width(x: np.ndarray, esf: np.ndarray) -> float:
-    """10-90 % rise distance (px) of the ESF, from its smoothed, normalised version."""
-    lo, hi = _plateaus(x, esf)
-    e = (esf - lo) / (hi - lo)
-    inside = np.abs(x) < 10
-    xs, es = x[inside], e[inside]
-    x10 = xs[np.argmin(np.abs(es - 0.1))]
-    x90 = xs[np.argmin(np.abs(es - 0.9))]
-    return float(abs(x90 - x10))
+    return d.ravel(), work.ravel(), slope, np.mod(-xe, 1.0)
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:
@@ -436,23 +532,6 @@ def _angle_deg(slope: float, transposed: bool) -> float:
     elif ang <= -90.0:
         ang += 180.0
     return ang
-
-
-def _angle_warnings(slope: float, n_lines: int, n_empty: int, n_bins: int) -> list[str]:
-    """Warnings on angles where the phase sampling degenerates, and on incomplete phase coverage."""
-    tilt = float(np.degrees(np.arctan(abs(slope))))
-    out = []
-    for a in DEGENERATE_ANGLES_DEG:
-        if abs(tilt - a) < 1.0:
-            out.append(
-                f"unreliable angle: edge tilt {tilt:.2f} deg is within 1 deg of {a:g} deg, where the "
-                "sub-pixel phases repeat; use a tilt of about 3-10 deg"
-            )
-    if n_lines * abs(slope) < 1.0:
-        out.append(f"edge shifts only {n_lines * abs(slope):.2f} px over {n_lines} lines: phases incomplete")
-    if n_empty > 0.02 * n_bins:
-        out.append(f"{n_empty} of {n_bins} ESF bins are empty and were interpolated")
-    return out
 
 
 def _edge_metrics(x: np.ndarray, esf: np.ndarray):

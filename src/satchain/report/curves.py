@@ -66,7 +66,7 @@ def _signed_axis_otf(otf, direction: tuple[float, float]):
 
     def along(f_cy_per_px):
         f_mm = units.cy_per_px_to_cy_per_mm(np.asarray(f_cy_per_px, float), pitch_m=pitch_m)
-        return np.real(otf(f_mm * ux, f_mm * uy, exclude=local))
+        return np.real(otf(f_mm * ux, f_mm * uy, exclude=local) if local else otf(f_mm * ux, f_mm * uy))
 
     local = tuple(c for c in WIDE_COMPONENTS if c in getattr(otf, "component_names", ()))  # as measured locally
     fc = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=pitch_m))

@@ -1,0 +1,240 @@
+"""Slanted-edge numerics: ESF binning on the natural sample lattice, MTF with exact noise propagation.
+
+Used by :mod:`satchain.measure.edge`.  All distances are in pixels along the edge normal.
+
+Binning.  The projected samples of row ``r`` sit at ``d = (col - x_e(r)) cos t``: a lattice of period ``cos t``
+shifted by the row's phase ``frac(-x_e(r))``.  At most tilts the phases of many rows fill the period and the
+ISO bins of ``1/oversampling`` px are all populated.  Near ``atan(1/n)`` (45, 26.57, 18.43 deg ...) or on
+short edges the phases gather in ``n`` clusters and whole bins stay empty; filling them by interpolation is
+what makes plain ISO 9-42 % low there.  Instead, the bins are then put on the natural lattice of the clusters
+(spacing ``cos t / n``, centred on them), so every bin holds real samples and the ESF is sampled uniformly at
+the spacing the data actually have.
+
+MTF.  The LSF is the first difference of the binned ESF (transfer ``sinc(f w)``, corrected), kept raw inside a
+Tukey window and taken from a Gaussian-smoothed ESF outside it.  Every step is linear in the bin values, so
+the noise of the MTF at each frequency is propagated exactly (first order, including the normalisation at
+f = 0) from the per-bin noise ``sigma^2 / n``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import convolve1d, gaussian_filter1d
+
+__all__ = ["choose_bins", "bin_esf", "adaptive_mtf", "rise_width"]
+
+_W_MIN_PX = 5.0  # smallest half-width of the raw-LSF window (px)
+_W_MIN_RISE = 2.5  # ... and in units of the 10-90 % rise distance
+_TAIL_SMOOTH_PX = 1.25  # Gaussian smoothing of the ESF outside the window (px); 0.75 doubled the noise at 0.25 cy/px
+
+
+def choose_bins(row_phase: np.ndarray, cos_t: float, oversampling: int):
+    """Bin width and origin (px along the normal) from the rows' sub-pixel phases.
+
+    Parameters
+    ----------
+    row_phase : ndarray
+        ``frac(-x_e(r))`` of every row used (px along the row, in [0, 1)).
+    cos_t : float
+        Cosine of the edge tilt (the lattice period along the normal).
+    oversampling : int
+        ISO bins per pixel.
+
+    Returns
+    -------
+    (width_px, origin_px, mode) with mode ``"iso"`` (1/oversampling bins), ``"lattice"`` (the natural lattice
+    of n phase clusters) or ``"gap"`` (bins just wider than the largest phase gap).
+    """
+    w_iso = 1.0 / oversampling
+    p = np.sort(np.mod(row_phase, 1.0))
+    gaps = np.diff(np.concatenate([p, [p[0] + 1.0]]))
+    g_max = float(gaps.max())
+    big = gaps >= 0.5 * g_max
+    n = int(np.count_nonzero(big))
+    # n clusters (each narrower than half their spacing, gaps alike): the natural lattice
+    tight = (1.0 - gaps[big].sum()) < 0.5 and np.ptp(gaps[big]) < 0.5 / n
+    if n <= 2 * oversampling and tight and p.size >= 2 * n:
+        z = np.mean(np.exp(2j * np.pi * n * p))
+        phi0 = float(np.angle(z) / (2 * np.pi * n)) % (1.0 / n)
+        return cos_t / n, phi0 * cos_t, "lattice"
+    if g_max * cos_t <= 0.8 * w_iso:
+        return w_iso, 0.0, "iso"
+    return 1.05 * g_max * cos_t, 0.0, "gap"
+
+
+def bin_esf(d: np.ndarray, v: np.ndarray, w: float, origin: float = 0.0):
+    """ESF at the centres ``origin + k w`` of bins of width ``w``, corrected for the sample positions.
+
+    A bin's plain average is the ESF at the bin centre plus ``E' <u> + E'' <u^2> / 2`` (``u`` = offsets of
+    its samples from the centre); these terms are removed with derivatives from the binned ESF itself (three
+    fixed-point passes).  Empty bins (only possible at the ends of the ESF, where the region's corners cut
+    rows short) are filled linearly.  Returns bin centres, ESF and counts.
+    """
+    k = np.rint((d - origin) / w).astype(int)
+    k0 = k.min()
+    idx = k - k0
+    counts = np.bincount(idx)
+    ok = counts > 0
+    n = np.maximum(counts, 1)
+    u = d - origin - k * w
+    mean_v = np.bincount(idx, weights=v) / n
+    m1 = np.bincount(idx, weights=u) / n
+    m2 = np.bincount(idx, weights=u * u) / n
+    x = origin + (np.arange(counts.size) + k0) * w
+    esf = mean_v.copy()
+    for _ in range(3):
+        if not np.all(ok):
+            esf[~ok] = np.interp(x[~ok], x[ok], esf[ok])
+        es = gaussian_filter1d(esf, max(0.5, 0.125 / w), mode="nearest")
+        d1 = np.gradient(es, w)
+        d2 = np.gradient(d1, w)
+        esf = mean_v - d1 * m1 - 0.5 * d2 * m2
+    if not np.all(ok):
+        esf[~ok] = np.interp(x[~ok], x[ok], esf[ok])
+    return x, esf, counts
+
+
+def _tukey(x: np.ndarray, half_width: float) -> np.ndarray:
+    """Tukey window: 1 for |x| <= W/2, cosine taper to 0 at |x| = W."""
+    a = np.clip((np.abs(x) - 0.5 * half_width) / (0.5 * half_width), 0.0, 1.0)
+    return 0.5 * (1.0 + np.cos(np.pi * a))
+
+
+def _diff_adjoint(y: np.ndarray, w: float) -> np.ndarray:
+    """Transpose of ``e -> diff(e) / w`` along the last axis (length K-1 -> K)."""
+    shape = y.shape[:-1] + (y.shape[-1] + 1,)
+    out = np.zeros(shape, dtype=y.dtype)
+    out[..., 1:] += y
+    out[..., :-1] -= y
+    return out / w
+
+
+def _gauss_kernel(sigma_bins: float) -> np.ndarray:
+    """Normalised Gaussian kernel truncated at 4 sigma (odd length)."""
+    r = max(1, int(4.0 * sigma_bins + 0.5))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma_bins) ** 2)
+    return k / k.sum()
+
+
+def _smooth(e: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """Gaussian smoothing along the last axis, ends extended with their edge values."""
+    r = kernel.size // 2
+    pad = np.concatenate([np.repeat(e[..., :1], r, axis=-1), e, np.repeat(e[..., -1:], r, axis=-1)], axis=-1)
+    return (
+        np.apply_along_axis(np.convolve, -1, pad, kernel, mode="valid")
+        if e.ndim > 1
+        else np.convolve(pad, kernel, mode="valid")
+    )
+
+
+def _smooth_adjoint(y: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """Exact transpose of :func:`_smooth` along the last axis (the kernel is symmetric)."""
+    r = kernel.size // 2
+    yy = np.pad(np.atleast_2d(y), ((0, 0), (r, r)))
+    full = convolve1d(yy.real, kernel, axis=-1, mode="constant")
+    if np.iscomplexobj(y):
+        full = full + 1j * convolve1d(yy.imag, kernel, axis=-1, mode="constant")
+    out = full[:, r:-r].copy()
+    out[:, 0] += full[:, :r].sum(axis=1)
+    out[:, -1] += full[:, -r:].sum(axis=1)
+    return out.reshape(y.shape) if np.iscomplexobj(y) else out.real.reshape(y.shape)
+
+
+class _Lsf:
+    """The linear map bin ESF -> windowed LSF at the bin midpoints, and its spectrum's sensitivities."""
+
+    def __init__(self, x: np.ndarray, half_w: float, w: float):
+        self.w = w
+        self.xm = 0.5 * (x[1:] + x[:-1])
+        self.win = _tukey(self.xm, half_w)
+        self.kernel = _gauss_kernel(_TAIL_SMOOTH_PX / w)
+
+    def apply(self, esf: np.ndarray) -> np.ndarray:
+        g_raw = np.diff(esf) / self.w
+        g_s = np.diff(_smooth(esf, self.kernel)) / self.w
+        return self.win * g_raw + (1 - self.win) * g_s
+
+    def spectrum(self, lsf: np.ndarray, f: np.ndarray) -> np.ndarray:
+        return np.exp(-2j * np.pi * np.outer(f, self.xm)) @ lsf * self.w
+
+    def sensitivity(self, f: np.ndarray) -> np.ndarray:
+        """d spectrum(f) / d esf_k, shape (f, K): the adjoint of the map applied to the Fourier kernel."""
+        e = np.exp(-2j * np.pi * np.outer(np.atleast_1d(f), self.xm)) * self.w
+        a = _diff_adjoint(self.win * e, self.w)
+        b = _diff_adjoint((1 - self.win) * e, self.w)
+        return a + _smooth_adjoint(b, self.kernel)
+
+
+def _mtf_sigma(op: _Lsf, lsf, f, var_bins, corr):
+    """First-order standard deviation of the normalised MTF at ``f`` (magnitude and normalisation noise)."""
+    spec = op.spectrum(lsf, f)
+    m0 = spec[0].real
+    a = op.sensitivity(f)
+    a0 = op.sensitivity(np.array([0.0]))[0].real
+    u = np.where(np.abs(spec) > 0, np.conj(spec) / np.maximum(np.abs(spec), 1e-300), 1.0)
+    c = (u[:, None] * a).real / m0 - (np.abs(spec) / m0**2)[:, None] * a0[None, :]
+    return np.sqrt(np.sum(c * c * var_bins[None, :], axis=1)) / corr
+
+
+def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
+    """MTF from the binned ESF with the noise-adaptive window.
+
+    The window half-width ``W`` is the largest of ``W_max 0.85^k`` (down to the larger of 5 px and 2.5 rise
+    distances) whose predicted noise of the MTF at Nyquist is below ``noise_target``.
+
+    Returns
+    -------
+    (mtf, mtf_sigma, W, lsf at the bin midpoints, midpoints)
+    """
+    w = float(x[1] - x[0])
+    var_bins = sigma**2 / np.maximum(counts, 1).astype(float)
+    corr = np.sinc(f * w)
+    nyq = np.array([0.0, 0.5])
+    w_max = float(min(-x[0], x[-1]))
+    w_min = min(max(_W_MIN_PX, _W_MIN_RISE * rise_width(x, esf)), w_max)
+    # candidate half-widths w_max * 0.85^k down to w_min; the first meeting the target, found by bisection
+    # (the predicted noise falls monotonically as the window shrinks)
+    ws = [w_max]
+    while ws[-1] * 0.85 > w_min:
+        ws.append(ws[-1] * 0.85)
+    if ws[-1] > w_min:
+        ws.append(w_min)
+    cache = {}
+
+    def meets(k: int) -> bool:
+        op = _Lsf(x, ws[k], w)
+        lsf = op.apply(esf)
+        cache[k] = (op, lsf)
+        return float(_mtf_sigma(op, lsf, nyq, var_bins, np.sinc(nyq * w))[1]) <= noise_target
+
+    lo, hi = -1, len(ws) - 1
+    if meets(0):
+        hi = 0
+    else:
+        lo = 0
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            lo, hi = (lo, mid) if meets(mid) else (mid, hi)
+    if hi not in cache:
+        meets(hi)
+    op, lsf = cache[hi]
+    half_w = ws[hi]
+    spec = op.spectrum(lsf, f)
+    m0 = spec[0].real
+    mtf = np.abs(spec) / abs(m0) / corr
+    sig = _mtf_sigma(op, lsf * np.sign(m0), f, var_bins, corr)
+    return mtf, sig, half_w, lsf / abs(m0), op.xm
+
+
+def rise_width(x: np.ndarray, esf: np.ndarray) -> float:
+    """10-90 % rise distance (px) of the ESF, levels from its two outer quarters."""
+    q = max(2, x.size // 4)
+    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    e = (esf - lo) / (hi - lo) if hi != lo else esf * 0
+    inside = np.abs(x) < 10
+    xs, es = x[inside], e[inside]
+    if xs.size < 2:
+        return 1.0
+    x10 = xs[np.argmin(np.abs(es - 0.1))]
+    x90 = xs[np.argmin(np.abs(es - 0.9))]
+    return float(abs(x90 - x10))
