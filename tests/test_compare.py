@@ -185,10 +185,10 @@ def coltman_gauss(f, b):
 
 @pytest.mark.parametrize(("direction", "b"), [("ACT", A), ("ALT", B)])
 def test_bars_compare_with_coltman_along_the_modulation_axis(direction, b):
-    f = np.array([0.05, 0.1, 0.15, 0.2, 0.3])
+    f = np.array([0.05, 0.1, 0.2, 0.3, BAR_COMPARE_MAX_CY_PER_PX + 0.05])
     ctf = coltman_gauss(f, b)
     ctf[1] -= 0.05  # a known error, inside the compared range
-    ctf[-1] += 0.5  # beyond 5 px per period: listed, not compared
+    ctf[-1] += 0.5  # finer than 2.5 px per period: listed, not compared
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
     m = {"bar_targets": [{"id": "b", "direction": direction, "f_cy_per_px": f.tolist(), "ctf": ctf.tolist()}]}
     c = compare(m, p, TOL)
@@ -199,10 +199,10 @@ def test_bars_compare_with_coltman_along_the_modulation_axis(direction, b):
 
 def test_bars_only_fine_groups_is_na():
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
-    f = [BAR_COMPARE_MAX_CY_PER_PX + 0.05, 0.4]
+    f = [BAR_COMPARE_MAX_CY_PER_PX + 0.02, BAR_COMPARE_MAX_CY_PER_PX + 0.05]
     m = {"bar_targets": [{"id": "b", "direction": "ACT", "f_cy_per_px": f, "ctf": [0.0, 0.0]}]}
     row = rows_of(compare(m, p, TOL), "bar_ctf")[0]
-    assert row.passed is None and "5 px" in row.reason
+    assert row.passed is None and f"{1 / BAR_COMPARE_MAX_CY_PER_PX:g} px per period" in row.reason
 
 
 # ---------------------------------------------------------------------------------------------- wedge

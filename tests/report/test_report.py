@@ -16,6 +16,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
 from PIL import Image
 
+from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX
 from satchain.pipeline import run_pipeline
 from satchain.report import _save, compare_plots, curves, figures, gallery, radiometry_plot, run_figures
 from satchain.report.compare_plots import PRINT_WIDTH_IN
@@ -217,7 +218,7 @@ def test_every_curve_as_csv(run):
     bars = _read_csv(d / "bars_ctf.csv")
     assert {r["compared"] for r in bars} <= {"yes", "no"}
     for r in bars:  # groups with fewer than 5 px per period are not compared
-        assert (r["compared"] == "yes") == (float(r["f_cy_per_px"]) <= 0.2)
+        assert (r["compared"] == "yes") == (float(r["f_cy_per_px"]) <= BAR_COMPARE_MAX_CY_PER_PX)
     star = _read_csv(d / "star_mtf.csv")
     assert {r["direction"] for r in star} == {"ACT", "ALT", "D45", "D135"}
     wedge = _read_csv(d / "wedge_contrast.csv")

@@ -246,9 +246,10 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         ax.text(
             lim,
             0.02,
-            f" cut-off {lim:g} cy/px (< {1 / lim:g} px per period:\n not compared, the result depends on phase)",
+            f"cut-off {lim:g} cy/px ({1 / lim:g} px per period):\nfiner groups are not compared ",
             color="tab:orange",
             va="bottom",
+            ha="right",
         )
         _mark(ax, 0.5, "Nyquist", 0.4)
         ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
