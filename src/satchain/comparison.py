@@ -105,7 +105,8 @@ class _Detail:
 class EdgeCheck(_Detail):
     """A slanted edge: the measured and predicted MTF along its ``normal`` (x = ACT, y = ALT) at the measured
     frequencies ``f_cy_per_px``, the MTF at Nyquist (0.5 cy/px) both ways and its error, the angle (deg)
-    measured and true, the measured RER and MTF50 (cy/px)."""
+    measured and true, the measured RER and MTF50 (cy/px); the measurement's 1-sigma noise (at Nyquist and per
+    frequency) and its quality flags."""
 
     id: str
     direction: str
@@ -121,6 +122,9 @@ class EdgeCheck(_Detail):
     f_cy_per_px: list
     mtf_measured: list
     mtf_predicted: list
+    mtf_at_nyquist_sigma: float | None = None
+    mtf_sigma: list | None = None
+    flags: list | None = None
 
 
 @dataclass(frozen=True)
@@ -290,6 +294,9 @@ def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Edge
                 "f_cy_per_px": f.tolist(),
                 "mtf_measured": e.get("mtf", []),
                 "mtf_predicted": p.mtf(f).tolist(),
+                "mtf_at_nyquist_sigma": _finite(e.get("mtf_at_nyquist_sigma", e.get("mtf_at_nyquist_std"))),
+                "mtf_sigma": e.get("mtf_sigma"),
+                "flags": list(e.get("flags") or []),
             }
         )
         why = None if meas is not None else "the edge gave no MTF at Nyquist"

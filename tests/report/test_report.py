@@ -207,6 +207,10 @@ def test_every_curve_as_csv(run):
         pred = np.array([float(r["mtf_predicted"]) for r in rows])
         assert np.interp(0.5, f, pred) == pytest.approx(e["mtf_at_nyquist_predicted"], abs=2e-3)
         assert float(rows[0]["mtf_measured"]) == pytest.approx(1.0, abs=0.02)  # MTF(0) = 1
+        # the measurement's 1-sigma noise beside every value; at Nyquist it is results.json's
+        sig = np.array([float(r["mtf_sigma_measured"]) for r in rows])
+        assert np.all(sig[1:] > 0) and np.interp(0.5, f, sig) == pytest.approx(e["mtf_at_nyquist_sigma"], rel=0.05)
+        assert isinstance(e["flags"], list)
     esf = _read_csv(d / "edges_esf_lsf.csv")
     for eid in {r["edge_id"] for r in esf}:
         rows = [r for r in esf if r["edge_id"] == eid]

@@ -158,6 +158,9 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         f, mm, mp = c["f_cy_per_px"], c["mtf_measured"], c["mtf_predicted"]
         ax = top[2]
         ax.plot(f, mm, color=MEAS, lw=1.4, label="measured (e-SFR)")
+        sig = np.asarray(c.get("mtf_sigma", np.full(f.size, np.nan)), float)
+        if np.isfinite(sig).any():
+            ax.fill_between(f, mm - 2 * sig, mm + 2 * sig, color=MEAS, alpha=0.2, lw=0, label="measured ± 2σ (noise)")
         ax.plot(f, mp, color=PRED, ls="--", lw=1.4, label="predicted")
         ax.axvline(0.5, color="gray", lw=1)
         _mark(ax, 0.5, "Nyquist", 0.72)
@@ -179,6 +182,8 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         r = bot[2]
         ok = f <= 1.0
         r.plot(f[ok], (mm - mp)[ok], color=MEAS, lw=1)
+        if np.isfinite(sig).any():
+            r.fill_between(f[ok], (mm - mp - 2 * sig)[ok], (mm - mp + 2 * sig)[ok], color=MEAS, alpha=0.2, lw=0)
         _band(r, tol, label="tol. at Nyquist")
         r.axvline(0.5, color="gray", lw=1)
         r.set_xlabel("frequency along the edge normal (cy/px)")

@@ -107,6 +107,8 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
             esf_p, lsf_p = esf_p[::-1].copy(), lsf_p[::-1].copy()
         f = np.asarray(e["f_cy_per_px"], float)
         mm, mp = np.asarray(e["mtf_measured"], float), np.asarray(e["mtf_predicted"], float)
+        sig = e.get("mtf_sigma") or [None] * f.size
+        sig = np.array([np.nan if v is None else v for v in sig], float)
         out.append(
             {
                 "id": e["id"],
@@ -120,6 +122,7 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
                 "f_cy_per_px": f,
                 "mtf_measured": mm,
                 "mtf_predicted": mp,
+                "mtf_sigma": sig if sig.size == f.size else np.full(f.size, np.nan),
                 "mtf50": (crossing(f, mm, 0.5), crossing(f, mp, 0.5)),
                 "mtf10": (crossing(f, mm, 0.1), crossing(f, mp, 0.1)),
                 "nyquist": (e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")),
@@ -220,9 +223,10 @@ def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
         "slanted edges: ESF (normalised 0..1) and LSF (1/px) along the edge normal; x_px from the edge",
     )
     cols["edges_mtf.csv"] = (
-        ["edge_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_predicted"],
-        _stack(e, ["id", "direction"], ["f_cy_per_px", "mtf_measured", "mtf_predicted"]),
-        "slanted edges: e-SFR (measured) and system MTF along the edge normal (predicted); Nyquist = 0.5 cy/px",
+        ["edge_id", "direction", "f_cy_per_px", "mtf_measured", "mtf_sigma_measured", "mtf_predicted"],
+        _stack(e, ["id", "direction"], ["f_cy_per_px", "mtf_measured", "mtf_sigma", "mtf_predicted"]),
+        "slanted edges: e-SFR (measured, with its 1-sigma noise) and system MTF along the edge normal (predicted); "
+        "Nyquist = 0.5 cy/px",
     )
     cols["star_mtf.csv"] = _star_columns(curves["stars"])
     cols["bars_ctf.csv"] = _bars_columns(curves["bars"])
