@@ -28,3 +28,46 @@ def ankarasat3():
 def table1_path():
     """The shared reference Table 1 when the checkout sits beside shared/, else None (packaged copy)."""
     return SHARED_TABLE1 if SHARED_TABLE1.exists() else None
+
+
+#: A reduced scene (two edges, a star, a wedge) that end-to-end tests run in a few seconds.
+REDUCED_SCENE_TOML = """
+[scene]
+width_m = 170.0
+height_m = 140.0
+background = 0.2
+pixel_m = 0.07
+
+[[items]]
+kind = "slanted_edge"
+id = "edge_act"
+center_m = [35.0, 35.0]
+angle_deg = 6.0
+measures = "act"
+
+[[items]]
+kind = "slanted_edge"
+id = "edge_alt"
+center_m = [35.0, 102.0]
+angle_deg = 7.0
+measures = "alt"
+
+[[items]]
+kind = "siemens_star"
+id = "star"
+center_m = [100.0, 35.0]
+radius_m = 22.0
+cycles = 32
+
+[[items]]
+kind = "hyperbolic_wedge"
+id = "wedge_h"
+origin_m = [75.0, 90.0]
+orientation = "horizontal"
+"""
+
+
+@pytest.fixture(scope="session")
+def reduced_scene_toml():
+    """The reduced end-to-end scene (TOML text); see :data:`REDUCED_SCENE_TOML`."""
+    return REDUCED_SCENE_TOML

@@ -22,46 +22,12 @@ def strict_loads(text: str):
     return json.loads(text, parse_constant=reject)
 
 
-SCENE_TOML = """
-[scene]
-width_m = 170.0
-height_m = 140.0
-background = 0.2
-pixel_m = 0.07
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_act"
-center_m = [35.0, 35.0]
-angle_deg = 6.0
-measures = "act"
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_alt"
-center_m = [35.0, 102.0]
-angle_deg = 7.0
-measures = "alt"
-
-[[items]]
-kind = "siemens_star"
-id = "star"
-center_m = [100.0, 35.0]
-radius_m = 22.0
-cycles = 32
-
-[[items]]
-kind = "hyperbolic_wedge"
-id = "wedge_h"
-origin_m = [75.0, 90.0]
-orientation = "horizontal"
-"""
 
 
 @pytest.fixture(scope="module")
-def reduced_run(tmp_path_factory):
+def reduced_run(tmp_path_factory, reduced_scene_toml):
     d = tmp_path_factory.mktemp("run")
-    (d / "scene.toml").write_text(SCENE_TOML)
+    (d / "scene.toml").write_text(reduced_scene_toml)
     (d / "run.toml").write_text('[scene]\nlayout = "scene.toml"\npixel_m = 0.07\n[simulation]\nseed = 11\n')
     cfg = load_run_config(d / "run.toml")
     stages = []

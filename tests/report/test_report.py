@@ -23,40 +23,8 @@ from satchain.report.compare_plots import PRINT_WIDTH_IN
 from satchain.report.html import SECTIONS
 from satchain.runconfig import load_run_config
 
-SCENE_TOML = """
-[scene]
-width_m = 170.0
-height_m = 140.0
-background = 0.2
-pixel_m = 0.07
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_act"
-center_m = [35.0, 35.0]
-angle_deg = 6.0
-measures = "act"
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_alt"
-center_m = [35.0, 102.0]
-angle_deg = 7.0
-measures = "alt"
-
-[[items]]
-kind = "siemens_star"
-id = "star"
-center_m = [100.0, 35.0]
-radius_m = 22.0
-cycles = 32
-
-[[items]]
-kind = "hyperbolic_wedge"
-id = "wedge_h"
-origin_m = [75.0, 90.0]
-orientation = "horizontal"
-
+#: The reduced end-to-end scene (tests/conftest.py) plus a bar target.
+BARS_TOML = """
 [[items]]
 kind = "bar_target"
 id = "bars"
@@ -69,10 +37,10 @@ FIGURE_MODULES = (compare_plots, run_figures, gallery, figures, radiometry_plot)
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
+def run(tmp_path_factory, reduced_scene_toml):
     """One reduced run; every figure the report draws is captured (and saved as usual)."""
     d = tmp_path_factory.mktemp("report")
-    (d / "scene.toml").write_text(SCENE_TOML)
+    (d / "scene.toml").write_text(reduced_scene_toml + BARS_TOML)
     (d / "run.toml").write_text('[scene]\nlayout = "scene.toml"\npixel_m = 0.07\n[simulation]\nseed = 5\n')
     captured = []
 
