@@ -52,3 +52,17 @@ def test_tutorial_runs_end_to_end(monkeypatch, tmp_path, capsys):
     assert namespace["result"].passed is not False
     assert not list(tmp_path.iterdir())  # satchain.run without out_dir writes nothing
     assert "MTF@Nyquist" in capsys.readouterr().out
+
+
+def test_readme_python_api_example_runs(monkeypatch, tmp_path, capsys, reduced_scene_toml):
+    """The README's Python API block, on the reduced scene as its my_scene.toml: every check printed."""
+    (block,) = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
+    (tmp_path / "my_scene.toml").write_text(reduced_scene_toml)
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "readme"}
+    exec(compile(block, "README.md[python]", "exec"), namespace)  # noqa: S102
+    result = namespace["result"]
+    assert result.passed is True and result.measurements.snr.snr > 0
+    out = capsys.readouterr().out
+    assert all(row.figure in out for row in result.comparison.rows)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["my_scene.toml"]  # nothing written without out_dir
