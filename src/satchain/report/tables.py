@@ -45,6 +45,8 @@ def fmt(v, digits: int = 3, *, unit: str = "", signed: bool = False) -> str:
         return str(v)
     if not math.isfinite(x):
         return "–"
+    if round(x, digits) == 0:
+        x = 0.0  # no "-0.00"
     s = f"{x:+.{digits}f}" if signed else f"{x:.{digits}f}"
     return f"{s} {unit}".rstrip()
 
@@ -244,10 +246,8 @@ def _angle_rows(res: dict) -> list[dict]:
         if r.get("kind") != "edge_angle":
             continue
         m, p = _num(r.get("measured")), _num(r.get("predicted"))
-        rows.append(
-            _row("edge angle", f"slanted edge {r.get('id')}", m, p, _diff(m, p), r.get("tolerance", "–"),
-                 r.get("pass"), 3, "°")  # fmt: skip
-        )
+        tol = f"± {fmt(r.get('tolerance_value'), 1)} °"
+        rows.append(_row("edge angle", f"slanted edge {r.get('id')}", m, p, _diff(m, p), tol, r.get("pass"), 3, "°"))
     return rows
 
 
