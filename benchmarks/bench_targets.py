@@ -4,7 +4,8 @@ Targets are rendered independently of satchain.measure by the tests' exact rende
 (tests/measure/test_star.py: sinusoidal star, isotropic blur, 4 x 4 sub-pixel integration;
 tests/measure/test_bars.py: bars on a plate, Gaussian PSF x pixel box, exact CDF at pixel centres).
 
-Star: centre NOT given (star off the region centre by up to 1.5 px), input modulation not given; printed:
+Star: centre NOT given (star on a pixel centre, 1/32 px and 1/2 px from one, then off the region centre by
+up to 1.5 px), input modulation not given; printed:
 max |MTF error| up to Nyquist over the four directions, for satchain (centre estimated, log-quadratic
 extrapolation of the input modulation) and the reference (region centre, straight-line extrapolation of
 the outer radii: the previous default), and their ratio.
@@ -47,8 +48,8 @@ def star_errors(n_cases: int = 8, seed: int = 0) -> None:
     print("Siemens star, 32 cycles, 121 x 121 px, centre and input modulation not given")
     print(f"{'MTF':>9} {'offset px':>15} {'satchain':>9} {'reference':>9} {'ratio':>6}")
     for kind, mtf in MTFS.items():
-        for _ in range(n_cases // 2):
-            dx, dy = rng.uniform(-1.5, 1.5, 2)
+        lattice = [(0.0, 0.0), (0.0, 1 / 32), (0.0, 0.5)]  # centres on / near a pixel centre, then random
+        for dx, dy in lattice + [tuple(rng.uniform(-1.5, 1.5, 2)) for _ in range(n_cases // 2)]:
             img = _render_star(32, (60 + dx, 60 + dy), mtf)
             r = measure_star(img, cycles=32)
             first = measure_star(img, cycles=32, refine_center=False, input_modulation=1.0)
