@@ -1,10 +1,12 @@
 """Siemens-star MTF (sinusoidal star, ISO 12233:2017 s-SFR style).
 
 A sinusoidal star of ``cycles`` periods per revolution has, at radius ``r`` px, the local spatial frequency
-``f = cycles / (2 pi r)`` cy/px along the tangent.  The pixels whose centres fall in an annulus of width
-``annulus_px`` around ``r`` are fitted, by least squares at their exact polar angles (no interpolation, which
-would add its own blur), with ``a + b cos(n th) + c sin(n th)``; the modulation is ``sqrt(b^2 + c^2) / a`` and
-the MTF is modulation / input modulation.
+``f = cycles / (2 pi r)`` cy/px along the tangent.  Radii ``r`` are spaced by ``annulus_px``; the pixels whose
+centres fall within ``1.5 annulus_px`` of ``r`` are fitted, by least squares at their exact polar angles (no
+interpolation, which would add its own blur), with ``a + b cos(n th) + c sin(n th)`` whose amplitude may vary
+quadratically with the radius (and, per direction, with the angle to the sector's axis); the modulation at
+``r`` is ``sqrt(b^2 + c^2) / a`` and the MTF is modulation / input modulation.  (A constant amplitude per 1-px
+annulus was biased by up to 0.02 near Nyquist for a star centred on or near a pixel centre; see ``_annuli``.)
 
 Directions.  The fit is done separately in pairs of opposite 45-deg sectors, one pair per direction of the
 *frequency* (the tangent): ``ACT`` (x; sectors above and below the centre), ``ALT`` (y; sectors left and
@@ -204,7 +206,7 @@ def measure_star(
         frequency from the outer radii by a weighted fit of ``log m = c0 + c1 f + c2 f^2`` (see the module
         docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
     annulus_px : float
-        Radial width of the annuli whose pixels are fitted together.
+        Spacing of the radii reported (px); each is fitted on the pixels within ``1.5 annulus_px`` of it.
     f_max_cy_per_px : float
         Smallest radius used is ``cycles / (2 pi f_max)``.
     pixel_m : float, optional
