@@ -4,10 +4,15 @@ Targets are rendered independently of satchain.measure by the tests' exact rende
 (tests/measure/test_star.py: sinusoidal star, isotropic blur, 4 x 4 sub-pixel integration;
 tests/measure/test_bars.py: bars on a plate, Gaussian PSF x pixel box, exact CDF at pixel centres).
 
-Star: centre NOT given (star off the region centre by up to 1.5 px), input modulation not given; printed:
+Star: centre NOT given (star on a pixel centre, 1/32 px and 1/2 px from one, then off the region centre by
+up to 1.5 px), input modulation not given; printed:
 max |MTF error| up to Nyquist over the four directions, for satchain (centre estimated, log-quadratic
 extrapolation of the input modulation) and the reference (region centre, straight-line extrapolation of
 the outer radii: the previous default), and their ratio.
+Star on the pixel lattice: centres at every (dx, dy) in {0, 1/32, 1/4, 1/2} px from a pixel centre, centre
+given exactly and input modulation 0.4 given (the annulus fits alone); printed per MTF: max |MTF error| up to
+Nyquist over the 16 centres and four directions, for satchain (amplitude quadratic across 3-px bands) and the
+reference (constant amplitude per 1-px annulus, the previous fit), and their ratio.
 Bars: 3-bar groups at 16 sub-pixel phases; printed: max |CTF - Coltman| for satchain's fit at the known
 period and for the sampled (max - min) of the reference, and their ratio.
 
@@ -25,6 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "measure"
 from test_bars import _coltman, _group  # noqa: E402
 from test_star import DIRS, MTFS, _render_star, _truth  # noqa: E402
 
+from satchain.measure._starfit import annulus_fit  # noqa: E402
 from satchain.measure.bars import measure_bars  # noqa: E402
 from satchain.measure.star import measure_star  # noqa: E402
 
@@ -42,8 +48,8 @@ def star_errors(n_cases: int = 8, seed: int = 0) -> None:
     print("Siemens star, 32 cycles, 121 x 121 px, centre and input modulation not given")
     print(f"{'MTF':>9} {'offset px':>15} {'satchain':>9} {'reference':>9} {'ratio':>6}")
     for kind, mtf in MTFS.items():
-        for _ in range(n_cases // 2):
-            dx, dy = rng.uniform(-1.5, 1.5, 2)
+        lattice = [(0.0, 0.0), (0.0, 1 / 32), (0.0, 0.5)]  # centres on / near a pixel centre, then random
+        for dx, dy in lattice + [tuple(rng.uniform(-1.5, 1.5, 2)) for _ in range(n_cases // 2)]:
             img = _render_star(32, (60 + dx, 60 + dy), mtf)
             r = measure_star(img, cycles=32)
             first = measure_star(img, cycles=32, refine_center=False, input_modulation=1.0)
@@ -55,6 +61,41 @@ def star_errors(n_cases: int = 8, seed: int = 0) -> None:
                     max(np.max(np.abs(res.mtf[k] - _truth(res.f_cy_per_px, mtf, a))[ok]) for k, a in DIRS.items())
                 )
             print(f"{kind:>9} {dx:+7.2f},{dy:+7.2f} {errs[0]:9.4f} {errs[1]:9.4f} {errs[1] / errs[0]:6.1f}")
+
+
+def _constant_amplitude_mtf(img, n, xc, yc, r_in, r_out, m0):
+    """Previous fit: constant amplitude per 1-px annulus |r - r_k| <= 0.5 (per pair of 45-deg sectors)."""
+    y, x = np.mgrid[0 : img.shape[0], 0 : img.shape[1]]
+    rr, th, v = np.hypot(x - xc, y - yc).ravel(), np.arctan2(y - yc, x - xc).ravel(), img.ravel()
+    radii = np.arange(r_out - 0.5, r_in, -1.0)
+    out = {k: np.full(radii.size, np.nan) for k in DIRS}
+    for i, r in enumerate(radii):
+        sel = np.abs(rr - r) <= 0.5
+        t, val = th[sel], v[sel]
+        for k, a in DIRS.items():
+            m = np.abs(np.angle(np.exp(2j * (t - np.deg2rad(a + 90))))) / 2 <= np.pi / 8
+            a0, amp, *_ = annulus_fit(t[m], val[m], n)
+            out[k][i] = amp / a0 / m0
+    return n / (2 * np.pi * radii), out
+
+
+def star_lattice_errors() -> None:
+    print("\nSiemens star centred on / near a pixel centre (centre and input modulation given): max |MTF error|")
+    print(f"{'MTF':>9} {'satchain':>9} {'reference':>9} {'ratio':>6}")
+    offs = (0.0, 1 / 32, 0.25, 0.5)
+    for kind, mtf in MTFS.items():
+        errs = [0.0, 0.0]
+        for dx in offs:
+            for dy in offs:
+                c = (60 + dx, 60 + dy)
+                img = _render_star(32, c, mtf)
+                r = measure_star(img, cycles=32, center=c, refine_center=False, input_modulation=0.4)
+                f_ref, ref = _constant_amplitude_mtf(img, 32, *c, 32 / (2 * np.pi * 0.75), r.radius_px.max() + 0.5, 0.4)
+                for j, (f, m) in enumerate(((r.f_cy_per_px, r.mtf), (f_ref, ref))):
+                    ok = f <= 0.5
+                    e = max(np.nanmax(np.abs(m[k] - _truth(f, mtf, a))[ok]) for k, a in DIRS.items())
+                    errs[j] = max(errs[j], e)
+        print(f"{kind:>9} {errs[0]:9.4f} {errs[1]:9.4f} {errs[1] / errs[0]:6.1f}")
 
 
 def bar_errors(sigma: float) -> None:
@@ -77,5 +118,6 @@ def bar_errors(sigma: float) -> None:
 
 if __name__ == "__main__":
     star_errors()
+    star_lattice_errors()
     for s in (0.4, 0.6, 0.8):
         bar_errors(s)

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 from _render import annular_mtf
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from satchain.errors import InputError
@@ -33,9 +33,9 @@ def test_isotropic_gaussian_all_directions():
     s = 0.7
     r = measure_star(_star(s, s), cycles=N, input_modulation=0.4)
     truth = np.exp(-2 * np.pi**2 * s**2 * r.f_cy_per_px**2)
-    for k in ("ACT", "ALT", "D45", "D135"):  # 1-px annuli at radii down to 10 px: 0.01
-        assert np.max(np.abs(r.mtf[k] - truth)) < 0.01, k
-    assert r.mtf_at_nyquist["ACT"] == pytest.approx(np.exp(-2 * np.pi**2 * s**2 * 0.25), abs=0.005)
+    for k in ("ACT", "ALT", "D45", "D135"):  # amplitude quadratic across each band: 1e-4 (a constant one: 0.009)
+        assert np.max(np.abs(r.mtf[k] - truth)) < 0.003, k
+    assert r.mtf_at_nyquist["ACT"] == pytest.approx(np.exp(-2 * np.pi**2 * s**2 * 0.25), abs=0.002)
     assert 0.7 < r.f_cy_per_px.max() <= 0.75
 
 
@@ -43,13 +43,15 @@ def test_directions_follow_the_axes():
     """Blur along x only lowers the ACT MTF (tangent along x: sectors above/below the centre)."""
     r = measure_star(_star(0.9, 0.3), cycles=N, input_modulation=0.4)
     f = r.f_cy_per_px
-    band = (f > 0.2) & (f < 0.4)
+    band = f <= 0.5
     # a 45-deg sector sees tangents within +-22.5 deg of its axis: the truth is the sector mean
     phi = np.linspace(-np.pi / 8, np.pi / 8, 181)[:, None]
     act = np.exp(-2 * np.pi**2 * f**2 * (0.81 * np.cos(phi) ** 2 + 0.09 * np.sin(phi) ** 2)).mean(axis=0)
     alt = np.exp(-2 * np.pi**2 * f**2 * (0.09 * np.cos(phi) ** 2 + 0.81 * np.sin(phi) ** 2)).mean(axis=0)
-    assert np.max(np.abs(r.mtf["ACT"][band] - act[band])) < 0.04
-    assert np.max(np.abs(r.mtf["ALT"][band] - alt[band])) < 0.04
+    # the amplitude changes by ~30 % across the ALT sector at 0.4 cy/px; fitted as quadratic in the angle to the
+    # axis and reported as its uniform mean: 0.004 (a constant amplitude per 1-px annulus: 0.06)
+    assert np.max(np.abs(r.mtf["ACT"][band] - act[band])) < 0.01
+    assert np.max(np.abs(r.mtf["ALT"][band] - alt[band])) < 0.01
     assert np.all(r.mtf["ACT"][band] < r.mtf["D45"][band])
     assert np.all(r.mtf["D45"][band] < r.mtf["ALT"][band])
     np.testing.assert_allclose(r.mtf["D45"], r.mtf["D135"], atol=1e-6)  # symmetric blur
@@ -124,9 +126,14 @@ MTFS = {
     dy=st.floats(-1.5, 1.5),
     kind=st.sampled_from(sorted(MTFS)),
 )
+# centres on or near a pixel centre: a constant amplitude per 1-px annulus was off by up to 0.021 there
+@example(dx=0.0, dy=0.0, kind="gaussian")
+@example(dx=0.0, dy=1 / 32, kind="gaussian")
+@example(dx=0.0, dy=0.5, kind="gaussian")
+@example(dx=1 / 32, dy=0.0, kind="annular")
 def test_exact_star_centre_and_modulation_unknown(dx, dy, kind):
     """Centre not given (and off the region centre by up to 1.5 px), input modulation not given: every
-    direction within 0.02 of the true MTF up to Nyquist, the centre to 0.01 px."""
+    direction within 0.02 of the true MTF up to Nyquist (issue 10's criterion), the centre to 0.01 px."""
     n, mtf = 32, MTFS[kind]
     centre = (60.0 + dx, 60.0 + dy)
     r = measure_star(_render_star(n, centre, mtf), cycles=n)
@@ -137,7 +144,7 @@ def test_exact_star_centre_and_modulation_unknown(dx, dy, kind):
     assert r.f_cy_per_px.max() > 0.5
     for k, a in DIRS.items():
         err = np.abs(r.mtf[k] - _truth(r.f_cy_per_px, mtf, a))[ok]
-        assert err.max() < 0.02, (k, err.max())
+        assert err.max() < 0.01, (k, err.max())  # issue 10 asks 0.02; <= 0.003 over 46 centres (README)
 
 
 def test_half_pixel_centre_error_is_refined():

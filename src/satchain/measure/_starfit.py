@@ -142,23 +142,37 @@ def harmonic_spectrum(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi:
     return m, amp, float(np.median(amp))
 
 
-def annulus_fit(theta: np.ndarray, values: np.ndarray, n: int):
-    """Least-squares ``a + g1 cos th + g2 sin th + b cos(n th) + c sin(n th)`` (the ``g`` terms take a linear
-    illumination gradient out of the fit and of the noise): (a, amplitude, amplitude sigma, residual sigma,
-    relative gradient ``|g| / a``).  The amplitude is debiased for the noise (Rice: E[A^2] = A^2 + 2 s_b^2),
-    so pure noise gives ~0.
+def annulus_fit(theta: np.ndarray, values: np.ndarray, n: int, shapes=()):
+    """Least-squares ``a + g1 cos th + g2 sin th + (b + sum_j b_j u_j) cos(n th) + (c + sum_j c_j u_j) sin(n th)``
+    (the ``g`` terms take a linear illumination gradient out of the fit and of the noise): (a, amplitude,
+    amplitude sigma, residual sigma, relative gradient ``|g| / a``).  The amplitude is debiased for the noise
+    (Rice: E[A^2] = A^2 + var b + var c), so pure noise gives ~0.  Its sigma is the one along the fitted phase
+    (linearised; the two quadratures' variances differ when few pixels sample the wave unevenly, as in a
+    sector of a star centred on the pixel lattice) when the amplitude exceeds 3 sigma, their mean otherwise.
+
+    ``shapes`` are per-sample variables ``u_j`` along which the star's amplitude may change (e.g. the radius
+    offset and its square, the angle to a sector's axis); the amplitude returned is ``|b + i c|``, the one where
+    every ``u_j = 0``.  Without them the local amplitude, which changes across a band of radii and angles, is
+    averaged with weights set by where the pixels fall on the wave: for a star centred on the pixel lattice
+    those weights are far from uniform (see :func:`satchain.measure.star._annuli`).
     """
     cols = [np.ones_like(theta), np.cos(n * theta), np.sin(n * theta)]
     if n != 1:
         cols += [np.cos(theta), np.sin(theta)]
+    for u in shapes:
+        cols += [u * cols[1], u * cols[2]]
     design = np.column_stack(cols)
     beta, *_ = np.linalg.lstsq(design, values, rcond=None)
     resid = values - design @ beta
     dof = max(values.size - design.shape[1], 1)
     s = float(np.sqrt(np.sum(resid**2) / dof))
     cov = s * s * np.linalg.pinv(design.T @ design)
-    sb = float(np.sqrt(0.5 * (cov[1, 1] + cov[2, 2])))
+    c2 = cov[1:3, 1:3]
     a2 = float(beta[1] ** 2 + beta[2] ** 2)
-    amp = float(np.sqrt(max(a2 - 2 * sb * sb, 0.0)))
+    amp = float(np.sqrt(max(a2 - np.trace(c2), 0.0)))
+    sb = float(np.sqrt(0.5 * np.trace(c2)))
+    if a2 > 9 * np.trace(c2):  # clear signal: the amplitude's variance is the one along its phase
+        u = beta[1:3] / np.sqrt(a2)
+        sb = float(np.sqrt(max(u @ c2 @ u, 0.0)))
     grad = float(np.hypot(beta[3], beta[4]) / beta[0]) if n != 1 and beta[0] > 0 else 0.0
     return float(beta[0]), amp, sb, s, grad

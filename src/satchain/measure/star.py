@@ -1,10 +1,12 @@
 """Siemens-star MTF (sinusoidal star, ISO 12233:2017 s-SFR style).
 
 A sinusoidal star of ``cycles`` periods per revolution has, at radius ``r`` px, the local spatial frequency
-``f = cycles / (2 pi r)`` cy/px along the tangent.  The pixels whose centres fall in an annulus of width
-``annulus_px`` around ``r`` are fitted, by least squares at their exact polar angles (no interpolation, which
-would add its own blur), with ``a + b cos(n th) + c sin(n th)``; the modulation is ``sqrt(b^2 + c^2) / a`` and
-the MTF is modulation / input modulation.
+``f = cycles / (2 pi r)`` cy/px along the tangent.  Radii ``r`` are spaced by ``annulus_px``; the pixels whose
+centres fall within ``1.5 annulus_px`` of ``r`` are fitted, by least squares at their exact polar angles (no
+interpolation, which would add its own blur), with ``a + b cos(n th) + c sin(n th)`` whose amplitude may vary
+quadratically with the radius (and, per direction, with the angle to the sector's axis); the modulation at
+``r`` is ``sqrt(b^2 + c^2) / a`` and the MTF is modulation / input modulation.  (A constant amplitude per 1-px
+annulus was biased by up to 0.02 near Nyquist for a star centred on or near a pixel centre; see ``_annuli``.)
 
 Directions.  The fit is done separately in pairs of opposite 45-deg sectors, one pair per direction of the
 *frequency* (the tangent): ``ACT`` (x; sectors above and below the centre), ``ALT`` (y; sectors left and
@@ -204,7 +206,7 @@ def measure_star(
         frequency from the outer radii by a weighted fit of ``log m = c0 + c1 f + c2 f^2`` (see the module
         docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
     annulus_px : float
-        Radial width of the annuli whose pixels are fitted together.
+        Spacing of the radii reported (px); each is fitted on the pixels within ``1.5 annulus_px`` of it.
     f_max_cy_per_px : float
         Smallest radius used is ``cycles / (2 pi f_max)``.
     pixel_m : float, optional
@@ -292,37 +294,59 @@ def measure_star(
 
 def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
     """Per-annulus modulation and 1-sigma, all angles and per direction; mean level; pooled noise sigma;
-    relative peak-to-peak illumination change across the outer circles."""
+    relative peak-to-peak illumination change across the outer circles.
+
+    Each radius ``r`` is fitted on the pixels of the band ``r +- 1.5 annulus_px`` (inside ``r_out``) with an
+    amplitude quadratic in the radius offset ``dr`` (its value at ``dr = 0`` is reported) and, per direction,
+    also in the angle ``psi`` to the sector's axis (its mean over uniform ``psi`` is reported, as the sector's
+    MTF is defined).  A constant amplitude over a 1-px annulus was biased by up to 0.02 near Nyquist for a
+    star centred on or near a pixel centre: the local amplitude changes by a few % across the annulus (and
+    across a sector under anisotropic blur), and the least-squares fit averages it with weights set by where
+    the pixels fall on the wave, which the lattice makes non-uniform (see the README's star section).
+    """
     ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
     rr = np.hypot(x - xc, y - yc).ravel()
     th = np.arctan2(y - yc, x - xc).ravel()
     v = data.ravel()
     radii = np.arange(r_out - annulus_px / 2, r_in, -annulus_px)
-    sector = {k: np.deg2rad(a + 90.0) for k, a in STAR_DIRECTIONS.items()}
     mods = {k: np.full(radii.size, np.nan) for k in [*STAR_DIRECTIONS, "all"]}
     sigs = {k: np.full(radii.size, np.nan) for k in mods}
     levels = np.empty(radii.size)
     res, grads = [], []
+    half = 1.5 * annulus_px
     for i, r in enumerate(radii):
-        sel = np.abs(rr - r) <= annulus_px / 2
-        t, val = th[sel], v[sel]
-        a, amp, sb, s, g = annulus_fit(t, val, n)
+        sel = (rr >= r - half) & (rr < min(r + half, r_out))
+        t, val, dr = th[sel], v[sel], (rr[sel] - r) / annulus_px
+        a, amp, sb, s, g = annulus_fit(t, val, n, (dr, dr * dr))
         if a <= 0:
             raise InputError("image: the star's mean level must be positive to define a modulation")
         levels[i], mods["all"][i], sigs["all"][i] = a, amp / a, sb / a
         res.append(s)
         grads.append(g)
-        for k, ang in sector.items():
-            dist = np.abs(np.angle(np.exp(2j * (t - ang)))) / 2  # angle to the sector axis, both opposite sides
-            m = dist <= np.pi / 8
-            if np.count_nonzero(m) >= 8:
-                ak, ampk, sbk, *_ = annulus_fit(t[m], val[m], n)
-                if ak > 0:
-                    mods[k][i], sigs[k][i] = ampk / ak, sbk / ak
+        for k, (mk, sk) in _sector_fits(t, val, dr, n).items():
+            mods[k][i], sigs[k][i] = mk, sk
     third = max(3, radii.size // 3)  # outer radii: residual = noise, little model error
     gradient = 2 * float(np.median(grads[:third]))  # peak-to-peak relative level change across a circle
     return radii, mods, sigs, levels, float(np.median(res[:third])), gradient
+
+
+#: Half-width (rad) of each direction's pair of opposite sectors.
+SECTOR_HALF = np.pi / 8
+
+
+def _sector_fits(t, val, dr, n) -> dict:
+    """Modulation and its 1-sigma per direction (pairs of opposite sectors), from one band of pixels."""
+    out = {}
+    for k, a in STAR_DIRECTIONS.items():
+        psi = np.angle(np.exp(2j * (t - np.deg2rad(a + 90.0)))) / 2  # angle to the sector axis, both sides
+        m = np.abs(psi) <= SECTOR_HALF
+        if np.count_nonzero(m) >= 24:  # 11 coefficients
+            q = psi[m] ** 2 - SECTOR_HALF**2 / 3  # zero mean over uniform psi
+            ak, ampk, sbk, *_ = annulus_fit(t[m], val[m], n, (dr[m], dr[m] ** 2, q))
+            if ak > 0:
+                out[k] = (ampk / ak, sbk / ak)
+    return out
 
 
 def _check_range_of_mtf(mtf: dict, f: np.ndarray, m0: float, m0_from: str) -> None:
