@@ -34,6 +34,7 @@ class GroupFit:
     noise: float
     misfit: float
     unobserved: tuple = ()
+    cov: np.ndarray | None = None  # covariance of (a, amps..., x0)
 
     def peak_trough(self) -> tuple[float, float]:
         """Fitted continuous profile at a bar centre and at a gap centre (bright first)."""
@@ -108,35 +109,51 @@ def fit_group(profile: np.ndarray, period: float, noise: float | None) -> GroupF
         )
         x0 = float(res.x)
     x0 = x0 % period
+    # a harmonic folded to 0.5 cy/px whose samples all sit near its zero crossings cannot be estimated: it is
+    # left out of the fit (amplitude 0, flagged; a multi-group target fills it, see _barjoint)
+    norms = np.sqrt(np.mean(_design(x, period, ks, x0)[:, 1:] ** 2, axis=0)) / np.sqrt(0.5)
+    unobserved = tuple(int(k) for k, nrm in zip(ks, norms, strict=True) if nrm < 0.3)
+    a, amps, cov, s, misfit = _linear_fit(x, y, period, ks, x0, noise, unobserved)
+    total = float(np.sum(amps))
+    mod = abs(total) / a if a > 0 else np.inf
+    std = np.nan
+    if cov is not None:
+        grad = np.zeros(cov.shape[0])
+        grad[0] = -abs(total) / a**2
+        grad[1 : 1 + len(ks)] = np.sign(total) / a
+        std = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
+    if total < 0:  # x0 on a dark bar: move it to a bright one (odd harmonics change sign)
+        x0, amps = (x0 + period / 2) % period, -amps
+        if cov is not None:  # amplitudes change sign: flip their rows / columns
+            sign = np.ones(cov.shape[0])
+            sign[1 : 1 + len(ks)] = -1.0
+            cov = cov * np.outer(sign, sign)
+    return GroupFit(a, ks, amps, x0, float(mod), std, float(s), misfit, unobserved, cov)
+
+
+def _linear_fit(x, y, period, ks, x0, noise, skip):
+    """``a``, amplitudes (0 for the harmonics in ``skip``), covariance of ``(a, A_k, x0)`` (None where
+    undefined), the noise used and the rms misfit, at the phase ``x0``."""
+    keep = np.array([True] + [k not in skip for k in ks] + [True])
     d = _design(x, period, ks, x0)
-    beta, *_ = np.linalg.lstsq(d, y, rcond=None)
+    beta = np.zeros(d.shape[1])
+    beta[keep[:-1]] = np.linalg.lstsq(d[:, keep[:-1]], y, rcond=None)[0]
     a, amps = float(beta[0]), beta[1:]
     resid = y - d @ beta
-    dof = y.size - d.shape[1] - 1
+    dof = y.size - int(keep.sum())
     s_fit = float(np.sqrt(np.sum(resid**2) / dof)) if dof > 0 else np.nan
     s = noise if noise is not None and np.isfinite(noise) else s_fit
     if noise is not None and np.isfinite(noise) and dof >= 3 and np.isfinite(s_fit):
         s = max(noise, s_fit)  # model error counts too
     misfit = float(np.sqrt(max(s_fit**2 - (noise or 0.0) ** 2, 0.0))) if np.isfinite(s_fit) else 0.0
-    # Jacobian in (a, A_k, x0)
     kk = np.asarray(ks, dtype=float)
     dx0 = np.sin(2 * np.pi * np.outer(x - x0, kk) / period) @ (amps * 2 * np.pi * kk / period)
     jac = np.column_stack([d, dx0])
-    total = float(np.sum(amps))
-    mod = abs(total) / a if a > 0 else np.inf
-    std = np.nan
+    cov = None
     if np.isfinite(s) and a > 0:
-        cov = s * s * np.linalg.pinv(jac.T @ jac)
-        grad = np.zeros(jac.shape[1])
-        grad[0] = -abs(total) / a**2
-        grad[1 : 1 + kk.size] = np.sign(total) / a
-        std = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
-    # a harmonic folded to 0.5 cy/px whose samples all sit near its zero crossings cannot be estimated
-    norms = np.sqrt(np.mean(d[:, 1:] ** 2, axis=0)) / np.sqrt(0.5)
-    unobserved = tuple(int(k) for k, nrm in zip(ks, norms, strict=True) if nrm < 0.3)
-    if total < 0:  # x0 on a dark bar: move it to a bright one (odd harmonics change sign)
-        x0, amps = (x0 + period / 2) % period, -amps
-    return GroupFit(a, ks, amps, x0, float(mod), std, float(s), misfit, unobserved)
+        cov = np.zeros((keep.size, keep.size))
+        cov[np.ix_(keep, keep)] = s * s * np.linalg.pinv(jac[:, keep].T @ jac[:, keep])
+    return a, amps, cov, s, misfit
 
 
 def period_gain(profile: np.ndarray, period: float) -> tuple[float, float, float]:

@@ -35,6 +35,7 @@ import numpy as np
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
 from satchain.measure._barfit import GroupFit, fit_group
+from satchain.measure._barjoint import fit_mtf_model, refit_with_prior
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -236,24 +237,48 @@ def _levels(fits, periods, levels, profiles):
 def _plateau(prof: np.ndarray, fit: GroupFit, period: float):
     """Modulation and 1-sigma from the samples within P/8 of the bar and gap centres, when those are flat
     (a plateau: bars wide enough for the blur; the samples then are the peak and trough themselves), else
-    None; and the relative spread found.  Needs P >= 8 px (two or more samples at distinct offsets within
-    +-P/8 of each centre, so flatness is seen within one bar, not across bars at the same phase)."""
+    None; and the relative spread found.  Needs P >= 8 px and samples within +-P/8 of each centre at
+    distinct distances from it (flatness is seen within one bar, not across bars or mirror samples)."""
     if period < 8.0:
         return None, np.inf
     x = np.arange(prof.size, dtype=float)
     u = (x - fit.x0) % period
-    bright = prof[np.minimum(u, period - u) <= period / 8]
-    dark = prof[np.abs(u - period / 2) <= period / 8]
+    d_bright, d_dark = np.minimum(u, period - u), np.abs(u - period / 2)
+    near_b, near_d = d_bright <= period / 8, d_dark <= period / 8
+    bright, dark = prof[near_b], prof[near_d]
     if bright.size < 2 or dark.size < 2:
         return None, np.inf
     b, d = float(np.mean(bright)), float(np.mean(dark))
     if not b > d:
         return None, np.inf
-    spread = (max(float(np.ptp(bright)), float(np.ptp(dark))) - 3 * fit.noise) / (b - d)
+    # the profile is symmetric about a centre, ~ peak - kappa dist^2: the samples' spread shows the drop
+    # from the peak only through their distinct distances (two samples at +-0.5 px are equal on any peak:
+    # 8 px at sigma 0.8 px read 0.919 for 0.963);
+    # scale it to the drop at the farthest sample; when all sit at one distance (e.g. +-0.5 px at 8 px), the
+    # check reaches out to 3P/16 (still on the bar top for a flat one)
+    wide = min(period / 8 + 1.0, 3 * period / 16)
+    drop = max(
+        _drop(prof, d_bright, period / 8, wide),
+        _drop(prof, d_dark, period / 8, wide),
+    )
+    spread = (drop - 3 * fit.noise) / (b - d)
     if spread > 0.005:
         return None, spread
     sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
     return ((b - d) / (b + d), sd), spread
+
+
+def _drop(prof: np.ndarray, dist: np.ndarray, near: float, wide: float) -> float:
+    """Spread of the samples within ``near`` of a centre (within ``wide`` if they all sit at one distance),
+    scaled by ``dmax^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to the farthest sample;
+    inf when all sit at one distance (nothing seen)."""
+    for lim in (near, wide):
+        sel = dist <= lim
+        d2 = dist[sel] ** 2
+        span = float(d2.max() - d2.min()) if d2.size else 0.0
+        if span >= 0.05:
+            return float(np.ptp(prof[sel])) * float(d2.max()) / span
+    return np.inf
 
 
 def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
@@ -321,15 +346,17 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    fits, floors, profiles, flags = [], [], [], []
+    fits, floors, profiles, flags, noises = [], [], [], [], []
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
         prof, noise, fl = _profile(image, roi, direction, p, i)
+        noises.append(noise)
         fit = fit_group(prof, p, noise)
         flags += fl + _check_group(fit, prof, p, i)
         fits.append(fit)
         floors.append(_sampled_floor(prof, fit.noise))
         profiles.append(prof)
     c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
+    fits, flags = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
     for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
@@ -367,6 +394,28 @@ def measure_bars(
         noise_std=np.array([ft.noise for ft in fits]),
         flags=tuple(flags),
     )
+
+
+def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):
+    """Groups with harmonics sampled at their zero crossings: refit with the target's joint MTF model as a
+    prior on those harmonics (needs enough groups; else the group keeps its flag)."""
+    if not any(ft.unobserved for ft in fits):
+        return fits, flags
+    model = fit_mtf_model(fits, periods, c_large)
+    if model is None:
+        return fits, flags
+    fits = list(fits)
+    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
+        if not fit.unobserved:
+            continue
+        fits[i], used = refit_with_prior(prof, float(p), fit, c_large, model, noises[i])
+        flags = [f for f in flags if not f.startswith(f"group {i}: harmonic(s) ")]
+        txt = ", ".join(f"{k}: M({k / p:.3f}) = {m:.3f} +- {sm:.3f}" for k, (m, sm) in used.items())
+        flags.append(
+            f"group {i}: harmonic(s) {list(used)} of the {p:g} px period are sampled near their zero crossings at "
+            f"this phase; constrained by the MTF fitted to the target's groups ({txt}), uncertainty included"
+        )
+    return fits, flags
 
 
 def _mtf_with_std(f, ctf, ctf_std):
