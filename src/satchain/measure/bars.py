@@ -253,31 +253,27 @@ def _plateau(prof: np.ndarray, fit: GroupFit, period: float):
         return None, np.inf
     # the profile is symmetric about a centre, ~ peak - kappa dist^2: the samples' spread shows the drop
     # from the peak only through their distinct distances (two samples at +-0.5 px are equal on any peak:
-    # 8 px at sigma 0.8 px read 0.919 for 0.963);
-    # scale it to the drop at the farthest sample; when all sit at one distance (e.g. +-0.5 px at 8 px), the
-    # check reaches out to 3P/16 (still on the bar top for a flat one)
+    # 8 px at sigma 0.8 px read 0.919 for 0.963), scaled to the drop at the farthest one; when all sit at one
+    # distance (e.g. +-0.5 px at 8 px) the check reaches out to 3P/16 (still on the bar top for a flat one)
     wide = min(period / 8 + 1.0, 3 * period / 16)
-    drop = max(
-        _drop(prof, d_bright, period / 8, wide),
-        _drop(prof, d_dark, period / 8, wide),
-    )
-    spread = (drop - 3 * fit.noise) / (b - d)
+    drop = max(_drop(prof, dist, period / 8, wide, fit.noise) for dist in (d_bright, d_dark))
+    spread = drop / (b - d)
     if spread > 0.005:
         return None, spread
     sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
     return ((b - d) / (b + d), sd), spread
 
 
-def _drop(prof: np.ndarray, dist: np.ndarray, near: float, wide: float) -> float:
-    """Spread of the samples within ``near`` of a centre (within ``wide`` if they all sit at one distance),
-    scaled by ``dmax^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to the farthest sample;
-    inf when all sit at one distance (nothing seen)."""
+def _drop(prof: np.ndarray, dist: np.ndarray, near: float, wide: float, noise: float) -> float:
+    """Spread of the samples within ``near`` of a centre (within ``wide`` if they all sit at one distance)
+    less 3 noise sigma, scaled by ``dmax^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to
+    the farthest sample; inf when all sit at one distance (nothing seen)."""
     for lim in (near, wide):
         sel = dist <= lim
         d2 = dist[sel] ** 2
         span = float(d2.max() - d2.min()) if d2.size else 0.0
         if span >= 0.05:
-            return float(np.ptp(prof[sel])) * float(d2.max()) / span
+            return max(float(np.ptp(prof[sel])) - 3 * noise, 0.0) * float(d2.max()) / span
     return np.inf
 
 
