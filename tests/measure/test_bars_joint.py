@@ -46,6 +46,14 @@ def test_every_group_within_003_of_coltman(period, phase, s):
         assert abs(r.ctf[0] - truth[0]) <= 2 * r.ctf_std[0] + 0.002, (r.ctf - truth, r.ctf_std)
 
 
+def test_symmetric_samples_are_not_a_plateau():
+    """8 px at sigma 0.8 px, bar centres half-way between samples: the two samples at +-0.5 px of a centre are
+    equal on any peak, so they do not show a flat top (they read 0.919 for Coltman's 0.963 as a plateau)."""
+    img, roi = _group(8.0, 0.5, 3, 0.8)
+    r = measure_bars(img, periods_px=[8.0], group_rois=[roi], levels=(40.0, 160.0))
+    assert abs(r.ctf[0] - _coltman(1 / 8, 0.8)) < 0.005
+
+
 def test_single_group_stays_flagged():
     """One 6 px group at phase 0: the 3rd harmonic is not in the data and there is no other group: flagged."""
     img, roi = _group(6.0, 0.0, 3, 0.6)
