@@ -1,0 +1,211 @@
+"""Streamed simulation: inputs whose coarse frame does not fit in memory (a 100000 x 100000 TIFF, say).
+
+The full-frame stage 2 (:meth:`Simulator.form_image`) transforms the whole coarse frame at once, which needs
+``~20 bytes x (input / D^2)`` of memory. The streamed path bounds every stage instead:
+
+1. stage 1 writes the coarse grid into a disk-backed array (:func:`coarse_store`, a ``.npy`` memory map in a
+   scratch folder removed afterwards) instead of memory;
+2. stage 2 forms the image tile by tile (:meth:`Simulator.form_tile`): each output tile of
+   ``SimParams.stream_tile_px`` from the coarse frame's window reaching ``SimParams.stream_margin_px`` output
+   pixels beyond it (the frame follows the same border rule as the full-frame path). The PSF's tail beyond
+   the margin is wrapped around the window instead of taken from the scene -- the only difference from the
+   full-frame result (measured by ``benchmarks/bench_stream.py``);
+3. the sensor runs per tile on the fixed noise-block grid (:mod:`satchain.engine.sensor`), so the noise is
+   bit-identical to the full-frame path's, and the image is written band by band into a tiled (Big)TIFF:
+   it is never held whole either.
+
+:func:`choose_streamed` picks this path when the full-frame path would exceed the memory limit.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from satchain.engine.sensor import SensorModel
+from satchain.engine.simulate import _FRAME_BYTES_PER_PX, Simulator
+from satchain.errors import ConfigError
+
+__all__ = [
+    "choose_streamed",
+    "coarse_store",
+    "stream_bytes",
+    "stream_tile_px",
+    "stream_tiles",
+    "write_streamed",
+]
+
+Progress = Callable[[int, int], None]
+#: bytes per output pixel of one tile: the complex128 fold, the float64 image, sensor temporaries
+_TILE_OUT_BYTES_PER_PX = 64
+#: longest side of the streamed PNG preview (a strided subsample of the image)
+PREVIEW_MAX_PX = 4096
+
+
+def stream_tile_px(sim: Simulator) -> int:
+    """The output tile side actually used: ``SimParams.stream_tile_px`` rounded up to a multiple of the
+    noise block and of the output period on which tile windows start on the coarse grid (integer ``k``)."""
+    p = sim.params
+    step = int(p.noise_block_px)
+    for ki in sim.k_int:
+        if ki:
+            step = math.lcm(step, sim.D // math.gcd(ki, sim.D))
+    return -(-int(p.stream_tile_px) // step) * step
+
+
+def stream_bytes(sim: Simulator) -> float:
+    """Estimated peak bytes of the streamed path (the coarse grid on disk is not counted): one decimation
+    tile or one stage-2 window with its tile's temporaries, plus one output band and the preview."""
+    t, m = stream_tile_px(sim), int(sim.params.stream_margin_px)
+    _, shape = sim.tile_window((0, t), (0, t), m)
+    window = min(_FRAME_BYTES_PER_PX * float(shape[0]) * shape[1], sim.frame_bytes)
+    decim = min(float(sim.params.max_tile_bytes), 20.0 * (sim.D * sim.n_coarse[0]) * (sim.D * sim.n_coarse[1]))
+    band = 8.0 * t * sim.output_shape[1]
+    preview = 8.0 * min(PREVIEW_MAX_PX**2, float(sim.output_shape[0]) * sim.output_shape[1])
+    return max(window + _TILE_OUT_BYTES_PER_PX * float(t) * t, decim) + band + preview
+
+
+def choose_streamed(sim: Simulator, *, focal_plane: str | None = None, limit_bytes: float | None = None) -> bool:
+    """True when the full-frame path would not fit (its estimate, :func:`satchain.engine.memory.simulation_bytes`,
+    above ``limit_bytes`` -- default :func:`satchain._safety.memory_limit_bytes` -- or its coarse frame above
+    ``SimParams.max_frame_bytes``) while the streamed path would. Only the plan is looked at; nothing is
+    allocated. The focal-plane image needs the whole coarse frame, so it never streams.
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> sim = Simulator(load_preset("ankarasat3"), input_pixel_m=0.035, input_shape=(100_000, 100_000))
+    >>> choose_streamed(sim, limit_bytes=8 * 2**30), choose_streamed(sim, limit_bytes=2**40)
+    (True, False)
+    """
+    from satchain._safety import memory_limit_bytes
+    from satchain.engine.memory import simulation_bytes
+
+    limit = memory_limit_bytes() if limit_bytes is None else float(limit_bytes)
+    if focal_plane is not None or min(sim.k) < 1:  # an output finer than the input is not a streaming job
+        return False
+    full_fits = simulation_bytes(sim) <= limit and sim.frame_bytes <= sim.params.max_frame_bytes
+    return not full_fits and stream_bytes(sim) <= limit
+
+
+@contextlib.contextmanager
+def coarse_store(
+    sim: Simulator, directory: str | os.PathLike | None = None, *, prefix: str = ".satchain-coarse-"
+) -> Iterator[np.ndarray]:
+    """A disk-backed float32 array of the coarse grid's shape (``numpy.lib.format.open_memmap``) in a new
+    scratch folder ``prefix*`` inside ``directory`` (default: :func:`tempfile.gettempdir`), owned by this
+    process (:func:`satchain._safety.claim`: a killed run's folder is removed by the next run's
+    :func:`satchain._safety.clean_stale`); the folder is removed on exit."""
+    from satchain._safety import claim
+
+    d = Path(tempfile.mkdtemp(prefix=prefix, dir=directory))
+    try:
+        claim(d)
+        arr = np.lib.format.open_memmap(d / "coarse.npy", mode="w+", dtype=np.float32, shape=sim.n_coarse)
+        yield arr
+        del arr
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def stream_tiles(
+    sim: Simulator,
+    coarse: np.ndarray,
+    *,
+    rows: tuple[int, int] | None = None,
+    sensor: SensorModel | None = None,
+    units: str = "reflectance",
+    noise: bool = False,
+    seed: int = 0,
+) -> Iterator[tuple[int, int, np.ndarray]]:
+    """Stage 2 (and the sensor) tile by tile, row-major: yields ``(row0, col0, tile)`` for the output rows
+    ``rows`` (default all; ``rows[0]`` on the tile grid). Tiles lie on the fixed noise-block grid, so with
+    a ``sensor`` the noise is that of :meth:`Simulator.run`."""
+    t, m = stream_tile_px(sim), int(sim.params.stream_margin_px)
+    ny, nx = sim.output_shape
+    r_lo, r_hi = (0, ny) if rows is None else rows
+    if r_lo % t:
+        raise ConfigError(f"rows = {rows!r}: must start on the tile grid (multiples of {t})")
+    for r0 in range(r_lo, min(r_hi, ny), t):
+        r1 = min(r0 + t, ny, r_hi)
+        for c0 in range(0, nx, t):
+            c1 = min(c0 + t, nx)
+            img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m)
+            if sensor is not None:
+                img = sensor.convert(
+                    img, origin=(r0, c0), units=units, noise=noise, seed=seed, block_px=sim.params.noise_block_px
+                )
+            yield r0, c0, img
+
+
+def write_streamed(
+    path: str | os.PathLike,
+    sim: Simulator,
+    coarse: np.ndarray,
+    *,
+    sensor: SensorModel | None = None,
+    units: str = "reflectance",
+    noise: bool = False,
+    seed: int = 0,
+    bit_depth: int | None = None,
+    pixel_m: float,
+    metadata: dict[str, Any] | None = None,
+    preview: bool = True,
+    progress: Progress | None = None,
+) -> Path | None:
+    """Stage 2 + sensor streamed into a tiled (Big)TIFF at ``path`` (atomically), band by band of output
+    tiles, with the file type and metadata of :func:`satchain.io.write_simulated`; and a PNG preview of a
+    strided subsample (at most :data:`PREVIEW_MAX_PX` a side) beside it. Returns the preview path."""
+    from satchain import io
+
+    t = stream_tile_px(sim)
+    ny, nx = sim.output_shape
+    dtype = io.simulated_dtype(units, bit_depth)
+    top = 2.0 ** (12 if bit_depth is None else int(bit_depth)) - 1
+    meta = {
+        **(metadata or {}),
+        "units": units,
+        "stage2": "streamed",
+        "stream_tile_px": t,
+        "stream_margin_px": int(sim.params.stream_margin_px),
+    }
+    if units == "dn":
+        meta["bit_depth"] = 12 if bit_depth is None else int(bit_depth)
+    tiff_tile = next(s for s in (256, 128, 64, 32, 16) if t % s == 0)
+    stride = max(1, -(-max(ny, nx) // PREVIEW_MAX_PX))
+    thumb = np.zeros((-(-ny // stride), -(-nx // stride)), dtype=np.float64)
+    n_bands, done = -(-ny // t), [0]
+
+    def tiff_tiles():
+        for r0 in range(0, ny, t):
+            band = np.zeros((min(t, ny - r0), nx), dtype=dtype)
+            for _, c0, img in stream_tiles(
+                sim, coarse, rows=(r0, r0 + t), sensor=sensor, units=units, noise=noise, seed=seed
+            ):
+                a = np.clip(np.round(img), 0, top) if units == "dn" else img
+                band[:, c0 : c0 + img.shape[1]] = a.astype(dtype)
+                sub = img[(-r0) % stride :: stride, (-c0) % stride :: stride]
+                thumb[-(-r0 // stride) :][: sub.shape[0], -(-c0 // stride) :][:, : sub.shape[1]] = sub
+            for rr in range(0, band.shape[0], tiff_tile):
+                for cc in range(0, nx, tiff_tile):
+                    yield band[rr : rr + tiff_tile, cc : cc + tiff_tile]
+            done[0] += 1
+            if progress is not None:
+                progress(done[0], n_bands)
+
+    io.write_tiff_tiles(
+        path, tiff_tiles(), shape=(ny, nx), dtype=dtype, tile=(tiff_tile, tiff_tile), pixel_m=pixel_m, metadata=meta
+    )
+    if not preview:
+        return None
+    png = Path(path).with_suffix(".png")
+    io.write_png(png, io.preview_uint8(thumb), pixel_m=pixel_m * stride)
+    return png
