@@ -37,6 +37,7 @@ from satchain.tf.budget import SystemOTF
 __all__ = ["SimParams", "Simulator", "simulate"]
 
 Progress = Callable[[int, int], None]
+Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
 _TILE_BYTES_PER_PX = 20  # float64 read + float32 tile + complex64 half spectrum + kept band
 _FRAME_BYTES_PER_PX = 20  # coarse float32 + complex64 half spectrum + band products
 
@@ -331,12 +332,19 @@ class Simulator:
         return tuple(start), tuple(shape)
 
     def form_tile(
-        self, coarse: np.ndarray, rows: tuple[int, int], cols: tuple[int, int], *, margin_px: int
+        self,
+        coarse: np.ndarray,
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        margin_px: int,
+        weight: Weight | None = None,
     ) -> np.ndarray:
         """Stage 2 on a window: output pixels ``rows[0]:rows[1] x cols[0]:cols[1]`` from the coarse frame's
         window extending ``margin_px`` output pixels beyond them (periodic over that window: the PSF's tail
         beyond the margin is wrapped, not cut; it equals :meth:`form_image` as the margin grows). Memory is one
-        window; ``coarse`` may be a disk-backed array."""
+        window; ``coarse`` may be a disk-backed array. ``weight(fy, fx)``: a spectral weight (cycles per coarse
+        sample) applied with the OTF, e.g. the near-field part of :mod:`satchain.engine.stream`."""
         if coarse.shape != self.n_coarse:
             raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
         start, shape = self.tile_window(rows, cols, margin_px)
@@ -344,31 +352,55 @@ class Simulator:
             (ey, ex), shape = self.frame_ext, self.frame_shape
             start = (-ey, -ex)
         block = self._frame_window(coarse, start, shape)
-        return self._form_block(block, start, rows, cols)
+        return self._form_block(block, start, rows, cols, weight=weight)
 
     def _form_block(
-        self, block: np.ndarray, start: tuple[int, int], rows: tuple[int, int], cols: tuple[int, int]
+        self,
+        block: np.ndarray,
+        start: tuple[int, int],
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        weight: Weight | None = None,
     ) -> np.ndarray:
         """Output pixels ``rows x cols`` of the periodic extension of ``block``, whose sample 0 is the ground
         truth's coarse sample ``start``: OTF, footprints and sampling in frequency."""
-        p, D = self.params, self.D
+        f_band = self.f_cut * self.D  # cycles per coarse sample
         ly, lx = block.shape
-        f_band = self.f_cut * D  # cycles per coarse sample
         spec = spectral.tile_band_spectrum(
-            block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=p.workers
+            block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=self.params.workers
         )
         del block
+        return self.form_spectrum(spec, start, rows, cols, weight=weight)
+
+    def form_spectrum(
+        self,
+        spec: spectral.BandSpectrum,
+        start: tuple[int, int],
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        weight: Weight | None = None,
+        fold: bool = True,
+    ) -> np.ndarray:
+        """Output pixels ``rows x cols`` from the band ``spec`` of the DFT of a periodic coarse block
+        (``spec.shape``) whose sample 0 is the ground truth's coarse sample ``start``, its values multiplied by
+        ``weight(fy, fx)`` (cycles per coarse sample) when given. ``fold=False``: always the matrix DFT."""
+        D = self.D
+        ly, lx = spec.shape
         ny_f, nx_f = ly * D, lx * D  # block length in input pixels
         fy = spec.my / ny_f * self.to_cy_per_mm[0]
         fx = spec.mx / nx_f * self.to_cy_per_mm[1]
         vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
+        if weight is not None:
+            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
         c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
         vals = (
             vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
         )
         scale = 1.0 / (ly * lx)
         ky, kx = self.k_int
-        if ky and kx and not ((start[0] * D) % ky or (start[1] * D) % kx or ny_f % ky or nx_f % kx):
+        if fold and ky and kx and not ((start[0] * D) % ky or (start[1] * D) % kx or ny_f % ky or nx_f % kx):
             ay = spectral.footprint_transfer(
                 spec.my, centre=self.ys.centres(0, 1)[0], width_px=self.ys.width_px, n_total=ny_f
             )
@@ -381,7 +413,11 @@ class Simulator:
             return img[oy : oy + rows[1] - rows[0], ox : ox + cols[1] - cols[0]]
         my = spectral.sampling_matrix(self.ys.centres(*rows) - start[0] * D, self.ys.width_px, 0, ny_f, spec.my)
         mx = spectral.sampling_matrix(self.xs.centres(*cols) - start[1] * D, self.xs.width_px, 0, nx_f, spec.mx)
-        return np.real(my @ ((vals * spec.cx[None, :]) @ mx.T)) * scale
+        v = vals * spec.cx[None, :]
+        (ty, by), (tx, bx) = my.shape, mx.shape
+        if ty * by * bx + ty * bx * tx < by * bx * tx + ty * by * tx:  # the cheaper order of the two products
+            return np.real((my @ v) @ mx.T) * scale
+        return np.real(my @ (v @ mx.T)) * scale
 
     def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
         """The focal-plane irradiance image (the paper's Figure 4b, in input units): the ground truth filtered

@@ -116,6 +116,57 @@ def coarse_store(
         shutil.rmtree(d, ignore_errors=True)
 
 
+class FarField:
+    """The long-range part of stage 2 over the whole coarse frame, so that tiles need only short margins.
+
+    The OTF's kink at zero frequency (``1 - OTF ~ |f|``) is what gives the PSF its smooth ``1/r^3`` tail (the
+    energy beyond radius R ~ 1/R): a tile window would wrap that tail. Split with a C-infinity low-pass
+    ``G`` (1 at f = 0, 0 beyond ``f_split``, cycles per coarse sample): ``OTF = OTF G + OTF (1 - G)``. The
+    part ``OTF (1 - G)`` has no kink at zero, so its PSF keeps only the oscillating tail (which averages out
+    over an edge) and is formed per tile window; the part ``OTF G`` -- the smooth tail -- is formed here from
+    the band ``|f| < f_split`` of the whole frame's DFT, computed exactly in bands of rows (a real FFT of each
+    frame row, then an FFT along the columns of the kept band only: memory ``rows x band``), and evaluated
+    at each tile's output pixels by a matrix DFT. ``f_split = 22 / margin`` (coarse samples), so the part
+    ``G`` removes from the tile lies within half the margin.
+    """
+
+    def __init__(self, sim: Simulator, coarse: np.ndarray, *, margin_px: int, band_bytes: float = 256 * 2**20):
+        import scipy.fft as sfft
+
+        from satchain.engine import spectral
+
+        self.sim = sim
+        m_coarse = min(max(int(margin_px), 1) * kk / sim.D for kk in sim.k)
+        self.f_split = min(2 * spectral.LOWPASS_SUPPORT / m_coarse, sim.f_cut * sim.D)
+        ly, lx = sim.frame_shape
+        ey, ex = sim.frame_ext
+        by, bx = spectral.band_index(ly, self.f_split), spectral.band_index(lx, self.f_split)
+        rows_x = np.empty((ly, bx + 1), dtype=np.complex64)  # the frame's rows, transformed, band only
+        h = max(1, int(band_bytes // (4 * lx)))
+        for a in range(0, ly, h):
+            blk = sim._frame_window(coarse, (a - ey, -ex), (min(h, ly - a), lx))
+            rows_x[a : a + blk.shape[0]] = sfft.rfft(blk, axis=1, workers=sim.params.workers)[:, : bx + 1]
+        full = sfft.fft(rows_x, axis=0, workers=sim.params.workers, overwrite_x=True)
+        my = np.fft.fftfreq(ly, 1.0 / ly).round().astype(np.int64)
+        keep = np.abs(my) <= by
+        self.spec = spectral.BandSpectrum(full[keep], my[keep], np.arange(bx + 1), (ly, lx))
+        self.start = (-ey, -ex)
+
+    def low(self, fy: np.ndarray, fx: np.ndarray) -> np.ndarray:
+        """``G(fy, fx)``, frequencies in cycles per coarse sample."""
+        from satchain.engine.spectral import lowpass
+
+        return lowpass(fy, 0.0, self.f_split) * lowpass(fx, 0.0, self.f_split)
+
+    def high(self, fy: np.ndarray, fx: np.ndarray) -> np.ndarray:
+        """``1 - G``: the part formed per tile window."""
+        return 1.0 - self.low(fy, fx)
+
+    def tile(self, rows: tuple[int, int], cols: tuple[int, int]) -> np.ndarray:
+        """The part ``OTF G`` at output pixels ``rows x cols`` (input units)."""
+        return self.sim.form_spectrum(self.spec, self.start, rows, cols, weight=self.low, fold=False)
+
+
 def stream_tiles(
     sim: Simulator,
     coarse: np.ndarray,
@@ -125,11 +176,15 @@ def stream_tiles(
     units: str = "reflectance",
     noise: bool = False,
     seed: int = 0,
+    far: FarField | bool | None = None,
 ) -> Iterator[tuple[int, int, np.ndarray]]:
     """Stage 2 (and the sensor) tile by tile, row-major: yields ``(row0, col0, tile)`` for the output rows
     ``rows`` (default all; ``rows[0]`` on the tile grid). Tiles lie on the fixed noise-block grid, so with
-    a ``sensor`` the noise is that of :meth:`Simulator.run`."""
+    a ``sensor`` the noise is that of :meth:`Simulator.run`. ``far``: the whole frame's long-range part
+    (:class:`FarField`, built here when None; ``False``: none, the PSF tail beyond the margin is wrapped)."""
     t, m = stream_tile_px(sim), int(sim.params.stream_margin_px)
+    if far is None:
+        far = FarField(sim, coarse, margin_px=m)
     ny, nx = sim.output_shape
     r_lo, r_hi = (0, ny) if rows is None else rows
     if r_lo % t:
@@ -138,7 +193,11 @@ def stream_tiles(
         r1 = min(r0 + t, ny, r_hi)
         for c0 in range(0, nx, t):
             c1 = min(c0 + t, nx)
-            img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m)
+            if far:
+                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m, weight=far.high)
+                img += far.tile((r0, r1), (c0, c1))
+            else:
+                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m)
             if sensor is not None:
                 img = sensor.convert(
                     img, origin=(r0, c0), units=units, noise=noise, seed=seed, block_px=sim.params.noise_block_px
