@@ -92,7 +92,7 @@ class SimParams:
     noise_block_px: int = 64
     workers: int = 2
     stream_tile_px: int = 2048
-    stream_margin_px: int = 256
+    stream_margin_px: int = 128
 
     def __post_init__(self) -> None:
         check_choice("border", self.border, BORDER_RULES)

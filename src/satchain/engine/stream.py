@@ -32,11 +32,15 @@ import numpy as np
 
 from satchain.engine.sensor import SensorModel
 from satchain.engine.simulate import _FRAME_BYTES_PER_PX, Simulator
+from satchain.engine.spectral import LOWPASS_SUPPORT, band_index
 from satchain.errors import ConfigError
 
 __all__ = [
+    "FarField",
     "choose_streamed",
     "coarse_store",
+    "far_split",
+    "simulate_to_tiff",
     "stream_bytes",
     "stream_tile_px",
     "stream_tiles",
@@ -46,6 +50,8 @@ __all__ = [
 Progress = Callable[[int, int], None]
 #: bytes per output pixel of one tile: the complex128 fold, the float64 image, sensor temporaries
 _TILE_OUT_BYTES_PER_PX = 64
+#: frame rows read at once while the far field is built (float32 bytes)
+_FAR_BAND_BYTES = 64 * 2**20
 #: longest side of the streamed PNG preview (a strided subsample of the image)
 PREVIEW_MAX_PX = 4096
 
@@ -70,7 +76,20 @@ def stream_bytes(sim: Simulator) -> float:
     decim = min(float(sim.params.max_tile_bytes), 20.0 * (sim.D * sim.n_coarse[0]) * (sim.D * sim.n_coarse[1]))
     band = 8.0 * t * sim.output_shape[1]
     preview = 8.0 * min(PREVIEW_MAX_PX**2, float(sim.output_shape[0]) * sim.output_shape[1])
-    return max(window + _TILE_OUT_BYTES_PER_PX * float(t) * t, decim) + band + preview
+    # the far field: its band of the frame (complex64, the transform's copy and the kept rows), one band of
+    # frame rows with its real FFT while it is built, and per tile the two sampling matrices and a product
+    ly, lx = sim.frame_shape
+    by, bx = (band_index(n, far_split(sim, m)) for n in (ly, lx))
+    far = 8.0 * (2 * ly + 2 * by + 1) * (bx + 1) + 16.0 * t * (2 * by + 2 * bx + 2)
+    build = 3.0 * _FAR_BAND_BYTES
+    return max(window + _TILE_OUT_BYTES_PER_PX * float(t) * t, decim, build) + far + band + preview
+
+
+def far_split(sim: Simulator, margin_px: int) -> float:
+    """Where :class:`FarField` splits the OTF, cycles per coarse sample: ``2 x LOWPASS_SUPPORT / margin``
+    (the margin in coarse samples), so the low-pass's kernel lies within half the tile margin."""
+    m_coarse = min(max(int(margin_px), 1) * kk / sim.D for kk in sim.k)
+    return min(2 * LOWPASS_SUPPORT / m_coarse, sim.f_cut * sim.D)
 
 
 def choose_streamed(sim: Simulator, *, focal_plane: str | None = None, limit_bytes: float | None = None) -> bool:
@@ -82,8 +101,9 @@ def choose_streamed(sim: Simulator, *, focal_plane: str | None = None, limit_byt
     Examples
     --------
     >>> from satchain import load_preset
-    >>> sim = Simulator(load_preset("ankarasat3"), input_pixel_m=0.035, input_shape=(100_000, 100_000))
-    >>> choose_streamed(sim, limit_bytes=8 * 2**30), choose_streamed(sim, limit_bytes=2**40)
+    >>> big = Simulator(load_preset("ankarasat3"), input_pixel_m=0.035, input_shape=(100_000, 100_000))
+    >>> small = Simulator(load_preset("ankarasat3"), input_pixel_m=0.035, input_shape=(2000, 2000))
+    >>> choose_streamed(big, limit_bytes=8 * 2**30), choose_streamed(small, limit_bytes=8 * 2**30)
     (True, False)
     """
     from satchain._safety import memory_limit_bytes
@@ -130,14 +150,13 @@ class FarField:
     ``G`` removes from the tile lies within half the margin.
     """
 
-    def __init__(self, sim: Simulator, coarse: np.ndarray, *, margin_px: int, band_bytes: float = 256 * 2**20):
+    def __init__(self, sim: Simulator, coarse: np.ndarray, *, margin_px: int, band_bytes: float = _FAR_BAND_BYTES):
         import scipy.fft as sfft
 
         from satchain.engine import spectral
 
         self.sim = sim
-        m_coarse = min(max(int(margin_px), 1) * kk / sim.D for kk in sim.k)
-        self.f_split = min(2 * spectral.LOWPASS_SUPPORT / m_coarse, sim.f_cut * sim.D)
+        self.f_split = far_split(sim, margin_px)
         ly, lx = sim.frame_shape
         ey, ex = sim.frame_ext
         by, bx = spectral.band_index(ly, self.f_split), spectral.band_index(lx, self.f_split)
@@ -268,3 +287,59 @@ def write_streamed(
     png = Path(path).with_suffix(".png")
     io.write_png(png, io.preview_uint8(thumb), pixel_m=pixel_m * stride)
     return png
+
+
+def simulate_to_tiff(
+    ground_truth,
+    system,
+    path: str | os.PathLike,
+    *,
+    pixel_m: float | None = None,
+    params=None,
+    sensor: SensorModel | None = None,
+    units: str = "reflectance",
+    noise: bool = False,
+    seed: int = 0,
+    scratch_dir: str | os.PathLike | None = None,
+    progress: Progress | None = None,
+) -> Path:
+    """Simulate ``ground_truth`` (an array with ``pixel_m``, a scene or a source) on the streamed path into
+    the tiled TIFF ``path`` (and its PNG preview), whatever its size: the coarse grid lives in a scratch
+    folder in ``scratch_dir`` (default: beside ``path``) and neither it nor the image is ever held whole.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from satchain import io, load_preset
+    >>> p = Path(tempfile.mkdtemp()) / "flat.tif"
+    >>> _ = simulate_to_tiff(np.full((700, 700), 0.2), load_preset("ankarasat3"), p, pixel_m=0.035)
+    >>> img, _ = io.read_image(p)
+    >>> img.shape, bool(np.allclose(img, 0.2, atol=1e-6))
+    ((50, 50), True)
+    """
+    from satchain._validate import check_choice
+    from satchain.engine.sensor import OUTPUT_UNITS
+    from satchain.engine.simulate import SimParams
+    from satchain.engine.sources import as_ground_truth
+
+    check_choice("units", units, OUTPUT_UNITS)
+    if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
+        raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
+    src = as_ground_truth(ground_truth, pixel_m=pixel_m)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params or SimParams())
+    path = Path(path)
+    with coarse_store(sim, scratch_dir or path.parent, prefix=f".{path.name}.staging-") as coarse:
+        sim.decimate(src, out=coarse, progress=progress)
+        write_streamed(
+            path,
+            sim,
+            coarse,
+            sensor=sensor,
+            units=units,
+            noise=noise,
+            seed=seed,
+            bit_depth=sensor.bit_depth if sensor is not None else None,
+            pixel_m=system.gsd_act_m,
+            metadata={"system": system.name, "seed": seed, "noise": noise, "input_pixel_m": src.pixel_m},
+        )
+    return path

@@ -1,0 +1,202 @@
+"""Streamed simulation (coarse grid on disk, stage 2 by tiles, image written band by band) against the
+full-frame path: wall time, throughput, peak RSS and the largest difference between the two.
+
+Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 128] [--tiff PATH]``
+     ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 10 GB tiled TIFF is
+     generated first, then streamed; hours on 2 cores, ~25 GB of disk)
+
+The input (AnkaraSat-3 at 3.5 cm, k = 14) is the procedural ground truth of ``bench_engine.py`` (stripes,
+sectors, slanted edges: generated per window, never held), or a tiled TIFF (``--tiff``, read by window).
+Each path runs in its own subprocess, whose peak RSS (``resource.getrusage``) is reported:
+
+* streamed: ``Simulator.decimate`` into a disk-backed coarse grid, then
+  ``satchain.engine.stream.write_streamed`` (reflectance, noise off) into a tiled TIFF;
+* full frame: ``Simulator.run`` in memory (skipped when it does not fit; with ``--huge`` it runs on a
+  ``--crop`` of the input instead, streamed and full frame both, so the difference is still measured).
+
+The difference is printed as max |streamed - full| / (max - min of the full-frame image).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_engine import PIXEL_M, ProceduralScene  # noqa: E402
+
+GiB = 2**30
+
+
+def _peak_rss_mib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
+
+
+def _source(args):
+    from satchain.engine.sources import SceneSource, as_ground_truth
+    from satchain.scene import ImageScene
+
+    if args.tiff:
+        return SceneSource(ImageScene(args.tiff, pixel_m=PIXEL_M))
+    return as_ground_truth(ProceduralScene(args.size))
+
+
+class _Crop:
+    """A window of another source as a source of its own."""
+
+    def __init__(self, src, n: int):
+        self.src, self.pixel_m = src, src.pixel_m
+        r0, c0 = (src.shape_px[0] - n) // 2, (src.shape_px[1] - n) // 2
+        self.r0, self.c0, self.shape_px = r0, c0, (n, n)
+
+    def read(self, window):
+        from satchain.engine.tiling import Window
+
+        r, c, h, w = window
+        return self.src.read(Window(r + self.r0, c + self.c0, h, w))
+
+
+def worker(args) -> None:
+    """One run in this process: prints a JSON line."""
+    from satchain import load_preset
+    from satchain.engine.simulate import SimParams, Simulator
+    from satchain.engine.stream import choose_streamed, coarse_store, stream_bytes, write_streamed
+
+    src = _source(args)
+    if args.crop:
+        src = _Crop(src, args.crop)
+    params = SimParams(stream_tile_px=args.tile, stream_margin_px=args.margin)
+    sim = Simulator(load_preset("ankarasat3"), input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
+    out = Path(args.dir) / f"{args.worker}-{src.shape_px[0]}.tif"
+    t0 = time.perf_counter()
+    info = {"auto_streamed": choose_streamed(sim), "stream_gib": stream_bytes(sim) / GiB}
+    if args.worker == "streamed":
+        with coarse_store(sim, args.dir) as coarse:
+            sim.decimate(src, out=coarse)
+            t1 = time.perf_counter()
+            write_streamed(out, sim, coarse, pixel_m=sim.system.gsd_act_m, preview=False)
+        info["stage1_s"] = t1 - t0
+    else:
+        from satchain import io
+
+        sim.check_frame()
+        io.write_tiff(out, sim.run(src).astype(np.float32))
+    wall = time.perf_counter() - t0
+    n_in = src.shape_px[0] * src.shape_px[1]
+    info.update(
+        path=str(out),
+        wall_s=wall,
+        mpx_s=n_in / 1e6 / wall,
+        peak_rss_mib=_peak_rss_mib(),
+        input=list(src.shape_px),
+        output=list(sim.output_shape),
+        coarse=list(sim.n_coarse),
+        frame_gib=sim.frame_bytes / GiB,
+        tile=args.tile,
+        margin=args.margin,
+    )
+    print(json.dumps(info), flush=True)
+
+
+def _run(kind: str, args, *, crop: int = 0) -> dict:
+    cmd = [sys.executable, __file__, "--worker", kind, "--size", str(args.size), "--tile", str(args.tile)]
+    cmd += ["--margin", str(args.margin), "--dir", args.dir, "--crop", str(crop)]
+    if args.tiff:
+        cmd += ["--tiff", args.tiff]
+    p = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ})
+    if p.returncode:
+        raise SystemExit(f"{kind} run failed:\n{p.stderr[-3000:]}")
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def _print(name: str, r: dict) -> None:
+    extra = f", stage 1 {r['stage1_s']:.1f} s" if "stage1_s" in r else ""
+    print(
+        f"{name:26s} input {r['input'][0]} x {r['input'][1]} -> {r['output'][0]} x {r['output'][1]}: "
+        f"{r['wall_s']:.1f} s{extra}, {r['mpx_s']:.1f} Mpx/s (input), peak RSS {r['peak_rss_mib']:.0f} MiB"
+    )
+
+
+def _difference(a_path: str, b_path: str) -> float:
+    from satchain import io
+
+    a, _ = io.read_image(a_path)
+    b, _ = io.read_image(b_path)
+    b = b.astype(np.float64)
+    return float(np.max(np.abs(a.astype(np.float64) - b)) / np.ptp(b))
+
+
+def make_huge_tiff(path: Path, n: int) -> None:
+    """A ``n x n`` uint8 tiled TIFF of the procedural ground truth, written band by band."""
+    from satchain import io
+    from satchain.engine.tiling import Window
+
+    scene, t = ProceduralScene(n), 256
+
+    def tiles():
+        for r in range(0, n, t):
+            band = scene.read(Window(r, 0, min(t, n - r), n))
+            band = np.clip(np.round(band * 255), 0, 255).astype(np.uint8)
+            for c in range(0, n, t):
+                yield band[:, c : c + t]
+
+    io.write_tiff_tiles(path, tiles(), shape=(n, n), dtype=np.uint8, tile=(t, t), pixel_m=PIXEL_M)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--size", type=int, default=16384, help="procedural input side, px")
+    ap.add_argument("--tiff", help="a tiled TIFF input instead (read by window, 3.5 cm pixels)")
+    ap.add_argument("--tile", type=int, default=512, help="output tile side, px (SimParams.stream_tile_px)")
+    ap.add_argument("--margin", type=int, default=128, help="output px margins (SimParams.stream_margin_px)")
+    ap.add_argument("--crop", type=int, default=0, help="full-frame comparison on a central crop of this side")
+    ap.add_argument("--huge", action="store_true", help="100000 x 100000 from a generated tiled TIFF")
+    ap.add_argument("--dir", help="scratch directory (default: a temporary one)")
+    ap.add_argument("--worker", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.worker:
+        worker(args)
+        return
+    with tempfile.TemporaryDirectory(dir=args.dir) as d:
+        args.dir = d
+        if args.huge:
+            args.size, args.tile = 100_000, 2048
+            args.tiff = str(Path(d) / "huge.tif")
+            t0 = time.perf_counter()
+            make_huge_tiff(Path(args.tiff), args.size)
+            gib, dt = os.path.getsize(args.tiff) / GiB, time.perf_counter() - t0
+            print(f"generated {args.tiff} ({gib:.1f} GiB) in {dt:.0f} s")
+            args.crop = args.crop or 8192
+        s = _run("streamed", args)
+        _print("streamed", s)
+        print(
+            f"  (chosen automatically: {s['auto_streamed']}; full frame {s['frame_gib']:.2f} GiB of coarse frame, "
+            f"streamed estimate {s['stream_gib']:.2f} GiB; tile {s['tile']} px, margin {s['margin']} px)"
+        )
+        if args.crop:
+            s = _run("streamed", args, crop=args.crop)
+            _print(f"streamed, {args.crop}-px crop", s)
+        try:
+            f = _run("full", args, crop=args.crop)
+        except SystemExit as exc:
+            print(f"full frame: did not run ({str(exc).splitlines()[-1]})")
+            return
+        _print("full frame" + (f", {args.crop}-px crop" if args.crop else ""), f)
+        print(
+            f"time streamed / full frame: {s['wall_s'] / f['wall_s']:.2f}; "
+            f"peak RSS streamed / full frame: {s['peak_rss_mib'] / f['peak_rss_mib']:.2f}"
+        )
+        print(f"max |streamed - full frame| / range: {_difference(s['path'], f['path']):.2e}")
+
+
+if __name__ == "__main__":
+    main()
