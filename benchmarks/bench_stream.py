@@ -1,7 +1,7 @@
 """Streamed simulation (coarse grid on disk, stage 2 by tiles, image written band by band) against the
 full-frame path: wall time, throughput, peak RSS and the largest difference between the two.
 
-Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 128] [--tiff PATH]``
+Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 128] [--stage1-mib 640] [--tiff PATH]``
      ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 10 GB tiled TIFF is
      generated first, then streamed; hours on 2 cores, ~25 GB of disk)
 
@@ -74,7 +74,9 @@ def worker(args) -> None:
     src = _source(args)
     if args.crop:
         src = _Crop(src, args.crop)
-    params = SimParams(stream_tile_px=args.tile, stream_margin_px=args.margin)
+    params = SimParams(
+        stream_tile_px=args.tile, stream_margin_px=args.margin, max_tile_bytes=int(args.stage1_mib * 2**20)
+    )
     sim = Simulator(load_preset("ankarasat3"), input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
     out = Path(args.dir) / f"{args.worker}-{src.shape_px[0]}.tif"
     t0 = time.perf_counter()
@@ -109,7 +111,7 @@ def worker(args) -> None:
 
 def _run(kind: str, args, *, crop: int = 0) -> dict:
     cmd = [sys.executable, __file__, "--worker", kind, "--size", str(args.size), "--tile", str(args.tile)]
-    cmd += ["--margin", str(args.margin), "--dir", args.dir, "--crop", str(crop)]
+    cmd += ["--margin", str(args.margin), "--dir", args.dir, "--crop", str(crop), "--stage1-mib", str(args.stage1_mib)]
     if args.tiff:
         cmd += ["--tiff", args.tiff]
     p = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ})
@@ -158,6 +160,7 @@ def main() -> None:
     ap.add_argument("--tiff", help="a tiled TIFF input instead (read by window, 3.5 cm pixels)")
     ap.add_argument("--tile", type=int, default=512, help="output tile side, px (SimParams.stream_tile_px)")
     ap.add_argument("--margin", type=int, default=128, help="output px margins (SimParams.stream_margin_px)")
+    ap.add_argument("--stage1-mib", type=int, default=640, help="stage-1 tile memory (SimParams.max_tile_bytes)")
     ap.add_argument("--crop", type=int, default=0, help="full-frame comparison on a central crop of this side")
     ap.add_argument("--huge", action="store_true", help="100000 x 100000 from a generated tiled TIFF")
     ap.add_argument("--dir", help="scratch directory (default: a temporary one)")
