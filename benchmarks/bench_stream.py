@@ -2,6 +2,7 @@
 full-frame path: wall time, throughput, peak RSS and the largest difference between the two.
 
 Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 128] [--stage1-mib 640] [--tiff PATH]``
+     ``python benchmarks/bench_stream.py --margin-sweep``  (error vs margin, with and without the far field)
      ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 10 GB tiled TIFF is
      generated first, then streamed; hours on 2 cores, ~25 GB of disk)
 
@@ -154,6 +155,45 @@ def make_huge_tiff(path: Path, n: int) -> None:
     io.write_tiff_tiles(path, tiles(), shape=(n, n), dtype=np.uint8, tile=(t, t), pixel_m=PIXEL_M)
 
 
+def margin_sweep(n: int, tile: int) -> None:
+    """Error of the streamed stage 2 against the full-frame one by margin, with and without the far field,
+    on two ``n x n`` scenes: uniform noise with rectangles, and 8 x 8 black/white blocks (long straight
+    edges: the worst case for a wrapped PSF tail)."""
+    from satchain import load_preset
+    from satchain.engine.simulate import SimParams, Simulator
+    from satchain.engine.sources import ArraySource
+    from satchain.engine.stream import stream_tiles
+
+    rng = np.random.default_rng(0)
+    noise = rng.uniform(0.1, 0.9, (n, n))
+    for _ in range(20):
+        h, w = rng.integers(5, n // 4, size=2)
+        r, c = rng.integers(0, n - h), rng.integers(0, n - w)
+        noise[r : r + h, c : c + w] = rng.uniform(0.1, 0.9)
+    blocks = np.kron(rng.integers(0, 2, (8, 8)), np.ones((n // 8, n // 8)))
+    system = load_preset("ankarasat3")
+    for name, img in (("noise+rectangles", noise), ("8x8 blocks", blocks)):
+        sim = Simulator(system, input_pixel_m=PIXEL_M, input_shape=img.shape)
+        coarse = sim.decimate(ArraySource(img, pixel_m=PIXEL_M))
+        full = sim.form_image(coarse)
+        for m in (16, 32, 64, 128, 256):
+            p = SimParams(stream_tile_px=tile, stream_margin_px=m)
+            sm = Simulator(system, input_pixel_m=PIXEL_M, input_shape=img.shape, params=p)
+            _, window = sm.tile_window((0, tile), (0, tile), m)
+            if window[0] >= sm.frame_shape[0]:
+                continue
+            err = {}
+            for far in (False, None):
+                out, t0 = np.zeros(sm.output_shape), time.perf_counter()
+                for r0, c0, t in stream_tiles(sm, coarse, far=far):
+                    out[r0 : r0 + t.shape[0], c0 : c0 + t.shape[1]] = t
+                err[far] = (np.max(np.abs(out - full)) / np.ptp(full), time.perf_counter() - t0)
+            print(
+                f"{name:17s} {n} px, {tile}-px tiles, margin {m:3d} px: max|diff|/range wrapped tail "
+                f"{err[False][0]:.1e} ({err[False][1]:.1f} s), with far field {err[None][0]:.1e} ({err[None][1]:.1f} s)"
+            )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--size", type=int, default=16384, help="procedural input side, px")
@@ -164,10 +204,14 @@ def main() -> None:
     ap.add_argument("--crop", type=int, default=0, help="full-frame comparison on a central crop of this side")
     ap.add_argument("--huge", action="store_true", help="100000 x 100000 from a generated tiled TIFF")
     ap.add_argument("--dir", help="scratch directory (default: a temporary one)")
+    ap.add_argument("--margin-sweep", action="store_true", help="error vs margin on 4096-px scenes, 64-px tiles")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         worker(args)
+        return
+    if args.margin_sweep:
+        margin_sweep(4096, 64)
         return
     with tempfile.TemporaryDirectory(dir=args.dir) as d:
         args.dir = d

@@ -373,6 +373,22 @@ class Simulator:
         del block
         return self.form_spectrum(spec, start, rows, cols, weight=weight)
 
+    def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
+        """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse
+        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``."""
+        D = self.D
+        ly, lx = spec.shape
+        ny_f, nx_f = ly * D, lx * D  # block length in input pixels
+        fy = spec.my / ny_f * self.to_cy_per_mm[0]
+        fx = spec.mx / nx_f * self.to_cy_per_mm[1]
+        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
+        if weight is not None:
+            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
+        c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
+        return (
+            vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
+        )
+
     def form_spectrum(
         self,
         spec: spectral.BandSpectrum,
@@ -389,15 +405,7 @@ class Simulator:
         D = self.D
         ly, lx = spec.shape
         ny_f, nx_f = ly * D, lx * D  # block length in input pixels
-        fy = spec.my / ny_f * self.to_cy_per_mm[0]
-        fx = spec.mx / nx_f * self.to_cy_per_mm[1]
-        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
-        if weight is not None:
-            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
-        c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
-        vals = (
-            vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
-        )
+        vals = self.band_values(spec, weight=weight)
         scale = 1.0 / (ly * lx)
         ky, kx = self.k_int
         if fold and ky and kx and not ((start[0] * D) % ky or (start[1] * D) % kx or ny_f % ky or nx_f % kx):

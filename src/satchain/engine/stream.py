@@ -168,8 +168,15 @@ class FarField:
         full = sfft.fft(rows_x, axis=0, workers=sim.params.workers, overwrite_x=True)
         my = np.fft.fftfreq(ly, 1.0 / ly).round().astype(np.int64)
         keep = np.abs(my) <= by
-        self.spec = spectral.BandSpectrum(full[keep], my[keep], np.arange(bx + 1), (ly, lx))
-        self.start = (-ey, -ex)
+        spec = spectral.BandSpectrum(full[keep], my[keep], np.arange(bx + 1), (ly, lx))
+        del rows_x, full
+        # the band's values, filtered (OTF x G), Hermitian-weighted and normalised: fixed for every tile
+        self.values = sim.band_values(spec, weight=self.low) * spec.cx[None, :] / (ly * lx)
+        self.my, self.mx = spec.my, spec.mx
+        self.origin_px = (-ey * sim.D, -ex * sim.D)  # input pixel of frame sample 0
+        self.n_px = (ly * sim.D, lx * sim.D)
+        self._rows: tuple[int, int] | None = None
+        self._rows_values: np.ndarray | None = None
 
     def low(self, fy: np.ndarray, fx: np.ndarray) -> np.ndarray:
         """``G(fy, fx)``, frequencies in cycles per coarse sample."""
@@ -182,8 +189,16 @@ class FarField:
         return 1.0 - self.low(fy, fx)
 
     def tile(self, rows: tuple[int, int], cols: tuple[int, int]) -> np.ndarray:
-        """The part ``OTF G`` at output pixels ``rows x cols`` (input units)."""
-        return self.sim.form_spectrum(self.spec, self.start, rows, cols, weight=self.low, fold=False)
+        """The part ``OTF G`` at output pixels ``rows x cols`` (input units): a matrix DFT with footprint
+        averaging along each axis (the row transform is kept for the next tile of the same rows)."""
+        from satchain.engine.spectral import sampling_matrix
+
+        sim = self.sim
+        if rows != self._rows:
+            my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
+            self._rows, self._rows_values = rows, my @ self.values
+        mx = sampling_matrix(sim.xs.centres(*cols) - self.origin_px[1], sim.xs.width_px, 0, self.n_px[1], self.mx)
+        return np.real(self._rows_values @ mx.T)
 
 
 def stream_tiles(
