@@ -276,12 +276,13 @@ def write_streamed(
     stride = max(1, -(-max(ny, nx) // PREVIEW_MAX_PX))
     thumb = np.zeros((-(-ny // stride), -(-nx // stride)), dtype=np.float64)
     n_bands, done = -(-ny // t), [0]
+    far = FarField(sim, coarse, margin_px=int(sim.params.stream_margin_px))  # once, for every band
 
     def tiff_tiles():
         for r0 in range(0, ny, t):
             band = np.zeros((min(t, ny - r0), nx), dtype=dtype)
             for _, c0, img in stream_tiles(
-                sim, coarse, rows=(r0, r0 + t), sensor=sensor, units=units, noise=noise, seed=seed
+                sim, coarse, rows=(r0, r0 + t), sensor=sensor, units=units, noise=noise, seed=seed, far=far
             ):
                 a = np.clip(np.round(img), 0, top) if units == "dn" else img
                 band[:, c0 : c0 + img.shape[1]] = a.astype(dtype)
