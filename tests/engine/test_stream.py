@@ -60,6 +60,18 @@ def test_streamed_equals_full_frame_within_the_stated_bound(case, border):
     assert errors[16, False] > 2 * errors[64, False]  # ... and the margin sets the error
 
 
+@pytest.mark.parametrize(("pixel_m", "phase"), [(0.04, (0.0, 0.0)), (0.035, (3.3, 1.7))])
+def test_streamed_any_ratio_and_phase(pixel_m, phase):
+    """A non-integer GSD / input ratio (matrix DFT in every window) and a sub-pixel detector phase."""
+    img = make_scene((2100, 1900), np.random.default_rng(2))
+    sim = Simulator(BASE, input_pixel_m=pixel_m, input_shape=img.shape, params=SimParams(phase_px=phase))
+    coarse = sim.decimate(ArraySource(img, pixel_m=pixel_m))
+    full = sim.form_image(coarse)
+    p = SimParams(phase_px=phase, stream_tile_px=64, stream_margin_px=64)
+    streamed = Simulator(BASE, input_pixel_m=pixel_m, input_shape=img.shape, params=p)
+    assert np.max(np.abs(_assemble(streamed, coarse) - full)) <= 1e-5 * np.ptp(full)
+
+
 def test_streamed_periodic_border_wraps_like_the_full_frame(case):
     """Under the periodic rule the frame is the coarse grid itself (no extension): windows wrap around it."""
     src, _, _ = case
