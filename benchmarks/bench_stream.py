@@ -3,8 +3,8 @@ full-frame path: wall time, throughput, peak RSS and the largest difference betw
 
 Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 128] [--stage1-mib 640] [--tiff PATH]``
      ``python benchmarks/bench_stream.py --margin-sweep``  (error vs margin, with and without the far field)
-     ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 10 GB tiled TIFF is
-     generated first, then streamed; hours on 2 cores, ~25 GB of disk)
+     ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 9.3 GiB tiled uint8 TIFF
+     of a repeated 4096-px procedural square is generated first, then streamed; ~13 GiB of disk)
 
 The input (AnkaraSat-3 at 3.5 cm, k = 14) is the procedural ground truth of ``bench_engine.py`` (stripes,
 sectors, slanted edges: generated per window, never held), or a tiled TIFF (``--tiff``, read by window).
@@ -138,19 +138,22 @@ def _difference(a_path: str, b_path: str) -> float:
     return float(np.max(np.abs(a.astype(np.float64) - b)) / np.ptp(b))
 
 
-def make_huge_tiff(path: Path, n: int) -> None:
-    """A ``n x n`` uint8 tiled TIFF of the procedural ground truth, written band by band."""
+def make_huge_tiff(path: Path, n: int, *, period: int = 4096) -> None:
+    """A ``n x n`` uint8 tiled TIFF: one ``period``-px square of the procedural ground truth, repeated (so it
+    is written at disk speed rather than rendered pixel by pixel for hours)."""
     from satchain import io
     from satchain.engine.tiling import Window
 
-    scene, t = ProceduralScene(n), 256
+    t = 256
+    block = ProceduralScene(period).read(Window(0, 0, period, period))
+    block = np.clip(np.round(block * 255), 0, 255).astype(np.uint8)
+    block = np.tile(block, (2, 2))  # any tile-sized window of the repeated pattern is a slice of this
 
     def tiles():
         for r in range(0, n, t):
-            band = scene.read(Window(r, 0, min(t, n - r), n))
-            band = np.clip(np.round(band * 255), 0, 255).astype(np.uint8)
             for c in range(0, n, t):
-                yield band[:, c : c + t]
+                r0, c0 = r % period, c % period
+                yield block[r0 : r0 + min(t, n - r), c0 : c0 + min(t, n - c)]
 
     io.write_tiff_tiles(path, tiles(), shape=(n, n), dtype=np.uint8, tile=(t, t), pixel_m=PIXEL_M)
 
