@@ -13,7 +13,8 @@ Each path runs in its own subprocess, whose peak RSS (``resource.getrusage``) is
 * streamed: ``Simulator.decimate`` into a disk-backed coarse grid, then
   ``satchain.engine.stream.write_streamed`` (reflectance, noise off) into a tiled TIFF;
 * full frame: ``Simulator.run`` in memory (skipped when it does not fit; with ``--huge`` it runs on a
-  ``--crop`` of the input instead, streamed and full frame both, so the difference is still measured).
+  ``--crop`` of the input instead, streamed (in 256-px tiles, so the windows are smaller than the crop's
+  frame) and full frame both, so the difference is still measured).
 
 The difference is printed as max |streamed - full| / (max - min of the full-frame image).
 """
@@ -111,7 +112,8 @@ def worker(args) -> None:
 
 
 def _run(kind: str, args, *, crop: int = 0) -> dict:
-    cmd = [sys.executable, __file__, "--worker", kind, "--size", str(args.size), "--tile", str(args.tile)]
+    tile = min(args.tile, 256) if crop else args.tile  # a crop's output is small: tiles well inside its frame
+    cmd = [sys.executable, __file__, "--worker", kind, "--size", str(args.size), "--tile", str(tile)]
     cmd += ["--margin", str(args.margin), "--dir", args.dir, "--crop", str(crop), "--stage1-mib", str(args.stage1_mib)]
     if args.tiff:
         cmd += ["--tiff", args.tiff]
