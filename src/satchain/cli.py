@@ -22,6 +22,7 @@ from satchain._safety import (
     check_sidecars,
 )
 from satchain.engine.memory import check_simulation_memory
+from satchain.engine.stream import choose_streamed
 from satchain.errors import ConfigError
 
 app = typer.Typer(
@@ -281,13 +282,41 @@ def simulate(
     src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
     sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
     sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
-    check_simulation_memory(sim, focal_plane=fp_grid if focal_plane is not None else None)
+    fp = fp_grid if focal_plane is not None else None
+    streamed = choose_streamed(sim, focal_plane=fp)
+    if not streamed:
+        check_simulation_memory(sim, focal_plane=fp)
+        sim.check_frame()
     if min(src.shape_px) < 8:
         raise ConfigError(
             f"INPUT {input_!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; a "
             "ground truth needs at least 8 px a side: check --scene-pixel-m"
         )
     out.parent.mkdir(parents=True, exist_ok=True)
+    meta = {
+        "system": s.name,
+        "seed": seed,
+        "noise": not no_noise,
+        "gsd_act_m": s.gsd_act_m,
+        "gsd_alt_m": s.gsd_alt_m,
+        "input": str(input_),
+        "input_pixel_m": src.pixel_m,
+    }
+    bits = sensor.bit_depth if sensor is not None else s.detector.bit_depth
+    if streamed:
+        _simulate_streamed(
+            sim,
+            src,
+            out,
+            sensor=sensor,
+            units=units_,
+            noise=not no_noise,
+            seed=seed,
+            bits=bits,
+            meta=meta,
+            scheduler=scheduler,
+        )
+        return
     if focal_plane is not None:
         focal_plane.parent.mkdir(parents=True, exist_ok=True)
     bar, update = _progress(f"simulating {src.shape_px[0]}x{src.shape_px[1]} px")
@@ -299,16 +328,6 @@ def simulate(
         else:
             coarse = sim.decimate(src, progress=update)
     img = sim.run(src, sensor=sensor, units=units_, noise=not no_noise, seed=seed, coarse=coarse)
-    meta = {
-        "system": s.name,
-        "seed": seed,
-        "noise": not no_noise,
-        "gsd_act_m": s.gsd_act_m,
-        "gsd_alt_m": s.gsd_alt_m,
-        "input": str(input_),
-        "input_pixel_m": src.pixel_m,
-    }
-    bits = sensor.bit_depth if sensor is not None else s.detector.bit_depth
     io.write_simulated(out, img, units=units_, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)
     console.print(
         f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}",
@@ -321,6 +340,57 @@ def simulate(
         meta = {"units": "input (reflectance) filtered by the optics and motion", "system": s.name, "grid": fp_grid}
         io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=fp_pixel, metadata=meta)
         console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)", markup=False, highlight=False)
+
+
+def _simulate_streamed(sim, src, out: Path, *, sensor, units: str, noise: bool, seed: int, bits, meta, scheduler):
+    """``satchain simulate`` for an input whose coarse frame does not fit in memory: the coarse grid on disk
+    beside ``out``, stage 2 tile by tile, the image written band by band (:mod:`satchain.engine.stream`)."""
+    from satchain._safety import check_disk, clean_stale, memory_limit_bytes
+    from satchain.engine.stream import coarse_store, stream_bytes, stream_tile_px, write_streamed
+    from satchain.io import simulated_dtype
+
+    ny, nx = sim.n_coarse
+    oy, ox = sim.output_shape
+    image_bytes = float(oy) * ox * simulated_dtype(units, bits).itemsize
+    check_disk(4.0 * ny * nx + image_bytes, [out], f"streaming {sim.input_shape[0]} x {sim.input_shape[1]} input px")
+    clean_stale(out)  # scratch folders of killed runs
+    t, m = stream_tile_px(sim), sim.params.stream_margin_px
+    console.print(
+        f"streamed: the full-frame path would exceed the memory limit ({memory_limit_bytes() / 2**30:.1f} GiB); "
+        f"the coarse grid ({ny} x {nx}, {4.0 * ny * nx / 2**30:.2f} GiB) goes to disk beside {out}, the image is "
+        f"formed in {t} x {t} px tiles with {m} px margins (about {stream_bytes(sim) / 2**30:.2f} GiB of memory)",
+        markup=False,
+        highlight=False,
+    )
+    with coarse_store(sim, out.parent, prefix=f".{out.name}.staging-") as coarse:
+        bar, update = _progress(f"stage 1: {sim.input_shape[0]}x{sim.input_shape[1]} px")
+        with bar:
+            if scheduler is not None:
+                from satchain.engine.distributed import decimate_distributed
+
+                decimate_distributed(sim, src, scheduler=scheduler, progress=update, out=coarse)
+            else:
+                sim.decimate(src, progress=update, out=coarse)
+        bar, update = _progress(f"stage 2: {oy}x{ox} px in {t}-px tiles")
+        with bar:
+            write_streamed(
+                out,
+                sim,
+                coarse,
+                sensor=sensor,
+                units=units,
+                noise=noise,
+                seed=seed,
+                bit_depth=bits,
+                pixel_m=sim.system.gsd_act_m,
+                metadata=meta,
+                progress=update,
+            )
+    console.print(
+        f"wrote {out} ({oy} x {ox} px, {units}, streamed) and {out.with_suffix('.png')} (subsampled preview)",
+        markup=False,
+        highlight=False,
+    )
 
 
 def _print_run(result) -> None:

@@ -119,10 +119,13 @@ def _decimate_client(sim: Simulator, source, coarse: np.ndarray, client, progres
         del sim_f, src_f
 
 
-def decimate_distributed(sim: Simulator, source, *, scheduler=None, progress: Progress | None = None) -> np.ndarray:
+def decimate_distributed(
+    sim: Simulator, source, *, scheduler=None, progress: Progress | None = None, out: np.ndarray | None = None
+) -> np.ndarray:
     """Stage 1 of ``sim`` (:meth:`Simulator.decimate`) with its tiles spread over Dask: ``scheduler`` as for
     :func:`simulate_distributed`, or ``"local"`` for a ``distributed.LocalCluster`` on this machine (one
-    worker process per core). Returns the coarse grid, identical to ``sim.decimate(source)``."""
+    worker process per core). Returns the coarse grid, identical to ``sim.decimate(source)``, written into
+    ``out`` when given (e.g. a disk-backed array, :func:`satchain.engine.stream.coarse_store`)."""
     _require("dask")
     cluster = None
     if scheduler == "local":
@@ -133,7 +136,9 @@ def decimate_distributed(sim: Simulator, source, *, scheduler=None, progress: Pr
         client = scheduler
     else:
         client, owned = _client_for(scheduler)
-    coarse = np.empty(sim.n_coarse, dtype=np.float32)
+    if out is not None and (out.shape != sim.n_coarse or out.dtype != np.float32):
+        raise ConfigError(f"out: shape {out.shape}, dtype {out.dtype} must be {sim.n_coarse}, float32")
+    coarse = np.empty(sim.n_coarse, dtype=np.float32) if out is None else out
     try:
         if client is None:
             _decimate_threads(sim, source, coarse, progress)
@@ -203,6 +208,7 @@ def simulate_distributed(
     _require("dask")
     src = as_ground_truth(source, pixel_m=pixel_m)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
+    sim.check_frame()  # before stage 1
     coarse = decimate_distributed(sim, src, scheduler=scheduler, progress=progress)
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)
     if zarr_path is not None:

@@ -4,7 +4,9 @@ The engine bounds its own working set (one decimation tile, the coarse frame: ``
 with the job is the coarse grid (4 bytes per coarse sample), the output image and the sensor's temporaries
 (about :data:`OUTPUT_BYTES_PER_PX` per output pixel: the folded complex spectrum, the float64 image, noise
 draws and the file's copy) and, optionally, the focal-plane image. :func:`check_simulation_memory` refuses a
-job whose estimate exceeds :func:`satchain._safety.memory_limit_bytes` with the need in GiB.
+job whose estimate exceeds :func:`satchain._safety.memory_limit_bytes` with the need in GiB. Where it does not
+fit, ``satchain simulate`` takes the streamed path instead when that fits
+(:func:`satchain.engine.stream.choose_streamed`, estimate :func:`satchain.engine.stream.stream_bytes`).
 """
 
 from __future__ import annotations

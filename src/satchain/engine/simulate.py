@@ -37,6 +37,7 @@ from satchain.tf.budget import SystemOTF
 __all__ = ["SimParams", "Simulator", "simulate"]
 
 Progress = Callable[[int, int], None]
+Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
 _TILE_BYTES_PER_PX = 20  # float64 read + float32 tile + complex64 half spectrum + kept band
 _FRAME_BYTES_PER_PX = 20  # coarse float32 + complex64 half spectrum + band products
 
@@ -70,6 +71,14 @@ class SimParams:
         Side of the fixed noise-block grid (output pixels).
     workers : int
         Threads for the FFTs.
+    stream_tile_px : int
+        Streamed stage 2 (:mod:`satchain.engine.stream`, for inputs whose coarse frame does not fit): output
+        tile side, output pixels (rounded up to a multiple of ``noise_block_px`` and of the output period
+        that keeps tiles on the coarse grid).
+    stream_margin_px : int
+        Streamed stage 2: output pixels of coarse frame read beyond each side of a tile; the PSF tail beyond
+        it is wrapped around the tile's window instead of taken from the scene (the error it leaves is
+        measured in ``benchmarks/bench_stream.py``).
     """
 
     far_margin_px: int = 128
@@ -82,6 +91,8 @@ class SimParams:
     max_frame_bytes: int = 3 * 2**30
     noise_block_px: int = 64
     workers: int = 2
+    stream_tile_px: int = 2048
+    stream_margin_px: int = 128
 
     def __post_init__(self) -> None:
         check_choice("border", self.border, BORDER_RULES)
@@ -98,6 +109,10 @@ class SimParams:
             raise ConfigError(f"noise_block_px = {self.noise_block_px!r}: must be in [1, 4096]")
         if not 1 <= int(self.workers) <= 256:
             raise ConfigError(f"workers = {self.workers!r}: must be in [1, 256]")
+        if not 64 <= int(self.stream_tile_px) <= 65536:
+            raise ConfigError(f"stream_tile_px = {self.stream_tile_px!r}: must be in [64, 65536]")
+        if not 0 <= int(self.stream_margin_px) <= 100_000:
+            raise ConfigError(f"stream_margin_px = {self.stream_margin_px!r}: must be in [0, 100000]")
 
 
 def _int_ratio(k: float) -> int | None:
@@ -207,12 +222,21 @@ class Simulator:
             ext.append(e)
             length.append(n)
         self.frame_ext, self.frame_shape = tuple(ext), tuple(length)
-        need = _FRAME_BYTES_PER_PX * length[0] * length[1]
+
+    @property
+    def frame_bytes(self) -> float:
+        """Working memory of the full-frame stage 2 (:meth:`form_image`), bytes."""
+        return float(_FRAME_BYTES_PER_PX) * self.frame_shape[0] * self.frame_shape[1]
+
+    def check_frame(self) -> None:
+        """Refuse the full-frame stage 2 when its frame exceeds ``SimParams.max_frame_bytes``."""
+        need, p = self.frame_bytes, self.params
         if need > p.max_frame_bytes:
+            ly, lx = self.frame_shape
             raise ResourceLimitError(
-                f"input {self.input_shape[0]} x {self.input_shape[1]} px: its coarse frame {length[0]} x {length[1]} "
-                f"needs about {need / 2**30:.2f} GiB; SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} "
-                "GiB: simulate the input in parts (crop it) or raise SimParams.max_frame_bytes"
+                f"input {self.input_shape[0]} x {self.input_shape[1]} px: its coarse frame {ly} x {lx} needs about "
+                f"{need / 2**30:.2f} GiB; SimParams.max_frame_bytes allows {p.max_frame_bytes / 2**30:.2f} GiB: use "
+                "the streamed stage 2 (satchain.engine.stream), crop the input or raise SimParams.max_frame_bytes"
             )
 
     @property
@@ -235,9 +259,14 @@ class Simulator:
         m = self.margin_fine // self.D
         return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
-    def decimate(self, source: GroundTruth, *, progress: Progress | None = None) -> np.ndarray:
-        """Stage 1 over all tiles: the coarse grid of the whole ground truth (float32)."""
-        coarse = np.empty(self.n_coarse, dtype=np.float32)
+    def decimate(
+        self, source: GroundTruth, *, progress: Progress | None = None, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Stage 1 over all tiles: the coarse grid of the whole ground truth (float32), written into ``out``
+        (e.g. a disk-backed array, :func:`satchain.engine.stream.coarse_store`) when given."""
+        if out is not None and (out.shape != self.n_coarse or out.dtype != np.float32):
+            raise ConfigError(f"out: shape {out.shape}, dtype {out.dtype} must be {self.n_coarse}, float32")
+        coarse = np.empty(self.n_coarse, dtype=np.float32) if out is None else out
         for n, tile in enumerate(self.tiles):
             coarse[tile.coarse.rows, tile.coarse.cols] = self.decimate_tile(source, tile)
             if progress is not None:
@@ -247,65 +276,156 @@ class Simulator:
     # ------------------------------------------------------------------ stage 2
     def form_image(self, coarse: np.ndarray) -> np.ndarray:
         """Stage 2: OTF, detector footprints and sampling, from the coarse grid to the output image (input
-        units, no noise)."""
+        units, no noise), on the whole coarse frame at once (exact; see :meth:`form_tile` for a window)."""
         if coarse.shape != self.n_coarse:
             raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
-        p, D = self.params, self.D
+        self.check_frame()
         (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
-        cy, cx = self.coarse_ext  # the coarse grid already holds cy, cx exact samples beyond the edge
-        pad = ((ey - cy, ly - self.n_coarse[0] - ey + cy), (ex - cx, lx - self.n_coarse[1] - ex + cx))
-        if p.border == "constant":
-            frame = np.pad(coarse, pad, mode="constant", constant_values=p.border_value)
-        elif p.border == "periodic":
-            frame = coarse
-        else:
-            frame = self._mirror_frame(coarse)
-        f_band = self.f_cut * D  # cycles per coarse sample
+        frame = self._frame_window(coarse, (-ey, -ex), (ly, lx))
+        return self._form_block(frame, (-ey, -ex), (0, self.output_shape[0]), (0, self.output_shape[1]))
+
+    def frame_map(self, axis: int) -> np.ndarray:
+        """Coarse-grid index of every sample of the coarse frame along ``axis`` (frame sample 0 is the
+        ground truth's coarse sample ``-frame_ext``); -1 where the frame holds ``border_value``. Under the
+        mirror rule: the exact border band from stage 1, then the ground truth's coarse samples mirrored
+        about its edges (exact at an edge whose length is a multiple of D: the samples sit at block centres)."""
+        from satchain.engine.sources import _map_indices
+
+        e, c, n_all, length = self.frame_ext[axis], self.coarse_ext[axis], self.n_coarse[axis], self.frame_shape[axis]
+        if self.params.border == "periodic":
+            return np.arange(n_all)
+        nc = n_all - 2 * c  # the ground truth's own samples
+        t = np.arange(-e, length - e)
+        inside = (t >= -c) & (t < nc + c)
+        if self.params.border == "constant":
+            return np.where(inside, t + c, -1)
+        return np.where(inside, t, _map_indices(-e, length, nc, "symmetric")) + c
+
+    def _frame_window(self, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
+        """Samples ``start .. start + shape`` (ground-truth coarse coordinates) of the coarse frame, taken
+        periodically over the frame (as its FFT sees it), as float32."""
+        idx = []
+        for ax in (0, 1):
+            fm = self.frame_map(ax)
+            t = np.arange(start[ax], start[ax] + shape[ax]) + self.frame_ext[ax]
+            idx.append(fm[np.mod(t, fm.size)])
+        iy, ix = idx
+        # only the window's elements are read (a disk-backed coarse grid is never loaded whole)
+        out = np.asarray(coarse[np.ix_(np.maximum(iy, 0), np.maximum(ix, 0))], dtype=np.float32)
+        if self.params.border == "constant":
+            out[iy < 0, :] = self.params.border_value
+            out[:, ix < 0] = self.params.border_value
+        return out
+
+    def tile_window(self, rows: tuple[int, int], cols: tuple[int, int], margin_px: int) -> tuple[tuple, tuple]:
+        """``(start, shape)`` in ground-truth coarse coordinates of the coarse window that :meth:`form_tile`
+        transforms for output pixels ``rows x cols`` with ``margin_px`` output pixels of context on each side:
+        its start on the output grid's period and its length a fast FFT size (a multiple of that period)."""
+        start, shape = [], []
+        for ax, (lo, hi) in enumerate((rows, cols)):
+            kk, ki, D = self.k[ax], self.k_int[ax], self.D
+            q = ki // math.gcd(ki, D) if ki else 1  # coarse samples per aligned output period
+            a = int(math.floor((lo - margin_px) * kk / D / q)) * q
+            b = int(math.ceil((hi + margin_px) * kk / D))
+            start.append(a)
+            shape.append(q * spectral_len(-(-(b - a) // q)))
+        return tuple(start), tuple(shape)
+
+    def form_tile(
+        self,
+        coarse: np.ndarray,
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        margin_px: int,
+        weight: Weight | None = None,
+    ) -> np.ndarray:
+        """Stage 2 on a window: output pixels ``rows[0]:rows[1] x cols[0]:cols[1]`` from the coarse frame's
+        window extending ``margin_px`` output pixels beyond them (periodic over that window: the PSF's tail
+        beyond the margin is wrapped, not cut; it equals :meth:`form_image` as the margin grows). Memory is one
+        window; ``coarse`` may be a disk-backed array. ``weight(fy, fx)``: a spectral weight (cycles per coarse
+        sample) applied with the OTF, e.g. the near-field part of :mod:`satchain.engine.stream`."""
+        if coarse.shape != self.n_coarse:
+            raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
+        start, shape = self.tile_window(rows, cols, margin_px)
+        if all(n >= f for n, f in zip(shape, self.frame_shape, strict=True)):  # the whole frame is no larger
+            (ey, ex), shape = self.frame_ext, self.frame_shape
+            start = (-ey, -ex)
+        block = self._frame_window(coarse, start, shape)
+        return self._form_block(block, start, rows, cols, weight=weight)
+
+    def _form_block(
+        self,
+        block: np.ndarray,
+        start: tuple[int, int],
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        weight: Weight | None = None,
+    ) -> np.ndarray:
+        """Output pixels ``rows x cols`` of the periodic extension of ``block``, whose sample 0 is the ground
+        truth's coarse sample ``start``: OTF, footprints and sampling in frequency."""
+        f_band = self.f_cut * self.D  # cycles per coarse sample
+        ly, lx = block.shape
         spec = spectral.tile_band_spectrum(
-            frame, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=p.workers
+            block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=self.params.workers
         )
-        del frame
-        ny_f, nx_f = ly * D, lx * D  # frame length in input pixels
+        del block
+        return self.form_spectrum(spec, start, rows, cols, weight=weight)
+
+    def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
+        """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse
+        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``."""
+        D = self.D
+        ly, lx = spec.shape
+        ny_f, nx_f = ly * D, lx * D  # block length in input pixels
         fy = spec.my / ny_f * self.to_cy_per_mm[0]
         fx = spec.mx / nx_f * self.to_cy_per_mm[1]
         vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
+        if weight is not None:
+            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
         c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
-        vals = (
+        return (
             vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
         )
+
+    def form_spectrum(
+        self,
+        spec: spectral.BandSpectrum,
+        start: tuple[int, int],
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+        *,
+        weight: Weight | None = None,
+        fold: bool = True,
+    ) -> np.ndarray:
+        """Output pixels ``rows x cols`` from the band ``spec`` of the DFT of a periodic coarse block
+        (``spec.shape``) whose sample 0 is the ground truth's coarse sample ``start``, its values multiplied by
+        ``weight(fy, fx)`` (cycles per coarse sample) when given. ``fold=False``: always the matrix DFT."""
+        D = self.D
+        ly, lx = spec.shape
+        ny_f, nx_f = ly * D, lx * D  # block length in input pixels
+        vals = self.band_values(spec, weight=weight)
         scale = 1.0 / (ly * lx)
-        if all(self.k_int):
+        ky, kx = self.k_int
+        if fold and ky and kx and not ((start[0] * D) % ky or (start[1] * D) % kx or ny_f % ky or nx_f % kx):
             ay = spectral.footprint_transfer(
                 spec.my, centre=self.ys.centres(0, 1)[0], width_px=self.ys.width_px, n_total=ny_f
             )
             ax = spectral.footprint_transfer(
                 spec.mx, centre=self.xs.centres(0, 1)[0], width_px=self.xs.width_px, n_total=nx_f
             )
-            n_out = (ny_f // self.k_int[0], nx_f // self.k_int[1])
+            n_out = (ny_f // ky, nx_f // kx)
             img = spectral.fold_onto_grid(vals * ay[:, None] * ax[None, :], spec.my, spec.mx, spec.cx, n_out) * scale
-            oy, ox = (ey * D) // self.k_int[0], (ex * D) // self.k_int[1]
-            return img[oy : oy + self.output_shape[0], ox : ox + self.output_shape[1]]
-        my = spectral.sampling_matrix(
-            self.ys.centres(0, self.output_shape[0]) + ey * D, self.ys.width_px, 0, ny_f, spec.my
-        )
-        mx = spectral.sampling_matrix(
-            self.xs.centres(0, self.output_shape[1]) + ex * D, self.xs.width_px, 0, nx_f, spec.mx
-        )
-        return np.real(my @ ((vals * spec.cx[None, :]) @ mx.T)) * scale
-
-    def _mirror_frame(self, coarse: np.ndarray) -> np.ndarray:
-        """The coarse frame under the mirror rule: the exact border band from stage 1, then the ground truth's
-        coarse samples mirrored about its edges (exact at an edge whose length is a multiple of D, because
-        the samples sit at block centres)."""
-        from satchain.engine.sources import _map_indices
-
-        idx = []
-        for e, c, n_all, length in zip(self.frame_ext, self.coarse_ext, self.n_coarse, self.frame_shape, strict=True):
-            nc = n_all - 2 * c  # the ground truth's own samples
-            t = np.arange(-e, length - e)
-            mirrored = _map_indices(-e, length, nc, "symmetric")
-            idx.append(np.where((t >= -c) & (t < nc + c), t, mirrored) + c)
-        return coarse[np.ix_(idx[0], idx[1])]
+            oy, ox = rows[0] - (start[0] * D) // ky, cols[0] - (start[1] * D) // kx
+            return img[oy : oy + rows[1] - rows[0], ox : ox + cols[1] - cols[0]]
+        my = spectral.sampling_matrix(self.ys.centres(*rows) - start[0] * D, self.ys.width_px, 0, ny_f, spec.my)
+        mx = spectral.sampling_matrix(self.xs.centres(*cols) - start[1] * D, self.xs.width_px, 0, nx_f, spec.mx)
+        v = vals * spec.cx[None, :]
+        (ty, by), (tx, bx) = my.shape, mx.shape
+        if ty * by * bx + ty * bx * tx < by * bx * tx + ty * by * tx:  # the cheaper order of the two products
+            return np.real((my @ v) @ mx.T) * scale
+        return np.real(my @ (v @ mx.T)) * scale
 
     def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
         """The focal-plane irradiance image (the paper's Figure 4b, in input units): the ground truth filtered
@@ -362,6 +482,7 @@ class Simulator:
             raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
         if tuple(source.shape_px) != self.input_shape:
             raise ConfigError(f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}")
+        self.check_frame()  # before stage 1, not after it
         img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
         if sensor is not None:
             img = sensor.convert(
