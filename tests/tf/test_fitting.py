@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from satchain import ConfigError, InputError
@@ -13,6 +13,7 @@ from satchain.tf.fitting import fit_mtf
 
 @given(eps=st.floats(0.0, 0.6), smear=st.floats(0.0, 2.0), seed=st.integers(0, 2**32 - 1))
 @settings(max_examples=8, deadline=None)
+@example(eps=0.25, smear=0.0, seed=18472)  # smear at 0 fitted 0.15 +- 0.03 (Wald): identifiable only as L^2
 def test_recovers_known_parameters_from_noisy_curve(ankarasat3, eps, smear, seed):
     truth = ankarasat3.replace({"optics.obscuration_ratio": eps, "motion.smear_px": smear})
     f = np.linspace(4, 150, 30)
@@ -21,10 +22,15 @@ def test_recovers_known_parameters_from_noisy_curve(ankarasat3, eps, smear, seed
     start = ankarasat3.replace({"optics.obscuration_ratio": 0.2, "motion.smear_px": 0.8})
     r = fit_mtf(f, m, start, parameters=["optics.obscuration_ratio", "motion.smear_px"], sigma=sigma)
     for k, v in (("optics.obscuration_ratio", eps), ("motion.smear_px", smear)):
+        if k == "motion.smear_px" and v < 0.3:
+            # sinc(L f) = 1 - (pi L f)^2 / 6 + ...: near L = 0 the MTF depends on L^2, so the linearised
+            # (Wald) sigma does not describe the error of L there; the fitted curve is checked below instead
+            continue
         # within 5 sigma of the truth, or at the bound the truth sits on
         assert abs(r.values[k] - v) < 5 * r.stderr[k] + 1e-3
-    # residuals are consistent with the noise
+    # residuals are consistent with the noise, and the fitted curve is the true one within the noise
     assert r.rms_residual < 3 * sigma
+    assert np.max(np.abs(mtf_budget(r.system, f).alt["system"] - mtf_budget(truth, f).alt["system"])) < 4 * sigma
 
 
 def test_fit_of_paper_table_gives_preset_values(ankarasat3):
