@@ -34,8 +34,9 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
-from satchain.measure._barfit import GroupFit, fit_group
-from satchain.measure._barjoint import fit_mtf_model, refit_with_prior
+from satchain.measure._barfit import GroupFit, fit_group, plateau as _plateau
+from satchain.measure._barfinite import finite_group_correction
+from satchain.measure._barjoint import HOLD_ABOVE, fit_mtf_model, prior_harmonics, refit_with_prior
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -65,6 +66,7 @@ class BarsResult(ResultMixin):
     levels_from: str = "given"
     noise_std: np.ndarray | None = None
     flags: tuple = ()
+    ctf_correction: np.ndarray | None = None
 
 
 def coltman_inverse_coefficients(n_terms: int = 40) -> list[tuple[int, float]]:
@@ -196,12 +198,12 @@ def _sampled_floor(prof: np.ndarray, noise: float) -> float:
     return max(span, 0.0) / float(prof.max() + prof.min())
 
 
-def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags):
+def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags, extra_std=0.0):
     """The fitted CTF kept within [sampled modulation, 1]: the samples bound it from below, and a blurred
     profile (non-negative PSF) stays within the target's levels.  A fit outside (aliased harmonics of a
     sharp system) is clipped and flagged."""
     ctf = np.asarray(ctf, dtype=float).copy()
-    std = np.sqrt((mod_std / c_large) ** 2 + (ctf * c_std / c_large) ** 2)
+    std = np.sqrt((mod_std / c_large) ** 2 + (ctf * c_std / c_large) ** 2 + np.asarray(extra_std) ** 2)
     for i in range(ctf.size):
         lo, hi = floor[i], 1.0
         if ctf[i] < lo - max(2 * std[i], 0.005):
@@ -234,49 +236,6 @@ def _levels(fits, periods, levels, profiles):
     return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
 
 
-def _plateau(prof: np.ndarray, fit: GroupFit, period: float):
-    """Modulation and 1-sigma from the samples within P/8 of the bar and gap centres, when those are flat
-    (a plateau: bars wide enough for the blur; the samples then are the peak and trough themselves), else
-    None; and the relative spread found.  Needs P >= 8 px and samples within +-P/8 of each centre at
-    distinct distances from it (flatness is seen within one bar, not across bars or mirror samples)."""
-    if period < 8.0:
-        return None, np.inf
-    x = np.arange(prof.size, dtype=float)
-    u = (x - fit.x0) % period
-    d_bright, d_dark = np.minimum(u, period - u), np.abs(u - period / 2)
-    near_b, near_d = d_bright <= period / 8, d_dark <= period / 8
-    bright, dark = prof[near_b], prof[near_d]
-    if bright.size < 2 or dark.size < 2:
-        return None, np.inf
-    b, d = float(np.mean(bright)), float(np.mean(dark))
-    if not b > d:
-        return None, np.inf
-    # the profile is symmetric about a centre, ~ peak - kappa dist^2: the samples' spread shows the drop
-    # from the peak only through their distinct distances (two samples at +-0.5 px are equal on any peak:
-    # 8 px at sigma 0.8 px read 0.919 for 0.963), scaled to the drop at the farthest one; when all sit at one
-    # distance (e.g. +-0.5 px at 8 px) the check reaches out to 3P/16 (still on the bar top for a flat one)
-    wide = min(period / 8 + 1.0, 3 * period / 16)
-    drop = max(_drop(prof, dist, period / 8, wide, fit.noise) for dist in (d_bright, d_dark))
-    spread = drop / (b - d)
-    if spread > 0.005:
-        return None, spread
-    sd = float(fit.noise * np.sqrt(1 / bright.size + 1 / dark.size) * 2 * np.sqrt(b * b + d * d) / (b + d) ** 2)
-    return ((b - d) / (b + d), sd), spread
-
-
-def _drop(prof: np.ndarray, dist: np.ndarray, near: float, wide: float, noise: float) -> float:
-    """Spread of the samples within ``near`` of a centre (within ``wide`` if they all sit at one distance)
-    less 3 noise sigma, scaled by ``dmax^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to
-    the farthest sample; inf when all sit at one distance (nothing seen)."""
-    for lim in (near, wide):
-        sel = dist <= lim
-        d2 = dist[sel] ** 2
-        span = float(d2.max() - d2.min()) if d2.size else 0.0
-        if span >= 0.05:
-            return max(float(np.ptp(prof[sel])) - 3 * noise, 0.0) * float(d2.max()) / span
-    return np.inf
-
-
 def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
     """Large-area contrast from the widest group's plateaus; refused when it has none (the CTF would be
     inflated)."""
@@ -298,6 +257,7 @@ def measure_bars(
     direction: str = "ACT",
     levels=None,
     pixel_m: float | None = None,
+    bars_per_group: int | None = 3,
 ) -> BarsResult:
     """CTF of bar groups (fitted at the known period, any grid phase) and the MTF from the inverse Coltman
     series.
@@ -352,14 +312,21 @@ def measure_bars(
         floors.append(_sampled_floor(prof, fit.noise))
         profiles.append(prof)
     c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
-    fits, flags = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
+    fits, flags, model, joint = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
+    plateau = np.zeros(len(fits), dtype=bool)
     for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
         found, _ = _plateau(prof, fit, float(p))
         if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
             mod[i], mod_std[i] = found
+            plateau[i] = True
             flags = [f for f in flags if not (f.startswith(f"group {i}: ") and "alias" in f)]
+    corr, corr_std = np.zeros(len(fits)), np.zeros(len(fits))
+    if model is not None and bars_per_group is not None:
+        corr, corr_std, flags = finite_group_correction(
+            model, fits, profiles, periods, c_large, int(bars_per_group), joint, plateau, flags
+        )
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
@@ -367,7 +334,7 @@ def measure_bars(
             f"levels = {levels!r}: the sampled CTF of the {periods[k]:g} px group is already {floor[k]:.3g} > "
             f"{CTF_MAX}; the large-area contrast is too small (wrong levels?)"
         )
-    ctf, ctf_std = _bounded_ctf(mod / c_large, mod_std, c_large, c_std, floor, periods, flags)
+    ctf, ctf_std = _bounded_ctf(mod / c_large + corr, mod_std, c_large, c_std, floor, periods, flags, corr_std)
     f = 1.0 / periods
     mtf, mtf_std = _mtf_with_std(f, ctf, ctf_std)
     bad = ~((mtf >= 0) & (mtf <= CTF_MAX))
@@ -389,29 +356,51 @@ def measure_bars(
         levels_from=levels_from,
         noise_std=np.array([ft.noise for ft in fits]),
         flags=tuple(flags),
+        ctf_correction=corr if model is not None and bars_per_group is not None else None,
     )
 
 
 def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):
-    """Groups with harmonics sampled at their zero crossings: refit with the target's joint MTF model as a
-    prior on those harmonics (needs enough groups; else the group keeps its flag)."""
-    if not any(ft.unobserved for ft in fits):
-        return fits, flags
+    """Groups with harmonics they cannot observe (aliased onto fitted ones, or sampled at their zero
+    crossings): refit with the target's joint MTF model as a prior on those harmonics, iterated with the
+    model to a fixed point (needs enough groups; else each group keeps its flag).  See ``_barjoint``."""
+    todo = [i for i, (ft, p) in enumerate(zip(fits, periods, strict=True)) if _joint_candidate(ft, float(p))]
+    first, fits, used = fits, list(fits), {}
     model = fit_mtf_model(fits, periods, c_large)
-    if model is None:
-        return fits, flags
-    fits = list(fits)
-    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
-        if not fit.unobserved:
-            continue
-        fits[i], used = refit_with_prior(prof, float(p), fit, c_large, model, noises[i])
-        flags = [f for f in flags if not f.startswith(f"group {i}: harmonic(s) ")]
-        txt = ", ".join(f"{k}: M({k / p:.3f}) = {m:.3f} +- {sm:.3f}" for k, (m, sm) in used.items())
+    if model is None or not todo:
+        return fits, flags, model, ()
+    for _ in range(_JOINT_ITERATIONS):
+        new = list(fits)
+        for i in todo:
+            new[i], used[i] = refit_with_prior(profiles[i], float(periods[i]), first[i], model, noises[i])
+        change = max(abs(new[i].modulation - fits[i].modulation) for i in todo)
+        fits = new
+        if change < 1e-7:
+            break
+        model = fit_mtf_model(fits, periods, c_large) or model
+    for i in todo:
+        p = float(periods[i])
+        flags = [f for f in flags if not (f.startswith(f"group {i}: ") and ("alias" in f or "zero crossings" in f))]
+        txt = ", ".join(f"M({k / p:.3f}) = {m:.3f} +- {sm:.3f}" for k, (m, sm) in used[i].items())
         flags.append(
-            f"group {i}: harmonic(s) {list(used)} of the {p:g} px period are sampled near their zero crossings at "
-            f"this phase; constrained by the MTF fitted to the target's groups ({txt}), uncertainty included"
+            f"group {i}: harmonic(s) {list(used[i])} of the {p:g} px period alias onto others or are sampled near "
+            f"their zero crossings; constrained by the MTF fitted to the target's groups ({txt}), uncertainty "
+            "included"
         )
-    return fits, flags
+    return fits, flags, model, tuple(todo)
+
+
+#: Most rounds of (joint model, group refits); the aliased terms are a few % of the fundamentals, so a
+#: handful reaches the fixed point.
+_JOINT_ITERATIONS = 8
+
+
+def _joint_candidate(fit: GroupFit, period: float) -> bool:
+    """A group whose CTF needs harmonics it cannot observe, and whose phase is identifiable (fundamental not
+    within 0.02 cy/px of 0.5 cy/px)."""
+    g1 = abs(1 / period - round(1 / period))
+    held = any(k / period > HOLD_ABOVE for k in fit.harmonics if k > 1)
+    return 0.5 - g1 >= 0.02 and fit.cov is not None and (bool(prior_harmonics(fit, period)) or held)
 
 
 def _mtf_with_std(f, ctf, ctf_std):
