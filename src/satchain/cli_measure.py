@@ -303,12 +303,22 @@ def bars(
         str | None,
         typer.Option("--levels", help="large-area DARK,BRIGHT levels; default: the widest group if flat-topped"),
     ] = None,
+    bars_per_group: Annotated[
+        int,
+        typer.Option(
+            "--bars-per-group",
+            help="bright bars in each group (3: USAF-style and the paper's targets); 0: a long grating, whose "
+            "CTF is not corrected for a finite group",
+        ),
+    ] = 3,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
 ) -> None:
-    """Bar-target CTF per group and the MTF from the inverse Coltman series."""
+    """Bar-target CTF per group (the square-wave CTF: with 3 or more groups, corrected for the finite group,
+    aliased harmonics and grid phase through the target's joint MTF) and the MTF from the inverse Coltman
+    series."""
     from satchain.measure.bars import measure_bars
     from satchain.report.measure_plots import plot_bars
 
@@ -324,7 +334,15 @@ def bars(
     else:
         raise ConfigError(f"--periods-px = {periods_px!r}: {len(periods)} groups need one --group-roi each")
     lv = None if levels is None else tuple(_numbers("--levels", levels, 2))
-    r = measure_bars(data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p)
+    r = measure_bars(
+        data,
+        periods_px=periods,
+        group_rois=rois,
+        direction=direction.upper(),
+        levels=lv,
+        pixel_m=p,
+        bars_per_group=bars_per_group or None,
+    )
     payload = {"image": str(image), "group_rois": rois, "pixel_m": p, **r.to_dict()}
 
     def plot(d: Path):
@@ -338,6 +356,7 @@ def bars(
             "f cy/px",
             *(["f cy/m ground"] if p else []),
             "CTF ± 1σ",
+            "of which correction",
             "MTF (Coltman inverse) ± 1σ",
             "bar phase px",
         ):
@@ -350,6 +369,7 @@ def bars(
                 f"{r.f_cy_per_px[k]:.4f}",
                 *ground,
                 _pm(float(r.ctf[k]), float(r.ctf_std[k])),
+                "-" if r.ctf_correction is None else f"{float(r.ctf_correction[k]):+.4f}",
                 _pm(mtf, float(r.mtf_std[k])),
                 f"{r.phase_px[k]:.3f}",
             )

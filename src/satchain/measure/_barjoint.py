@@ -239,7 +239,9 @@ def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noi
     ph = 2 * np.pi * np.outer(x - x0, kk) / period
     # covariance with the phase free (its column from the data rows only)
     dx0 = np.sin(ph) @ (amps * 2 * np.pi * kk / period) / s
-    jac = np.column_stack([np.vstack([_design(x, period, ks, x0) / s, prior]), np.concatenate([dx0, np.zeros(len(pk))])])
+    jac = np.column_stack(
+        [np.vstack([_design(x, period, ks, x0) / s, prior]), np.concatenate([dx0, np.zeros(len(pk))])]
+    )
     cov = np.linalg.pinv(jac.T @ jac)
     total = float(np.sum(amps))
     if total < 0:  # x0 on a dark bar: move it to a bright one (odd harmonics change sign)

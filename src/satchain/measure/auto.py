@@ -518,7 +518,13 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
         periods_px = [float(g["period_m"]) / p for g in groups]
         try:
             r = measure_bars(
-                refl, periods_px=periods_px, group_rois=rois, direction=direction, levels=levels, pixel_m=p
+                refl,
+                periods_px=periods_px,
+                group_rois=rois,
+                direction=direction,
+                levels=levels,
+                pixel_m=p,
+                bars_per_group=int(it["n_bars"]),
             )
             break
         except InputError as exc:
@@ -538,6 +544,7 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
             "ctf_std": cs,
             "mtf": m,
             "phase_px": ph,
+            "ctf_correction": None if r.ctf_correction is None else float(r.ctf_correction[j]),
             "flags": [f for f in r.flags if f.startswith(f"group {j}:")],
         }
         for j, (k, g, pp, roi, c, cs, m, ph) in enumerate(
