@@ -157,6 +157,9 @@ class BarCheck(_Detail):
     mtf_predicted: list
     max_abs_error: float | None
     passed: bool | None
+    ctf_std_measured: list = field(default_factory=list)
+    ctf_correction: list = field(default_factory=list)
+    flags: list = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -351,6 +354,13 @@ def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Star
     return [StarCheck.from_dict(d) for d in details], rows
 
 
+def _floats(values, n: int) -> list:
+    """A per-group list as floats (NaN where absent)."""
+    if values is None:
+        return [np.nan] * n
+    return [np.nan if v is None else float(v) for v in values]
+
+
 def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCheck], list[CheckRow]]:
     details, rows = [], []
     for b in measured.get("bar_targets", []):
@@ -373,6 +383,9 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCh
                 "mtf_predicted": np.asarray(m(f)).tolist(),
                 "max_abs_error": err,
                 "pass": _within(err, tol.bar_ctf),
+                "ctf_std_measured": _floats(b.get("ctf_std"), f.size),
+                "ctf_correction": _floats(b.get("ctf_correction"), f.size),
+                "flags": [str(x) for x in b.get("flags", [])],
             }
         )
         lim = BAR_COMPARE_MAX_CY_PER_PX

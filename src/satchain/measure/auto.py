@@ -560,6 +560,7 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
         "ctf": r.ctf,
         "ctf_std": r.ctf_std,
+        "ctf_correction": r.ctf_correction,
         "mtf": r.mtf,
         "mtf_std": r.mtf_std,
         "large_area_contrast": r.large_area_contrast,

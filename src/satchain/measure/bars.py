@@ -377,6 +377,12 @@ def measure_bars(
         corr, corr_std, flags = finite_group_correction(
             model, fits, profiles, periods, c_large, int(bars_per_group), joint, plateau, flags
         )
+    elif bars_per_group is not None:
+        flags.append(
+            f"fewer than 3 groups with a measurable fundamental: each CTF is that of its finite {bars_per_group}-bar "
+            "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
+            "or a sharp system they can differ by a few %"
+        )
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))

@@ -266,7 +266,7 @@ def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
 
 
 def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
-    rows = [[] for _ in range(8)]
+    rows = [[] for _ in range(10)]
     for br in bars:
         f = list(br.get("f_cy_per_px", []))
         lim = br.get("compared_up_to_cy_per_px", 0.2)
@@ -276,6 +276,8 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             _rep(br.get("direction"), n),
             f,
             br.get("ctf_measured", _rep(None, n)),
+            br.get("ctf_std_measured") or _rep(None, n),
+            br.get("ctf_correction") or _rep(None, n),
             br.get("ctf_coltman_predicted", _rep(None, n)),
             br.get("ctf_fourier_synthesis_predicted", _rep(None, n)),
             br.get("mtf_from_ctf_measured", _rep(None, n)),
@@ -289,6 +291,8 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             "direction",
             "f_cy_per_px",
             "ctf_measured",
+            "ctf_std_measured",
+            "ctf_correction_square_wave",
             "ctf_coltman_predicted",
             "ctf_paper_method_predicted",
             "mtf_from_ctf_measured",
