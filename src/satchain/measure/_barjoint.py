@@ -27,7 +27,7 @@ from scipy.optimize import minimize_scalar, nnls
 
 from satchain.measure._barfit import F_HARMONIC_MAX, GroupFit
 
-__all__ = ["MtfModel", "fit_mtf_model", "prior_harmonics", "refit_with_prior"]
+__all__ = ["MtfModel", "fit_mtf_model", "held_harmonics", "prior_harmonics", "refit_with_prior"]
 
 #: Fewest groups (distinct fundamental frequencies) the joint model needs.
 MIN_GROUPS = 3
@@ -38,6 +38,8 @@ MIN_GROUPS = 3
 LOG_MODEL_ERROR = 0.05
 #: Harmonics above this frequency (cy/px) are held at the model in the joint refit, not fitted.
 HOLD_ABOVE = 1.0
+#: ... and those folding below this many cycles per region length.
+HOLD_FOLDED = 1.0
 #: Relative floor of the data 1-sigma in the joint refit (noise-free profiles: keeps it well conditioned).
 NOISE_FLOOR = 1e-6
 
@@ -181,6 +183,18 @@ def prior_harmonics(fit: GroupFit, period: float) -> tuple[int, ...]:
     return tuple(sorted({*out, *fit.unobserved}))
 
 
+def held_harmonics(ks, period: float, n_samples: int) -> tuple[int, ...]:
+    """Harmonics (k > 1) the joint refit holds at the model rather than fits: above :data:`HOLD_ABOVE` cy/px
+    (small behind the pixel aperture), or folding below ``HOLD_FOLDED / L`` cy/px, where over the region they
+    look like the finite group's smooth hump (3.3 px: harmonic 3 folds to 0.09 cy/px)."""
+    out = []
+    for k in ks:
+        g = abs(k / period - round(k / period))
+        if k > 1 and (k / period > HOLD_ABOVE or g < HOLD_FOLDED / n_samples):
+            out.append(int(k))
+    return tuple(out)
+
+
 def _design(x, period, ks, x0):
     return np.column_stack([np.ones_like(x), *(np.cos(2 * np.pi * k * (x - x0) / period) for k in ks)])
 
@@ -204,7 +218,7 @@ def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noi
     # harmonics above 1 cy/px are small (pixel aperture) and, when fitted freely, soak up the finite group's
     # hump (e.g. 2.5 px: harmonic 3 folds to 0.2 cy/px): they are held at the model, not fitted
     ks0 = tuple(sorted({*fit.harmonics, *prior_harmonics(fit, period)}))
-    hold = tuple(k for k in ks0 if k / period > HOLD_ABOVE)
+    hold = held_harmonics(ks0, period, y.size)
     pk = tuple(sorted({*prior_harmonics(fit, period), *hold}))
     ks = ks0
     # the prior ties A_k to the group's own fundamental, A_k = A_1 g_k M(k / P) / (g_1 M(1 / P)): sign-free

@@ -50,7 +50,7 @@ from satchain.errors import InputError
 from satchain.measure._barfinite import finite_group_correction
 from satchain.measure._barfit import GroupFit, fit_group
 from satchain.measure._barfit import plateau as _plateau
-from satchain.measure._barjoint import HOLD_ABOVE, fit_mtf_model, prior_harmonics, refit_with_prior
+from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -420,7 +420,11 @@ def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):
     """Groups with harmonics they cannot observe (aliased onto fitted ones, or sampled at their zero
     crossings): refit with the target's joint MTF model as a prior on those harmonics, iterated with the
     model to a fixed point (needs enough groups; else each group keeps its flag).  See ``_barjoint``."""
-    todo = [i for i, (ft, p) in enumerate(zip(fits, periods, strict=True)) if _joint_candidate(ft, float(p))]
+    todo = [
+        i
+        for i, (ft, p, prof) in enumerate(zip(fits, periods, profiles, strict=True))
+        if _joint_candidate(ft, float(p), len(prof))
+    ]
     first, fits, used = fits, list(fits), {}
     model = fit_mtf_model(fits, periods, c_large)
     if model is None or not todo:
@@ -451,11 +455,11 @@ def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):
 _JOINT_ITERATIONS = 8
 
 
-def _joint_candidate(fit: GroupFit, period: float) -> bool:
+def _joint_candidate(fit: GroupFit, period: float, n_samples: int) -> bool:
     """A group whose CTF needs harmonics it cannot observe, and whose phase is identifiable (fundamental not
     within 0.02 cy/px of 0.5 cy/px)."""
     g1 = abs(1 / period - round(1 / period))
-    held = any(k / period > HOLD_ABOVE for k in fit.harmonics if k > 1)
+    held = bool(held_harmonics(fit.harmonics, period, n_samples))
     return 0.5 - g1 >= 0.02 and fit.cov is not None and (bool(prior_harmonics(fit, period)) or held)
 
 
