@@ -334,6 +334,10 @@ def bars(
     else:
         raise ConfigError(f"--periods-px = {periods_px!r}: {len(periods)} groups need one --group-roi each")
     lv = None if levels is None else tuple(_numbers("--levels", levels, 2))
+    if bars_per_group == 1 or bars_per_group < 0:
+        raise ConfigError(
+            f"--bars-per-group = {bars_per_group}: need >= 2 bright bars per group, or 0 for a long grating"
+        )
     r = measure_bars(
         data,
         periods_px=periods,
