@@ -91,6 +91,11 @@ def fit_plateaus(x: np.ndarray, esf: np.ndarray, lim: float):
         ax = np.abs(x[side])
         if ax.size < 4:
             raise InputError("image: the edge lies at the border of the region; centre it in the ROI")
+        if ax.max() < lim:  # a ramp, or an edge whose transition fills the region: no plateau to fit
+            raise InputError(
+                f"image: no plateau: the transition (2 x its 10-90 % rise = {lim:.1f} px) reaches the region's "
+                f"border ({ax.max():.1f} px from the edge); not an edge, or the region is too small for its blur"
+            )
         use = min(lim, 0.5 * ax.max())
         sel = ax >= use
         xs, es = x[side][sel], esf[side][sel]
