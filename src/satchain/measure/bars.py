@@ -41,13 +41,13 @@ functions; this module keeps its own so measurement stays independent of predict
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
-from satchain.measure._barfinite import finite_group_correction
+from satchain.measure._barfinite import finite_group_correction, group_centres
 from satchain.measure._barfit import GroupFit, fit_group
 from satchain.measure._barfit import plateau as _plateau
 from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
@@ -158,8 +158,10 @@ def _profile(image, roi, direction: str, period: float, index: int):
     return prof, noise, ([f"group {index}: {clip}"] if clip else [])
 
 
-def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> list[str]:
-    """Refuse profiles that are not bars at ``period``; return flags."""
+def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, deferred: dict | None = None) -> list[str]:
+    """Refuse profiles that are not bars at ``period``; return flags.  With ``deferred`` (a target of three or
+    more groups), a profile the periodic model misfits is not refused here: its refusal is recorded under
+    ``index`` and decided against the target's MTF model (``_validate_deferred``)."""
     from satchain.measure._barfit import period_gain
 
     g_claim, g_other, f_other = period_gain(prof, period)
@@ -178,11 +180,15 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int) -> 
     if fit.misfit > 0.25 * amp:
         on_hump = _misfit_on_hump(prof, period, fit)
         if not on_hump <= 0.25 * amp:
-            raise InputError(
+            msg = (
                 f"group_rois[{index}]: the profile is not a bar pattern of period {period:g} px (rms misfit "
                 f"{fit.misfit:.3g} = {fit.misfit / amp:.0%} of the bar amplitude, also with a smooth envelope: a "
                 "single bar or edge, or bars too blurred for the few samples in the region)"
             )
+            if deferred is None:
+                raise InputError(msg)
+            deferred[index] = msg
+            return []
         flags.append(
             f"group {index}: the bars sit on a hump ({fit.misfit / amp:.0%} of the bar amplitude, "
             f"{on_hump / amp:.0%} once a smooth envelope is allowed): a short group under a wide blur; the CTF of "
@@ -228,6 +234,37 @@ def _misfit_on_hump(prof: np.ndarray, period: float, fit: GroupFit) -> float:
     resid = y - d @ np.linalg.lstsq(d, y, rcond=None)[0]
     s2 = float(np.sum(resid**2)) / dof - (fit.noise if np.isfinite(fit.noise) else 0.0) ** 2
     return float(np.sqrt(max(s2, 0.0)))
+
+
+def _validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars, flags):
+    """A group the periodic model misfit (a short group on the hump of a wide blur) is kept only when the
+    target's MTF model, rendering the whole group as it lies in its region, reproduces its profile (rms
+    misfit, after a gain and an offset, within 25 % of the bar amplitude); otherwise the original refusal."""
+    for i, msg in deferred.items():
+        p, prof = float(periods[i]), np.asarray(profiles[i], dtype=float)
+        centres = None
+        if model is not None and n_bars is not None:
+            centres, _ = group_centres(fits[i].x0, p, prof.size, int(n_bars))
+        if centres is None:
+            raise InputError(msg)
+        synth = model.render_group(p, centres, prof.size, c_large)
+        d = np.column_stack([synth, np.ones_like(synth)])
+        coef = np.linalg.lstsq(d, prof, rcond=None)[0]
+        resid = prof - d @ coef
+        s2 = (
+            float(np.sum(resid**2)) / max(prof.size - 2, 1)
+            - (fits[i].noise if np.isfinite(fits[i].noise) else 0.0) ** 2
+        )
+        amp = abs(float(np.sum(fits[i].amps)))
+        misfit = float(np.sqrt(max(s2, 0.0)))
+        if not (coef[0] > 0 and misfit <= 0.25 * amp):
+            raise InputError(msg)
+        flags.append(
+            f"group {i}: the bars sit on the hump of a short group under a wide blur ({fits[i].misfit / amp:.0%} "
+            f"misfit for a periodic profile); the target's MTF model renders the group within {misfit / amp:.0%}: "
+            "measured, with the square-wave correction"
+        )
+    return flags
 
 
 def _sampled_floor(prof: np.ndarray, noise: float) -> float:
@@ -352,12 +389,14 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    fits, floors, profiles, flags, noises = [], [], [], [], []
+    fits, floors, profiles, flags, noises, deferred = [], [], [], [], [], {}
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
         prof, noise, fl = _profile(image, roi, direction, p, i)
         noises.append(noise)
         fit = fit_group(prof, p, noise)
-        flags += fl + _check_group(fit, prof, p, i)
+        flags += fl + _check_group(fit, prof, p, i, deferred if periods.size >= 3 else None)
+        if i in deferred:  # kept out of the joint model until the model has explained it
+            fit = replace(fit, cov=None)
         fits.append(fit)
         floors.append(_sampled_floor(prof, fit.noise))
         profiles.append(prof)
@@ -383,6 +422,8 @@ def measure_bars(
             "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
             "or a sharp system they can differ by a few %"
         )
+    if deferred:
+        flags = _validate_deferred(deferred, model, fits, profiles, periods, c_large, bars_per_group, flags)
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
