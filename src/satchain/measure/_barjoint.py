@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar, nnls
 
-from satchain.measure._barfit import F_HARMONIC_MAX, GroupFit
+from satchain.measure._barfit import F_HARMONIC_MAX, GroupFit, _design
 
 __all__ = ["MtfModel", "fit_mtf_model", "held_harmonics", "prior_harmonics", "refit_with_prior"]
 
@@ -195,10 +195,6 @@ def held_harmonics(ks, period: float, n_samples: int) -> tuple[int, ...]:
     return tuple(out)
 
 
-def _design(x, period, ks, x0):
-    return np.column_stack([np.ones_like(x), *(np.cos(2 * np.pi * k * (x - x0) / period) for k in ks)])
-
-
 def _solve(x, y, period, ks, x0, s, prior):
     """Weighted least squares of the data rows (1-sigma ``s``) and the prior rows at phase ``x0``: the
     coefficients ``(a, A_k...)`` and the cost."""
@@ -271,7 +267,7 @@ def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noi
         moved = prior.copy()
         j = pk.index(k)
         moved[j, 1] -= sr * moved[j, 1 + ks.index(k)]
-        b2, _ = _solve(x, y, period, ks, x0 % period if total >= 0 else x0, s, moved)
+        b2, _ = _solve(x, y, period, ks, x0, s, moved)
         var += (abs(float(np.sum(b2[1:]))) / b2[0] - total / a) ** 2
     std = float(np.sqrt(var))
     misfit = float(np.sqrt(max(s_fit**2 - (noise or 0.0) ** 2, 0.0)))
