@@ -61,7 +61,8 @@ class CheckRow:
     ``measured`` / ``predicted`` are in the check's unit (MTF and CTF: unitless; wedge: ground m; NIIRS: levels;
     for star and bars ``measured`` is the largest absolute error and ``predicted`` 0). ``error`` is what the
     tolerance limits (absolute, or relative for the wedge). ``passed`` is None (n/a) when the measurement is
-    missing; ``reason`` then says why.
+    missing; ``reason`` then says why. ``sigma`` is the 1-sigma uncertainty of ``error`` (from the measurement's
+    uncertainty and the prediction's), in the unit of ``error``; when it is None, ``sigma_null_means`` says why.
     """
 
     figure: str
@@ -74,6 +75,8 @@ class CheckRow:
     tolerance_text: str
     passed: bool | None
     reason: str | None = None
+    sigma: float | None = None
+    sigma_null_means: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -87,6 +90,8 @@ class CheckRow:
             "tolerance_value": self.tolerance,
             "pass": self.passed,
             "reason": self.reason,
+            "sigma": self.sigma,
+            "sigma_null_means": self.sigma_null_means,
         }
 
 
