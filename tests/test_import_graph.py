@@ -138,3 +138,48 @@ def test_run_types_flow_one_way_even_through_deferred_imports():
     g = import_graph(deferred=True)
     assert "satchain.api" not in g["satchain.pipeline"] | g["satchain.results"]
     assert not any({"satchain.api", "satchain.pipeline"} <= c for c in cycles(g))
+
+
+# ------------------------------------------------------------------------------- split modules keep their names
+
+#: Public names of modules that were split (issue 18): importable from the old path, forever.
+OLD_NAMES = {
+    "satchain.radiometry": (
+        "AU_M C_M_PER_S GIQE_REFLECTANCES H_J_S K_J_PER_K NoiseBudget RadiometryResult SIGMA_W_PER_M2_K4 "
+        "SOLAR_SPECTRA SUN_RADIUS_M atmosphere_transmissions band_radiance contrast_snr electrons_per_pixel "
+        "focal_plane_irradiance lambertian_radiance noise_budget photon_radiance planck_solar_irradiance "
+        "planck_spectral_radiance radiometric_budget signal_electrons snr_vs_reflectance solar_spectrum "
+        "spectral_per_m_to_per_um spectral_per_um_to_per_m surface_irradiance toa_radiance"
+    ),
+    "satchain.tf.optics": (
+        "SHANNON_W0_WAVES DiffractionOTF PupilOTF PupilPSF PupilParams annular_mtf diffraction_otf "
+        "make_diffraction_otf noll_to_nm optical_cutoff_cy_per_mm pupil_otf pupil_psf shannon_atf zernike_noll"
+    ),
+    "satchain.api": "BudgetResult Measurements RunResult SceneResult SimulationResult strict_json as_run_config run",
+}
+PARTS = {
+    "satchain.radiometry": ("source", "focal_plane", "noise", "budget"),
+    "satchain.tf.optics": ("satchain.tf.annular", "satchain.tf.pupil", "satchain.tf.zernike"),
+}
+
+
+def test_split_modules_keep_every_public_name_at_the_old_path():
+    import importlib
+
+    for module, names in OLD_NAMES.items():
+        m = importlib.import_module(module)
+        missing = [n for n in names.split() if not hasattr(m, n)]
+        assert not missing, f"{module} lost {missing}"
+        assert set(names.split()) <= set(m.__all__) | {"as_run_config", "run"}, module
+
+
+def test_split_modules_re_export_every_public_name_of_their_parts():
+    import importlib
+
+    for module, parts in PARTS.items():
+        m = importlib.import_module(module)
+        for part in parts:
+            p = importlib.import_module(part if "." in part else f"{module}.{part}")
+            for name in p.__all__:
+                assert getattr(m, name) is getattr(p, name), f"{module}.{name} is not {p.__name__}.{name}"
+                assert name in m.__all__, f"{name} of {p.__name__} is missing from {module}.__all__"
