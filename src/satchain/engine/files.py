@@ -78,12 +78,22 @@ class SimulatedFile:
 
 
 def ground_truth_source(
-    input_: str | os.PathLike, *, pixel_m: float | None = None, input_scale: float | None = None, names=None
+    input_: str | os.PathLike,
+    *,
+    pixel_m: float | None = None,
+    input_scale: float | None = None,
+    names: Mapping[str, str] | None = None,
 ) -> tuple[SceneSource, Scene | None]:
     """The ground truth of ``input_``: an image of reflectance (``IMAGE_SUFFIXES``; ``input_scale`` turns its
     values into reflectance) or a scene (``"paper"`` or a layout file, rendered exactly at ``pixel_m``).
 
-    Returns the source and the scene (None for an image).
+    Returns the source and the scene (None for an image); ``names`` as in :func:`simulate_file`.
+
+    Examples
+    --------
+    >>> src, scene = ground_truth_source("paper", pixel_m=2.0)
+    >>> src.shape_px, src.pixel_m, type(scene).__name__
+    ((150, 100), 2.0, 'Scene')
     """
     from satchain.engine.sources import SceneSource
     from satchain.scene import ImageScene, load_layout

@@ -79,6 +79,7 @@ def _band_grid(lam: np.ndarray, band_m: tuple[float, float]) -> np.ndarray:
     inside = (lam > lo * (1 + 1e-12)) & (lam < hi * (1 - 1e-12))  # table points on an edge count once
     return np.concatenate([[lo], lam[inside], [hi]])
 
+
 def band_radiance(wavelength_m, spectral, band_m: tuple[float, float]) -> float:
     """Integral of a spectral quantity (per m of wavelength) over ``band_m`` (linear interpolation at
     the band edges, trapezoid inside).

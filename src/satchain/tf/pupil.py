@@ -54,6 +54,7 @@ class PupilParams:
             raise ConfigError(f"PupilParams.samples_across_pupil = {n!r}: must be an integer in [16, 65536]")
         check_positive("PupilParams.max_fft_bytes", self.max_fft_bytes)
 
+
 # ----------------------------------------------------------------------------------------- pupil sampling
 def _halfplane_coverage(d, nx, ny):
     """Exact fraction of a unit pixel lying in the half-plane ``{n . (x - centre) < d}`` (unit normal n).
