@@ -181,21 +181,10 @@ def simulate_file(
     """
     name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     _check_options(units, noise, seed, focal_plane_grid, name)
-    out = Path(out)
-    fp_path = None if focal_plane is None else Path(focal_plane)
-    in_file = input_ if Path(input_).exists() else None
-    check_output_files({name("out"): out, name("focal_plane"): fp_path})
-    preview = {f"{name('out')} (preview)": out.with_suffix(".png")}
-    check_distinct_paths({name("out"): out, **preview, name("focal_plane"): fp_path}, {name("input"): in_file})
-    check_sidecars(preview)  # a user's .png of that name is not replaced
+    out, fp_path = Path(out), (None if focal_plane is None else Path(focal_plane))
+    _check_paths(input_, out, fp_path, name)
     src, _ = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
-    sensor = sensor_from_system(system) if (units != "reflectance" or noise) else None
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
-    fp_grid = focal_plane_grid if fp_path is not None else None
-    streamed = choose_streamed(sim, focal_plane=fp_grid)
-    if not streamed:
-        check_simulation_memory(sim, focal_plane=fp_grid)
-        sim.check_frame()
+    sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None)
     if min(src.shape_px) < MIN_INPUT_PX:
         raise ConfigError(
             f"{name('input')} {str(input_)!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x "
@@ -203,15 +192,9 @@ def simulate_file(
             f"{name('scene_pixel_m')}"
         )
     out.parent.mkdir(parents=True, exist_ok=True)
-    meta = {
-        "system": system.name,
-        "seed": int(seed),
-        "noise": bool(noise),
-        "gsd_act_m": system.gsd_act_m,
-        "gsd_alt_m": system.gsd_alt_m,
-        "input": str(input_),
-        "input_pixel_m": src.pixel_m,
-    }
+    meta = {"system": system.name, "seed": int(seed), "noise": bool(noise), "gsd_act_m": system.gsd_act_m,
+            "gsd_alt_m": system.gsd_alt_m, "input": str(input_), "input_pixel_m": src.pixel_m}  # fmt: skip
+    sensor = sensor_from_system(system) if (units != "reflectance" or noise) else None
     bits = sensor.bit_depth if sensor is not None else system.detector.bit_depth
     run = dict(sensor=sensor, units=units, noise=bool(noise), seed=int(seed), bits=bits, meta=meta)
     report = progress or (lambda stage, done, total: None)
@@ -221,6 +204,25 @@ def simulate_file(
     coarse = _decimate(sim, src, scheduler, f"simulating {src.shape_px[0]}x{src.shape_px[1]} px", report)
     shape, fp_pixel = _write_in_memory(sim, src, coarse, out, fp_path, focal_plane_grid, **run)
     return SimulatedFile(out, out.with_suffix(".png"), shape, units, False, fp_path, fp_pixel, meta)
+
+
+def _check_paths(input_: str | os.PathLike, out: Path, fp_path: Path | None, name: Callable[[str], str]) -> None:
+    """Outputs are files, never an input or each other, and the preview replaces only a satchain file."""
+    in_file = input_ if Path(input_).exists() else None
+    check_output_files({name("out"): out, name("focal_plane"): fp_path})
+    preview = {f"{name('out')} (preview)": out.with_suffix(".png")}
+    check_distinct_paths({name("out"): out, **preview, name("focal_plane"): fp_path}, {name("input"): in_file})
+    check_sidecars(preview)  # a user's .png of that name is not replaced
+
+
+def _plan(system: ImagingSystem, src: SceneSource, fp_grid: str | None) -> tuple[Simulator, bool]:
+    """The simulator and whether it streams; the full-frame path is refused up front when it cannot fit."""
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
+    streamed = choose_streamed(sim, focal_plane=fp_grid)
+    if not streamed:
+        check_simulation_memory(sim, focal_plane=fp_grid)
+        sim.check_frame()
+    return sim, streamed
 
 
 def _decimate(sim: Simulator, src: SceneSource, scheduler: str | None, stage: str, report: Progress, **kw):
