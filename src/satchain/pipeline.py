@@ -3,7 +3,9 @@
 Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth record) -> simulation
 (the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
 of each measured figure and comparison -> report (``report.html``, ``results.json``, images, ``manifest.json``).
-Each stage is a function of the typed results before it (:mod:`satchain.api`); only the report writes files.
+Each stage is a function of the typed results before it (:mod:`satchain.results`); only the report writes files.
+The truth record travels typed (:class:`satchain.scene.truth.Truth`); the JSON dict is made only where a
+function still reads that form (measure_auto, the report figures) and where it is written.
 
 Everything is written into a staging directory beside ``out_dir`` and swapped in only when the run has
 succeeded, so an existing ``out_dir`` is never left holding a mix of old and new results, and a failed
@@ -22,15 +24,19 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from satchain.api import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
-from satchain.comparison import Comparison
-from satchain.prediction import Predictions
-from satchain.runconfig import RunConfig
+from satchain.results import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
+
+if TYPE_CHECKING:
+    from satchain.comparison import Comparison
+    from satchain.prediction import Predictions
+    from satchain.runconfig import RunConfig
+    from satchain.system import ImagingSystem
 
 __all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
@@ -61,10 +67,11 @@ def _stage_budget(config: RunConfig, progress: Progress) -> BudgetResult:
 
 def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
     from satchain.scene import load_layout
+    from satchain.scene.truth import read_truth
 
     sc = config.scene
     scene = load_layout(config.layout_source())
-    result = SceneResult(scene, scene.truth(pixel_m=sc.pixel_m), sc.pixel_m)
+    result = SceneResult(scene, read_truth(scene.truth(pixel_m=sc.pixel_m)), sc.pixel_m)
     progress("scene", 1, 1)
     return result
 
@@ -90,18 +97,20 @@ def _stage_simulate(
     return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim)
 
 
-def _stage_measure(system, scene: SceneResult, sim: SimulationResult, progress: Progress) -> Measurements:
+def _stage_measure(
+    system: ImagingSystem, scene: SceneResult, sim: SimulationResult, progress: Progress
+) -> Measurements:
     from satchain.measure.auto import measure_auto
     from satchain.measure.snr import measure_snr
 
-    auto = measure_auto(sim.image, scene.truth, pixel_m=system.gsd_act_m)
+    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m)  # measure_auto reads the dict
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m)
     progress("measure", 1, 1)
     return Measurements(auto, snr)
 
 
-def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult, measured,
-                   progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
+def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
+                   measured: Measurements, progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
     from satchain.comparison import compare
     from satchain.prediction import predict
 
@@ -141,8 +150,8 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
 class ReportInputs:
     """The read-only view of a run that the report code (report/html.py, report/run_figures.py) reads:
     ``out`` (the directory being written), ``config``, ``system``, ``otf``, ``budget`` (dict), ``scene``,
-    ``truth`` (dict), ``simulator``, ``image``, ``focal_plane``, ``sensor``, ``measured`` (dict),
-    ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
+    ``truth`` (the JSON dict the figures read), ``simulator``, ``image``, ``focal_plane``, ``sensor``,
+    ``measured`` (dict), ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
 
     result: RunResult
     out: Path
@@ -153,7 +162,6 @@ class ReportInputs:
     otf = property(lambda self: self.result.budget.otf)
     budget = property(lambda self: self.result.budget.budget)
     scene = property(lambda self: self.result.scene.scene)
-    truth = property(lambda self: self.result.scene.truth)
     simulator = property(lambda self: self.result.simulation.simulator)
     image = property(lambda self: self.result.simulation.image)
     focal_plane = property(lambda self: self.result.simulation.focal_plane)
@@ -161,6 +169,10 @@ class ReportInputs:
     measured = property(lambda self: self.result.measurements.to_dict())
     comparison = property(lambda self: {"results": self.results})
     timings_s = property(lambda self: self.result.timings_s)
+
+    @cached_property
+    def truth(self) -> dict[str, Any]:
+        return self.result.scene.truth_dict
 
 
 def _write_budget_and_scene(result: RunResult, out: Path) -> None:
@@ -171,10 +183,11 @@ def _write_budget_and_scene(result: RunResult, out: Path) -> None:
     b, sc = result.budget, result.scene
     write_budget_outputs(b.system, dict(b.budget), out / "budget", otf=b.otf)
     (out / "images").mkdir(parents=True, exist_ok=True)
-    write_text(out / "images" / "scene.truth.json", json.dumps(sc.truth, indent=1))
+    truth = sc.truth_dict
+    write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
     p = result.config.scene.overview_pixel_m
     overview = sc.scene.render(pixel_m=p)
-    run_figures.plot_scene_overview(overview, sc.truth, p, out / "figures" / "fig1_scene.png")
+    run_figures.plot_scene_overview(overview, truth, p, out / "figures" / "fig1_scene.png")
 
 
 def _write_images(result: RunResult, out: Path) -> None:
