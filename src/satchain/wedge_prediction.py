@@ -1,0 +1,203 @@
+"""The predicted hyperbolic-wedge resolution, formed and measured the way the image's wedge is (issue 18).
+
+A wedge's 15 % contrast crossing is not Coltman's CTF of an infinite square wave: the wedge has five dark
+lines on a bright plate (a finite pattern), its contrast is ``(max - min) / (max + min)`` of *sampled* profiles
+(the samples rarely fall on the peaks, and near one GSD the line pairs alias onto the sampling null), and its
+reflectances 0.8 / 0.05 give a modulation of 0.88, not 1. So the prediction is made by the measurement itself:
+
+1. the wedge of the truth record is rendered alone (on its scene background) at a fine pixel
+   ``gsd_m / D`` (``D = round(gsd_m / truth pixel)``, the truth's own pixel size) over a window aligned with
+   the image's pixel grid (the engine's geometry contract: pixel ``[i, j]`` covers ``[j, j + 1) GSD``);
+2. the system's complex OTF (all components, the detector footprint included, the wide aerosol adjacency
+   left out as for every local prediction) is applied by FFT, and the result is sampled at the detector's
+   pixel centres, noise free;
+3. that image goes through :func:`satchain.measure.auto.measure_auto` -- the very same region, contrast scan
+   and 15 % crossing as the measured wedge.
+
+The prediction is never clamped to the GSD. Its uncertainty is the spread over sub-pixel placements of the
+pixel grid (the wedge moved by fractions of a pixel along and across its lines): the prediction for a wedge
+whose placement on the grid is not known better than a pixel. Prediction calls measure's estimator; measure
+never imports any of this (ARCHITECTURE: measurement stays independent of the transfer functions).
+
+Examples
+--------
+>>> from satchain.scene import HyperbolicWedge, Scene
+>>> truth = Scene(80.0, 30.0, (HyperbolicWedge("w", origin_m=(5.0, 5.0)),), pixel_m=0.05).truth()
+>>> gauss = lambda fx, fy: np.exp(-2.0 * (fx**2 + fy**2))  # a 2-D OTF in cy/px
+>>> p = predict_wedge(gauss, truth["items"][0], gsd_m=0.5, truth_pixel_m=0.05, background=0.2)
+>>> p.axis, 0.5 < p.resolution_m < 1.0, p.resolution_m_std < 0.1
+('ALT', True, True)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from satchain.errors import InputError
+
+__all__ = ["PLACEMENTS_PX", "WedgePrediction", "predict_wedge", "wedge_model_image"]
+
+#: The axis across a wedge's stripes for each wedge orientation of the scene.
+WEDGE_AXES = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}
+#: Sub-pixel placements ``(dx, dy)`` (output px) of the pixel grid over which the prediction's spread is taken;
+#: the first is the image's own placement (the predicted value).
+PLACEMENTS_PX = ((0.0, 0.0), (0.25, 0.5), (0.5, 0.25), (0.75, 0.75))
+#: Output pixels of background around the wedge's plate in the model window (the PSF's support).
+MARGIN_PX = 16
+
+OTF2D = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class WedgePrediction:
+    """A wedge's predicted resolvable line width (ground m), measured on its noise-free predicted image.
+
+    ``resolution_m`` is at the image's own placement on the pixel grid (None when the predicted contrast never
+    falls to the threshold); ``resolution_m_std`` the 1-sigma spread over the sub-pixel placements
+    :data:`PLACEMENTS_PX` (``resolutions_by_placement_m``); ``position_m`` / ``line_width_m`` / ``contrast``
+    the predicted contrast scan (positions along the wedge from its wide end); ``gsd_m`` the GSD; ``reason``
+    why there is no prediction, when there is none.
+    """
+
+    id: str
+    axis: str
+    resolution_m: float | None
+    gsd_m: float
+    resolution_m_std: float | None = None
+    resolutions_by_placement_m: tuple = ()
+    threshold: float = 0.15
+    position_m: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    line_width_m: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    contrast: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    reason: str | None = None
+
+    def contrast_at(self, position_m) -> np.ndarray:
+        """The predicted contrast at positions along the wedge (m from its wide end); NaN outside the scan."""
+        x = np.asarray(position_m, dtype=float)
+        if self.position_m.size < 2:
+            return np.full(x.shape, np.nan)
+        return np.interp(x, self.position_m, self.contrast, left=np.nan, right=np.nan)
+
+
+def _wedge_scene(item: Mapping[str, Any], background: float, pixel_m: float, size_m: tuple[float, float]):
+    """A scene holding only the wedge of a truth record (rebuilt from its parameters) on ``background``."""
+    from satchain.scene import HyperbolicWedge, Scene
+
+    w0 = float(item["line_width_start_m"])
+    lox, loy = (float(v) for v in item["local_origin_m"])
+    wedge = HyperbolicWedge(
+        str(item["id"]),
+        origin_m=(lox - w0, loy - w0),
+        orientation=str(item["orientation"]),
+        length_m=float(item["length_m"]),
+        line_width_start_m=w0,
+        line_width_end_m=float(item["line_width_end_m"]),
+        n_stripes=int(item["n_stripes"]),
+        bright=float(item["bright"]),
+        dark=float(item["dark"]),
+    )
+    return Scene(size_m[0], size_m[1], (wedge,), background=background, pixel_m=pixel_m)
+
+
+def wedge_model_image(
+    otf2d: OTF2D,
+    item: Mapping[str, Any],
+    *,
+    gsd_m: float,
+    truth_pixel_m: float,
+    background: float,
+    shift_px: tuple[float, float] = (0.0, 0.0),
+) -> tuple[np.ndarray, tuple[float, float]]:
+    """The noise-free image (reflectance, one value per detector pixel) of a truth record's wedge alone.
+
+    ``otf2d(fx, fy)`` is the system OTF in cy/px (x = ACT, y = ALT; complex or real; the detector footprint
+    included); ``shift_px`` moves the pixel grid by a fraction of a pixel. Returns the image and the scene
+    point (m) of its top-left corner (pixel ``[i, j]`` is centred at ``origin + (j + 1/2, i + 1/2) gsd_m``).
+    """
+    d = max(1, int(round(gsd_m / truth_pixel_m)))
+    p = gsd_m / d
+    bx0, by0, bx1, by1 = (float(v) for v in item["bbox_m"])
+    m = MARGIN_PX * gsd_m
+    c0, r0 = math.floor((bx0 - m) / gsd_m), math.floor((by0 - m) / gsd_m)  # output px, on the image's grid
+    nc, nr = math.ceil((bx1 + m) / gsd_m) - c0, math.ceil((by1 + m) / gsd_m) - r0
+    scene = _wedge_scene(item, background, p, (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m)))
+    shifted = (r0 * d, c0 * d)
+    fine = scene.render((max(shifted[0], 0), max(shifted[1], 0), nr * d, nc * d), pixel_m=p).astype(float)
+    if shifted[0] < 0 or shifted[1] < 0:  # the window starts before the scene's corner: background there
+        fine = np.pad(fine, ((max(-shifted[0], 0), 0), (max(-shifted[1], 0), 0)), constant_values=background)
+        fine = fine[: nr * d, : nc * d]
+    spec = np.fft.rfft2(fine - background)  # the window's border is background: periodic without a seam
+    fy = np.fft.fftfreq(fine.shape[0])[:, None] * d  # cy per output px
+    fx = np.fft.rfftfreq(fine.shape[1])[None, :] * d
+    # sample at the output pixel centres (fine index j d + d/2 - 1/2 + shift d): a phase ramp, then every d-th
+    sx, sy = d / 2 - 0.5 + shift_px[0] * d, d / 2 - 0.5 + shift_px[1] * d
+    ramp = np.exp(2j * np.pi * (fx * sx + fy * sy) / d)
+    image = np.fft.irfft2(spec * np.asarray(otf2d(fx, fy)) * ramp, s=fine.shape)[::d, ::d] + background
+    return image, (c0 * gsd_m, r0 * gsd_m)
+
+
+def _measure_model(image, item, origin_m, gsd_m, threshold):
+    from satchain.measure.auto import measure_auto
+
+    res = measure_auto(image, {"items": [dict(item)]}, pixel_m=gsd_m, origin_m=origin_m, wedge_threshold=threshold)
+    found = res.to_dict().get("hyperbolic_wedge", [])
+    if not found:
+        reason = "; ".join(str(s.get("reason")) for s in res.skipped) or "no result"
+        raise InputError(f"wedge {item['id']!r}: its predicted image cannot be measured ({reason})")
+    return found[0]
+
+
+def predict_wedge(
+    otf2d: OTF2D,
+    item: Mapping[str, Any],
+    *,
+    gsd_m: float,
+    truth_pixel_m: float,
+    background: float,
+    threshold: float = 0.15,
+    placements_px: tuple[tuple[float, float], ...] = PLACEMENTS_PX,
+) -> WedgePrediction:
+    """Predict a wedge's resolvable line width by measuring its noise-free predicted image (module docstring).
+
+    Parameters
+    ----------
+    otf2d : callable
+        The system OTF ``otf2d(fx, fy)`` in cy/px (x = ACT, y = ALT), detector footprint included.
+    item : mapping
+        The wedge's truth record (``kind = "hyperbolic_wedge"``, as :meth:`satchain.scene.Scene.truth` gives).
+    gsd_m, truth_pixel_m : float
+        The image's ground pixel and the truth's render pixel (m).
+    background : float
+        The scene's background reflectance around the wedge's plate.
+    threshold : float
+        Contrast at which the stripes stop being resolved.
+    placements_px : tuple of (dx, dy)
+        Sub-pixel placements of the pixel grid; the first is the image's own (the predicted value), all of them
+        give the spread ``resolution_m_std``.
+    """
+    runs = []
+    for dx, dy in placements_px:
+        image, (ox, oy) = wedge_model_image(
+            otf2d, item, gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background, shift_px=(dx, dy)
+        )
+        runs.append(_measure_model(image, item, (ox + dx * gsd_m, oy + dy * gsd_m), gsd_m, threshold))
+    res = [r.get("resolution_m") for r in runs]
+    finite = [float(v) for v in res if v is not None and math.isfinite(v)]
+    first = runs[0]
+    return WedgePrediction(
+        id=str(item["id"]),
+        axis=WEDGE_AXES[str(item["orientation"]).lower()],
+        resolution_m=None if res[0] is None else float(res[0]),
+        gsd_m=float(gsd_m),
+        resolution_m_std=float(np.std(finite, ddof=1)) if len(finite) > 1 else None,
+        resolutions_by_placement_m=tuple(res),
+        threshold=float(threshold),
+        position_m=np.asarray(first["position_m_along_wedge"], dtype=float),
+        line_width_m=np.asarray(first["line_width_m"], dtype=float),
+        contrast=np.asarray(first["contrast"], dtype=float),
+    )
