@@ -59,7 +59,8 @@ class WedgePrediction:
 
     ``resolution_m`` is at the image's own placement on the pixel grid (None when the predicted contrast never
     falls to the threshold); ``resolution_m_std`` the 1-sigma spread over the sub-pixel placements
-    :data:`PLACEMENTS_PX` (``resolutions_by_placement_m``); ``position_m`` / ``line_width_m`` / ``contrast``
+    :data:`PLACEMENTS_PX` (``resolutions_by_placement_m``; None where a placement has no crossing: counted in the
+    spread as the widest line when its wide end is already unresolved, as the narrowest when it never falls); ``position_m`` / ``line_width_m`` / ``contrast``
     the predicted contrast scan (positions along the wedge from its wide end); ``gsd_m`` the GSD; ``reason``
     why there is no prediction, when there is none.
     """
@@ -180,21 +181,31 @@ def predict_wedge(
         Sub-pixel placements of the pixel grid; the first is the image's own (the predicted value), all of them
         give the spread ``resolution_m_std``.
     """
-    runs = []
-    for dx, dy in placements_px:
+    runs, res, spread = [], [], []
+    w0, w1 = float(item["line_width_start_m"]), float(item["line_width_end_m"])
+    for k, (dx, dy) in enumerate(placements_px):
         image, (ox, oy) = wedge_model_image(
             otf2d, item, gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background, shift_px=(dx, dy)
         )
-        runs.append(_measure_model(image, item, (ox + dx * gsd_m, oy + dy * gsd_m), gsd_m, threshold))
-    res = [r.get("resolution_m") for r in runs]
-    finite = [float(v) for v in res if v is not None and math.isfinite(v)]
+        try:
+            runs.append(_measure_model(image, item, (ox + dx * gsd_m, oy + dy * gsd_m), gsd_m, threshold))
+        except InputError:
+            if k == 0:  # the image's own placement: no prediction
+                raise
+            res.append(None)  # its wide end is already unresolved: counted as the widest line in the spread
+            spread.append(w0)
+            continue
+        r = runs[-1].get("resolution_m")
+        res.append(None if r is None or not math.isfinite(r) else float(r))
+        spread.append(w1 if res[-1] is None else res[-1])  # no crossing: resolved to the narrow end
+    spread = spread if res[0] is not None else []
     first = runs[0]
     return WedgePrediction(
         id=str(item["id"]),
         axis=WEDGE_AXES[str(item["orientation"]).lower()],
         resolution_m=None if res[0] is None else float(res[0]),
         gsd_m=float(gsd_m),
-        resolution_m_std=float(np.std(finite, ddof=1)) if len(finite) > 1 else None,
+        resolution_m_std=float(np.std(spread, ddof=1)) if len(spread) > 1 else None,
         resolutions_by_placement_m=tuple(res),
         threshold=float(threshold),
         position_m=np.asarray(first["position_m_along_wedge"], dtype=float),
