@@ -81,7 +81,6 @@ def _stage_simulate(
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
-
     from satchain.tf.budget import SystemOTF
 
     c = config.simulation

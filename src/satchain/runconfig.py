@@ -208,7 +208,8 @@ def _merge_system(design: ImagingSystem, sections: dict[str, dict[str, Any]]) ->
                     f"as_built.{section}.{key}: unknown key; {section} has {', '.join(sorted(allowed))}"
                 )
             old = current[section].get(key)
-            flat[f"{section}.{key}"] = _deep_merge(old, value) if isinstance(value, dict) and isinstance(old, dict) else value
+            nested = isinstance(value, dict) and isinstance(old, dict)
+            flat[f"{section}.{key}"] = _deep_merge(old, value) if nested else value
     try:
         return design.replace(flat)
     except ConfigError as exc:

@@ -60,9 +60,9 @@ class WedgePrediction:
     ``resolution_m`` is at the image's own placement on the pixel grid (None when the predicted contrast never
     falls to the threshold); ``resolution_m_std`` the 1-sigma spread over the sub-pixel placements
     :data:`PLACEMENTS_PX` (``resolutions_by_placement_m``; None where a placement has no crossing: counted in the
-    spread as the widest line when its wide end is already unresolved, as the narrowest when it never falls); ``position_m`` / ``line_width_m`` / ``contrast``
-    the predicted contrast scan (positions along the wedge from its wide end); ``gsd_m`` the GSD; ``reason``
-    why there is no prediction, when there is none.
+    spread as the widest line when its wide end is already unresolved, as the narrowest when it never falls);
+    ``position_m`` / ``line_width_m`` / ``contrast`` the predicted contrast scan (positions along the wedge from
+    its wide end); ``gsd_m`` the GSD; ``reason`` why there is no prediction, when there is none.
     """
 
     id: str
@@ -126,7 +126,8 @@ def wedge_model_image(
     m = MARGIN_PX * gsd_m
     c0, r0 = math.floor((bx0 - m) / gsd_m), math.floor((by0 - m) / gsd_m)  # output px, on the image's grid
     nc, nr = math.ceil((bx1 + m) / gsd_m) - c0, math.ceil((by1 + m) / gsd_m) - r0
-    scene = _wedge_scene(item, background, p, (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m)))
+    size_m = (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m))
+    scene = _wedge_scene(item, background, p, size_m)
     shifted = (r0 * d, c0 * d)
     fine = scene.render((max(shifted[0], 0), max(shifted[1], 0), nr * d, nc * d), pixel_m=p).astype(float)
     if shifted[0] < 0 or shifted[1] < 0:  # the window starts before the scene's corner: background there
