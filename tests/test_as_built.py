@@ -190,3 +190,16 @@ def test_design_with_more_smear_predicts_it(tmp_path_factory):
     row = _rows(r)[("wedge_resolution", "wedge_h")]
     assert 0.8 < row.predicted < 1.15
     assert row.passed is True
+
+
+def test_report_lists_what_differs(design_run, as_built_run, tmp_path):
+    from satchain.pipeline import ReportInputs
+    from satchain.report import html
+
+    for name, result in (("built", as_built_run), ("design", design_run)):
+        (tmp_path / name).mkdir()
+        html.write_report(ReportInputs(result, tmp_path / name, result.to_json_dict()), tmp_path / name / "r.html")
+    built = (tmp_path / "built" / "r.html").read_text()
+    block = built[built.index('id="as-built"') : built.index("</div>", built.index('id="as-built"'))]
+    assert "motion.smear_px" in block and f"<td>{DESIGN_SMEAR_PX}</td><td>3.0</td>" in block
+    assert 'id="as-built"' not in (tmp_path / "design" / "r.html").read_text()
