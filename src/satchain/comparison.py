@@ -174,8 +174,12 @@ class WedgeCheck(_Detail):
     ``axis``, the GSD (m), their ratios, and the contrast scan (``position_m`` along the wedge from its wide end,
     ``line_width_m``) measured (``contrast``) and predicted (``contrast_predicted``: the same scan on the wedge's
     noise-free predicted image, :mod:`satchain.wedge_prediction`). 1-sigma: ``resolution_m_std`` (the measured
-    crossing, from the noise), ``resolution_predicted_m_std`` (the spread over sub-pixel placements,
-    ``resolution_predicted_by_placement_m``) and ``relative_error_sigma`` (of ``relative_error``, both combined)."""
+    crossing's, from the image noise: the predicted image re-measured with the sensor's noise added; the
+    measurement's own, larger, slope-based estimate is ``resolution_m_std_measure``), ``relative_error_sigma``
+    (of ``relative_error``: ``resolution_m_std / resolution_predicted_m``) and, reported beside them,
+    ``resolution_predicted_m_std``: the prediction's spread over sub-pixel placements of the pixel grid
+    (``resolution_predicted_by_placement_m``), the uncertainty of a prediction for a wedge whose placement is
+    unknown (a run's placement is known, so it is not part of the sigma)."""
 
     id: str
     orientation: str
@@ -192,6 +196,7 @@ class WedgeCheck(_Detail):
     contrast_predicted: list | None = None
     line_width_m: list | None = None
     resolution_m_std: float | None = None
+    resolution_m_std_measure: float | None = None
     resolution_predicted_m_std: float | None = None
     resolution_predicted_by_placement_m: list | None = None
     relative_error_sigma: float | None = None
@@ -415,14 +420,20 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCh
     return [BarCheck.from_dict(d) for d in details], rows
 
 
-def _wedge_sigma(res, sd_meas, pr, sd_pred) -> tuple[float | None, str | None]:
-    """1-sigma of ``res / pr - 1`` from the measured crossing's noise and the prediction's placement spread."""
+def _wedge_sigma(res, pr, p, sd_measure) -> tuple[float | None, float | None, str | None]:
+    """(1-sigma of the measured crossing in m, 1-sigma of ``res / pr - 1``, why None).
+
+    The crossing's 1-sigma from noise is the prediction's parametric bootstrap (the predicted image re-measured
+    with the sensor's noise added), else the measurement's own estimate. The prediction is made at the image's
+    own placement on the pixel grid, which the run knows exactly, so the spread over placements is reported
+    beside it (``resolution_predicted_m_std``) and not added."""
+    sd = None if p is None else _finite(p.resolution_noise_m_std)
+    sd = sd_measure if sd is None else sd
     if res is None or pr is None:
-        return None, "no relative error (a resolution is missing)"
-    if sd_meas is None:
-        return None, "the measured crossing has no uncertainty (too few positions around it)"
-    var = (sd_meas / pr) ** 2 + (res * (sd_pred or 0.0) / pr**2) ** 2
-    return math.sqrt(var), None
+        return sd, None, "no relative error (a resolution is missing)"
+    if sd is None:
+        return None, None, "no noise model (no sensor) and no uncertainty from the measurement"
+    return sd, sd / pr, None
 
 
 def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[WedgeCheck], list[CheckRow]]:
@@ -431,9 +442,9 @@ def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Wed
         axis = WEDGE_AXES[w["orientation"]]
         p = pred.wedges.get(str(w["id"]))
         res, pr = _finite(w.get("resolution_m")), None if p is None else _finite(p.resolution_m)
-        sd_meas, sd_pred = _finite(w.get("resolution_m_std")), None if p is None else _finite(p.resolution_m_std)
+        sd_measure, sd_pred = _finite(w.get("resolution_m_std")), None if p is None else _finite(p.resolution_m_std)
         rel = None if res is None or pr is None else res / pr - 1.0
-        sigma, sigma_why = _wedge_sigma(res, sd_meas, pr, sd_pred)
+        sd_noise, sigma, sigma_why = _wedge_sigma(res, pr, p, sd_measure)
         pos = w.get("position_m_along_wedge")
         c_pred = None if p is None or pos is None else p.contrast_at(pos).tolist()
         details.append(
@@ -452,7 +463,8 @@ def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Wed
                 "contrast": w.get("contrast"),
                 "contrast_predicted": c_pred,
                 "line_width_m": w.get("line_width_m"),
-                "resolution_m_std": sd_meas,
+                "resolution_m_std": sd_noise,
+                "resolution_m_std_measure": sd_measure,
                 "resolution_predicted_m_std": sd_pred,
                 "resolution_predicted_by_placement_m": None if p is None else list(p.resolutions_by_placement_m),
                 "relative_error_sigma": sigma,

@@ -89,6 +89,7 @@ class _SystemOTF:
 
     def __init__(self, otf: Any, exclude: tuple[str, ...] = ()):
         self._mtf = _SystemMTF(otf, exclude)
+        self.cutoff = self._mtf.cutoff
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
         m = self._mtf
@@ -200,6 +201,7 @@ def predict_from_mtf(
     elevation_deg: float = 90.0,
     warnings: tuple[str, ...] = (),
     otf2d: MTF2D | None = None,
+    noise_sigma: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Predictions:
     """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres).
 
@@ -207,7 +209,8 @@ def predict_from_mtf(
     gives them); without it the NIIRS figures are NaN. ``otf2d`` is the complex OTF (cy/px) that forms the
     predicted wedge images (default ``mtf2d``, exact when the OTF is real and non-negative); the wedges are
     rendered at the truth's ``pixel_m`` on its ``background``
-    (:func:`satchain.wedge_prediction.predict_wedge`).
+    (:func:`satchain.wedge_prediction.predict_wedge`); ``noise_sigma`` (per-pixel noise in reflectance as a
+    function of reflectance, :func:`sensor_noise_reflectance`) gives their crossings' 1-sigma from noise.
     """
     along = {d: AxisMTF(mtf2d, u) for d, u in DIRECTIONS.items()}
     edges = {}
@@ -217,7 +220,7 @@ def predict_from_mtf(
         nx, ny = (float(v) for v in it["normal_to_bright"])
         m = AxisMTF(mtf2d, (nx, ny))
         edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
-    wedges = _predict_wedges(mtf2d if otf2d is None else otf2d, truth, gsd_m, wedge_threshold)
+    wedges = _predict_wedges(mtf2d if otf2d is None else otf2d, truth, gsd_m, wedge_threshold, noise_sigma)
     q = quality or {}
     return Predictions(
         mtf_along=along,
@@ -234,7 +237,25 @@ def predict_from_mtf(
     )
 
 
-def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float) -> dict:
+def sensor_noise_reflectance(sensor: Any) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The per-pixel noise of ``sensor`` (a SensorModel) in reflectance units, as a function of reflectance:
+    shot noise of signal, path radiance and dark charge, read noise, PRNU, DSNU and (finite full well)
+    quantisation; None without a sensor."""
+    if sensor is None:
+        return None
+
+    def sigma(refl: np.ndarray) -> np.ndarray:
+        e = sensor.offset_e + sensor.dark_e + np.clip(refl, 0, None) * sensor.electrons_per_unit
+        q = (sensor.full_well_e / 2 ** int(sensor.bit_depth)) ** 2 / 12 if np.isfinite(sensor.full_well_e) else 0.0
+        var = e + sensor.read_noise_e**2 + (sensor.prnu * e) ** 2 + sensor.dsnu_e**2 + q
+        return np.sqrt(var) / sensor.electrons_per_unit
+
+    return sigma
+
+
+def _predict_wedges(
+    otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float, noise: Callable | None = None
+) -> dict:
     """Wedge id -> WedgePrediction (resolution None, with the reason, when the predicted image has no wedge
     the scan can measure)."""
     out = {}
@@ -245,7 +266,8 @@ def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, thresh
             continue
         try:
             out[str(it["id"])] = predict_wedge(
-                otf2d, it, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, threshold=threshold
+                otf2d, it, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, threshold=threshold,
+                noise_sigma=noise,
             )
         except InputError as exc:
             axis = WEDGE_AXES[str(it["orientation"]).lower()]
@@ -292,7 +314,7 @@ def predict(
     quality : mapping, optional
         :func:`satchain.quality.predict_quality` ``.to_dict()`` (computed when not given).
     sensor : SensorModel, optional
-        For saturation warnings.
+        For saturation warnings, and the image noise that gives the wedge crossings their 1-sigma.
     wedge_threshold : float
         Contrast at which a wedge stops resolving (the paper's 0.15).
     """
@@ -313,4 +335,5 @@ def predict(
         elevation_deg=system.orbit.elevation_deg,
         warnings=saturation_warnings(sensor, truth),
         otf2d=_SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names)),
+        noise_sigma=sensor_noise_reflectance(sensor),
     )

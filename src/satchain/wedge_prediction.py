@@ -49,6 +49,8 @@ WEDGE_AXES = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}
 PLACEMENTS_PX = ((0.0, 0.0), (0.25, 0.5), (0.5, 0.25), (0.75, 0.75))
 #: Output pixels of background around the wedge's plate in the model window (the PSF's support).
 MARGIN_PX = 16
+#: Noisy copies of the predicted image re-measured for the crossing's 1-sigma from noise.
+N_NOISE = 16
 
 OTF2D = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -63,6 +65,9 @@ class WedgePrediction:
     spread as the widest line when its wide end is already unresolved, as the narrowest when it never falls);
     ``position_m`` / ``line_width_m`` / ``contrast`` the predicted contrast scan (positions along the wedge from
     its wide end); ``gsd_m`` the GSD; ``reason`` why there is no prediction, when there is none.
+    ``resolution_noise_m_std``: the 1-sigma that the image noise gives a measured crossing, from re-measuring the
+    predicted image with the sensor's noise added :data:`N_NOISE` times (a parametric bootstrap); None without
+    a noise model.
     """
 
     id: str
@@ -76,6 +81,7 @@ class WedgePrediction:
     line_width_m: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
     contrast: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
     reason: str | None = None
+    resolution_noise_m_std: float | None = None
 
     def contrast_at(self, position_m) -> np.ndarray:
         """The predicted contrast at positions along the wedge (m from its wide end); NaN outside the scan."""
@@ -105,6 +111,43 @@ def _wedge_scene(item: Mapping[str, Any], background: float, pixel_m: float, siz
     return Scene(size_m[0], size_m[1], (wedge,), background=background, pixel_m=pixel_m)
 
 
+class _WedgeModel:
+    """A truth record's wedge rendered once at the fine pixel, its spectrum filtered by the OTF once (only inside
+    the OTF's ``cutoff``, cy/px, when it has one); :meth:`image` then samples it for any placement."""
+
+    def __init__(self, otf2d: OTF2D, item: Mapping[str, Any], gsd_m: float, truth_pixel_m: float, background: float):
+        d = max(1, int(round(gsd_m / truth_pixel_m)))
+        bx0, by0, bx1, by1 = (float(v) for v in item["bbox_m"])
+        m = MARGIN_PX * gsd_m
+        c0, r0 = math.floor((bx0 - m) / gsd_m), math.floor((by0 - m) / gsd_m)  # output px, on the image's grid
+        nc, nr = math.ceil((bx1 + m) / gsd_m) - c0, math.ceil((by1 + m) / gsd_m) - r0
+        size_m = (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m))
+        scene = _wedge_scene(item, background, gsd_m / d, size_m)
+        fine = np.full((nr * d, nc * d), float(background))  # before the scene's corner: background
+        y0, x0 = max(-r0 * d, 0), max(-c0 * d, 0)
+        win = (r0 * d + y0, c0 * d + x0, nr * d - y0, nc * d - x0)
+        fine[y0:, x0:] = scene.render(win, pixel_m=gsd_m / d)
+        spec = np.fft.fft2(fine - background)  # the window's border is background: periodic without a seam
+        fmax = float(getattr(otf2d, "cutoff", np.inf))
+        fy, fx = np.fft.fftfreq(nr * d) * d, np.fft.fftfreq(nc * d) * d  # cy per output px
+        self.iy, self.ix = np.nonzero(np.abs(fy) <= fmax)[0], np.nonzero(np.abs(fx) <= fmax)[0]
+        self.fy, self.fx = fy[self.iy][:, None], fx[self.ix][None, :]
+        self.band = spec[np.ix_(self.iy, self.ix)] * np.asarray(otf2d(self.fx, self.fy))
+        self.d, self.shape, self.background = d, (nr, nc), float(background)
+        self.origin_m = (c0 * gsd_m, r0 * gsd_m)
+
+    def image(self, shift_px: tuple[float, float]) -> np.ndarray:
+        """Point samples at the output pixel centres (fine index ``j d + d/2 - 1/2 + shift d``): a phase ramp,
+        the band folded modulo the output size (the aliasing of sampling every d-th fine sample), an inverse
+        DFT of the output size."""
+        d, (nr, nc) = self.d, self.shape
+        sx, sy = d / 2 - 0.5 + shift_px[0] * d, d / 2 - 0.5 + shift_px[1] * d
+        g = self.band * np.exp(2j * np.pi * (self.fx * sx + self.fy * sy) / d)
+        folded = np.zeros((nr, nc), dtype=complex)
+        np.add.at(folded, (self.iy[:, None] % nr, self.ix[None, :] % nc), g)
+        return np.fft.ifft2(folded).real / (d * d) + self.background
+
+
 def wedge_model_image(
     otf2d: OTF2D,
     item: Mapping[str, Any],
@@ -117,30 +160,12 @@ def wedge_model_image(
     """The noise-free image (reflectance, one value per detector pixel) of a truth record's wedge alone.
 
     ``otf2d(fx, fy)`` is the system OTF in cy/px (x = ACT, y = ALT; complex or real; the detector footprint
-    included); ``shift_px`` moves the pixel grid by a fraction of a pixel. Returns the image and the scene
-    point (m) of its top-left corner (pixel ``[i, j]`` is centred at ``origin + (j + 1/2, i + 1/2) gsd_m``).
+    included; an attribute ``cutoff`` in cy/px, when it has one, limits where it is evaluated); ``shift_px``
+    moves the pixel grid by a fraction of a pixel. Returns the image and the scene point (m) of its top-left
+    corner (pixel ``[i, j]`` is centred at ``origin + (j + 1/2, i + 1/2) gsd_m``).
     """
-    d = max(1, int(round(gsd_m / truth_pixel_m)))
-    p = gsd_m / d
-    bx0, by0, bx1, by1 = (float(v) for v in item["bbox_m"])
-    m = MARGIN_PX * gsd_m
-    c0, r0 = math.floor((bx0 - m) / gsd_m), math.floor((by0 - m) / gsd_m)  # output px, on the image's grid
-    nc, nr = math.ceil((bx1 + m) / gsd_m) - c0, math.ceil((by1 + m) / gsd_m) - r0
-    size_m = (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m))
-    scene = _wedge_scene(item, background, p, size_m)
-    shifted = (r0 * d, c0 * d)
-    fine = scene.render((max(shifted[0], 0), max(shifted[1], 0), nr * d, nc * d), pixel_m=p).astype(float)
-    if shifted[0] < 0 or shifted[1] < 0:  # the window starts before the scene's corner: background there
-        fine = np.pad(fine, ((max(-shifted[0], 0), 0), (max(-shifted[1], 0), 0)), constant_values=background)
-        fine = fine[: nr * d, : nc * d]
-    spec = np.fft.rfft2(fine - background)  # the window's border is background: periodic without a seam
-    fy = np.fft.fftfreq(fine.shape[0])[:, None] * d  # cy per output px
-    fx = np.fft.rfftfreq(fine.shape[1])[None, :] * d
-    # sample at the output pixel centres (fine index j d + d/2 - 1/2 + shift d): a phase ramp, then every d-th
-    sx, sy = d / 2 - 0.5 + shift_px[0] * d, d / 2 - 0.5 + shift_px[1] * d
-    ramp = np.exp(2j * np.pi * (fx * sx + fy * sy) / d)
-    image = np.fft.irfft2(spec * np.asarray(otf2d(fx, fy)) * ramp, s=fine.shape)[::d, ::d] + background
-    return image, (c0 * gsd_m, r0 * gsd_m)
+    model = _WedgeModel(otf2d, item, gsd_m, truth_pixel_m, background)
+    return model.image(shift_px), model.origin_m
 
 
 def _measure_model(image, item, origin_m, gsd_m, threshold):
@@ -154,6 +179,23 @@ def _measure_model(image, item, origin_m, gsd_m, threshold):
     return found[0]
 
 
+def _noise_std(image, item, origin_m, gsd_m, threshold, noise_sigma, first) -> float | None:
+    """1-sigma of the crossing (m) over :data:`N_NOISE` noisy copies of ``image`` (fixed seed: reproducible)."""
+    rng = np.random.default_rng(20260101)
+    sigma = np.asarray(noise_sigma(image), dtype=float)
+    out = []
+    for _ in range(N_NOISE):
+        try:
+            r = _measure_model(image + sigma * rng.standard_normal(image.shape), item, origin_m, gsd_m, threshold)
+        except InputError:
+            continue
+        out.append(r.get("resolution_m"))
+    vals = [float(v) for v in out if v is not None and math.isfinite(v)]
+    if first is None or len(vals) < N_NOISE // 2:
+        return None
+    return float(np.std(vals, ddof=1))
+
+
 def predict_wedge(
     otf2d: OTF2D,
     item: Mapping[str, Any],
@@ -163,6 +205,7 @@ def predict_wedge(
     background: float,
     threshold: float = 0.15,
     placements_px: tuple[tuple[float, float], ...] = PLACEMENTS_PX,
+    noise_sigma: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> WedgePrediction:
     """Predict a wedge's resolvable line width by measuring its noise-free predicted image (module docstring).
 
@@ -181,15 +224,18 @@ def predict_wedge(
     placements_px : tuple of (dx, dy)
         Sub-pixel placements of the pixel grid; the first is the image's own (the predicted value), all of them
         give the spread ``resolution_m_std``.
+    noise_sigma : callable, optional
+        The image noise, 1-sigma per pixel in reflectance as a function of the noise-free reflectance: gives
+        ``resolution_noise_m_std``.
     """
     runs, res, spread = [], [], []
     w0, w1 = float(item["line_width_start_m"]), float(item["line_width_end_m"])
+    model = _WedgeModel(otf2d, item, gsd_m, truth_pixel_m, background)
+    ox, oy = model.origin_m
     for k, (dx, dy) in enumerate(placements_px):
-        image, (ox, oy) = wedge_model_image(
-            otf2d, item, gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background, shift_px=(dx, dy)
-        )
         try:
-            runs.append(_measure_model(image, item, (ox + dx * gsd_m, oy + dy * gsd_m), gsd_m, threshold))
+            origin = (ox + dx * gsd_m, oy + dy * gsd_m)
+            runs.append(_measure_model(model.image((dx, dy)), item, origin, gsd_m, threshold))
         except InputError:
             if k == 0:  # the image's own placement: no prediction
                 raise
@@ -201,6 +247,10 @@ def predict_wedge(
         spread.append(w1 if res[-1] is None else res[-1])  # no crossing: resolved to the narrow end
     spread = spread if res[0] is not None else []
     first = runs[0]
+    sd_noise = None
+    if noise_sigma is not None:
+        sd_noise = _noise_std(model.image(placements_px[0]), item, (ox + placements_px[0][0] * gsd_m,
+                              oy + placements_px[0][1] * gsd_m), gsd_m, threshold, noise_sigma, res[0])
     return WedgePrediction(
         id=str(item["id"]),
         axis=WEDGE_AXES[str(item["orientation"]).lower()],
@@ -212,4 +262,5 @@ def predict_wedge(
         position_m=np.asarray(first["position_m_along_wedge"], dtype=float),
         line_width_m=np.asarray(first["line_width_m"], dtype=float),
         contrast=np.asarray(first["contrast"], dtype=float),
+        resolution_noise_m_std=sd_noise,
     )
