@@ -342,7 +342,9 @@ def run(
         print(DEFAULT_CONFIG_TOML, end="")
         return
     cfg = load_run_config(config)
-    check_inputs_outside(out, {"--config": config, "system.file": cfg.system_path()})
+    check_inputs_outside(
+        out, {"--config": config, "system.file": cfg.system_path(), "as_built.file": cfg.as_built_path()}
+    )
     if preset is not None:
         cfg = RunConfig.from_dict({**cfg.to_dict(), "system": {"preset": preset}}, base_dir=cfg.base_dir)
     bar = Progress(

@@ -51,18 +51,23 @@ def _stage_budget(config: RunConfig, progress: Progress) -> BudgetResult:
     from satchain.tf.budget import SystemOTF
 
     s = config.load_system()
-    if abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
-        from satchain.errors import ConfigError
-
-        raise ConfigError(
-            f"system {s.name!r}: ground pixels of {s.gsd_act_m:.4g} m (ACT) x {s.gsd_alt_m:.4g} m (ALT); satchain run "
-            "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
-            "for this system"
-        )
+    _check_square(s, "system")
+    _check_square(config.load_as_built_system(s), "as_built")  # refused before any work is done
     otf = SystemOTF(s)
     result = BudgetResult(s, otf, budget_results(s, otf=otf))
     progress("budget", 1, 1)
     return result
+
+
+def _check_square(s, what: str) -> None:
+    if s is not None and abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
+        from satchain.errors import ConfigError
+
+        raise ConfigError(
+            f"{what} {s.name!r}: ground pixels of {s.gsd_act_m:.4g} m (ACT) x {s.gsd_alt_m:.4g} m (ALT); satchain run "
+            "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
+            "for this system"
+        )
 
 
 def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
@@ -83,18 +88,21 @@ def _stage_simulate(
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
+    from satchain.tf.budget import SystemOTF
 
     c = config.simulation
+    built = config.load_as_built_system(budget.system)  # the camera as built; None: as designed
+    system, otf = (budget.system, budget.otf) if built is None else (built, SystemOTF(built))
     src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
-    sim = Simulator(budget.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=budget.otf)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=otf)
     check_simulation_memory(sim, focal_plane="coarse")
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
-    sensor = sensor_from_system(budget.system)
+    sensor = sensor_from_system(system)
     image = sim.run(src, sensor=sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
     focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
     progress("simulate", len(sim.tiles) + 1, len(sim.tiles) + 1)
-    return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim)
+    return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim, system=system)
 
 
 def _stage_measure(
@@ -141,7 +149,7 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
     budget = timed("budget", _stage_budget, config)
     scene = timed("scene", _stage_scene, config)
     sim = timed("simulate", _stage_simulate, config, budget, scene)
-    measured = timed("measure", _stage_measure, budget.system, scene, sim)
+    measured = timed("measure", _stage_measure, sim.system or budget.system, scene, sim)  # the image's own GSD
     predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
     return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
 
@@ -193,7 +201,8 @@ def _write_budget_and_scene(result: RunResult, out: Path) -> None:
 def _write_images(result: RunResult, out: Path) -> None:
     from satchain import io
 
-    c, s, sim = result.config.simulation, result.system, result.simulation
+    c, sim = result.config.simulation, result.simulation
+    s = sim.system or result.system  # the camera simulated (as built)
     d = out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
     io.write_simulated(

@@ -108,7 +108,8 @@ class SimulationResult:
 
     ``image``: the satellite image (``units``: dn, electrons, radiance or reflectance), one pixel per GSD;
     ``focal_plane``: scene reflectance filtered by optics and motion, sampled every ``focal_plane_pixel_m``
-    ground metres; ``sensor``: the SensorModel; ``simulator``: the Simulator (its ``D`` is the decimation).
+    ground metres; ``sensor``: the SensorModel; ``simulator``: the Simulator (its ``D`` is the decimation);
+    ``system``: the camera simulated (the config's ``as_built`` when it has one, else the design).
     """
 
     image: np.ndarray = field(repr=False)
@@ -117,6 +118,7 @@ class SimulationResult:
     units: str
     sensor: SensorModel = field(repr=False)
     simulator: Simulator = field(repr=False)
+    system: ImagingSystem | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -209,6 +211,9 @@ class RunResult:
             },
             "quality_predicted": b["quality"],
         }
+        from satchain.runconfig import system_differences
+
+        out["as_built_differences"] = system_differences(s, self.simulation.system) if self.config.as_built else []
         out.update(c.to_dict())
         out["skipped"] = list(self.measurements.auto.skipped)
         out["tolerances"] = self.config.tolerances.model_dump()

@@ -158,6 +158,7 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
         skipped=tables.skipped_groups(res.get("skipped", [])),
         n_skipped=len(res.get("skipped", [])),
         results=res,
+        as_built=res.get("as_built_differences") or [],
         tol=res.get("tolerances") or {},
         thumbs=target_thumbnails(ctx),
         table1=t1,
