@@ -455,14 +455,37 @@ def run(
         bar.start_task(tasks[stage])
         bar.update(tasks[stage], completed=done, total=total)
 
-    with bar:
-        result = satchain.run(cfg, out_dir=out, progress=update)
+    previous = out.is_dir() and any(out.iterdir())
+    try:
+        with bar:
+            result = satchain.run(cfg, out_dir=out, progress=update)
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (satchain._safety.Interrupted)
+        raise typer.Exit(_interrupted(exc, out, previous)) from None
     _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}", markup=False, highlight=False)
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
         raise typer.Exit(1)
+
+
+def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
+    """Say what an interrupted run left (the staging folder is already removed); the exit status 128 + signal."""
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    kept = (
+        f"the previous results in {str(out)!r} were kept unchanged"
+        if previous
+        else f"nothing was written to {str(out)!r}"
+    )
+    err_console.print(
+        Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
+        + Text(f"the run stopped and its staging folder was removed; {kept}"),
+        highlight=False,
+        soft_wrap=True,
+    )
+    return 128 + int(signum)
 
 
 from satchain.cli_measure import measure_app  # noqa: E402

@@ -253,26 +253,33 @@ def _check_out_dir(out: Path) -> None:
 
 
 def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> RunResult:
-    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result."""
+    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result.
+
+    Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
+    or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
+    """
+    from satchain._safety import terminate_as_interrupt
+
     out = Path(out_dir).resolve()
     _check_out_dir(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
-    _claim_run_dir(staging)
-    try:
-        result = run_in_memory(config, progress=progress)
-        t0 = time.perf_counter()
-        timings = dict(result.timings_s)
-        write_run_directory(result, staging, progress=progress)
-        timings["report"] = round(time.perf_counter() - t0, 3)
-        result = dataclasses.replace(result, timings_s=timings)
-        from satchain.report._save import write_text
+    with terminate_as_interrupt():
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        try:
+            _claim_run_dir(staging)
+            result = run_in_memory(config, progress=progress)
+            t0 = time.perf_counter()
+            timings = dict(result.timings_s)
+            write_run_directory(result, staging, progress=progress)
+            timings["report"] = round(time.perf_counter() - t0, 3)
+            result = dataclasses.replace(result, timings_s=timings)
+            from satchain.report._save import write_text
 
-        write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
-        _swap_in(staging, out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+            write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
+            _swap_in(staging, out)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
     return result
 
 
@@ -303,6 +310,10 @@ def _swap_in(staging: Path, out: Path) -> None:
         if old is not None:
             os.replace(old, out)
         raise
+    from satchain._safety import OWNER
+
+    with contextlib.suppress(OSError):
+        (out / OWNER).unlink()  # the results no longer belong to a process
     if old is not None:
         with contextlib.suppress(OSError):
             shutil.rmtree(old)
