@@ -47,6 +47,7 @@ __all__ = [
     "clean_stale",
     "clean_stale_temp_files",
     "memory_limit_bytes",
+    "not_utf8",
     "terminate_as_interrupt",
     "write_run_marker",
 ]
@@ -399,6 +400,15 @@ def check_input_file(path: str | os.PathLike, name: str, *, max_bytes: int = 64 
     if size > max_bytes:
         raise SatchainIOError(f"{name} {str(p)!r}: {size / 2**20:.0f} MiB is far too large for a {name}; wrong file?")
     return p
+
+
+def not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError, name: str) -> ConfigError:
+    """The error for a text input that is not UTF-8 (a Latin-1 or Windows-1252 file): the file and the byte offset."""
+    byte = exc.object[exc.start : exc.start + 1].hex() if isinstance(exc.object, bytes) else "?"
+    return ConfigError(
+        f"{name} {str(path)!r}: not UTF-8 text (byte 0x{byte} at offset {exc.start} cannot be decoded); TOML and "
+        "JSON files must be UTF-8: save it as UTF-8 (e.g. iconv -f latin1 -t utf-8)"
+    )
 
 
 def _written_by_satchain(path: Path) -> bool:

@@ -26,3 +26,8 @@ class SatchainIOError(SatchainError, OSError):
 
 class ResourceLimitError(SatchainError, MemoryError):
     """Work refused up front because it would not fit in the allowed memory."""
+
+
+class ParameterTypeError(ConfigError, TypeError):
+    """A public function called with an argument of the wrong type (a string or a boolean where a number is
+    wanted, None for an image, a file name where a truth record is wanted); also a ``TypeError``."""

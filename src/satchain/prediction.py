@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from satchain._argcheck import checked
 from satchain.ctf import wedge_resolution_m
 from satchain.errors import InputError
 
@@ -247,6 +248,7 @@ def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...
     return tuple(out)
 
 
+@checked
 def predict(
     system: Any,
     truth: Mapping[str, Any],
