@@ -48,6 +48,7 @@ __all__ = [
     "clean_stale_temp_files",
     "memory_limit_bytes",
     "not_utf8",
+    "nothing_measured",
     "terminate_as_interrupt",
     "write_run_marker",
 ]
@@ -408,6 +409,30 @@ def not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError, name: str) -> Con
     return ConfigError(
         f"{name} {str(path)!r}: not UTF-8 text (byte 0x{byte} at offset {exc.start} cannot be decoded); TOML and "
         "JSON files must be UTF-8: save it as UTF-8 (e.g. iconv -f latin1 -t utf-8)"
+    )
+
+
+def nothing_measured(skipped, image, pixel_m: float | None, truth_path) -> Exception:
+    """``measure auto`` measured no target: the error that says why (no finite pixel, every target skipped and
+    the commonest reasons) and what to check, instead of an exit status 0 with empty tables."""
+    import numpy as np
+
+    from satchain.errors import InputError
+
+    if image.size and not np.isfinite(image).any():
+        return InputError("IMAGE: every pixel is NaN or inf; nothing was measured")
+    targets = [s for s in skipped if not str(s.get("reason", "")).startswith("no measurement defined")]
+    if not targets:
+        return InputError(f"--truth {str(truth_path)!r}: lists no target to measure; nothing was measured")
+    reasons: dict[str, int] = {}
+    for s in targets:
+        key = str(s.get("reason", "")).split(":", 1)[0]
+        reasons[key] = reasons.get(key, 0) + 1
+    common = "; ".join(f"{n} x {r}" for r, n in sorted(reasons.items(), key=lambda kv: -kv[1])[:3])
+    scale = "unknown" if pixel_m is None else f"{pixel_m:g} m"
+    return InputError(
+        f"nothing was measured: all {len(targets)} targets of --truth {str(truth_path)!r} were skipped ({common}); "
+        f"check that the truth file belongs to this image and the pixel size ({scale}; --pixel-m)"
     )
 
 

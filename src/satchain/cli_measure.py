@@ -597,6 +597,10 @@ def auto(
     res = measure_auto(data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
     _emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))
+    if not res.items:  # a run that measured nothing is not a success (exit status 2, the reasons on stderr)
+        from satchain._safety import nothing_measured
+
+        raise nothing_measured(res.skipped, data, p, truth)
 
 
 from satchain import cli_find as _cli_find  # noqa: E402,F401  (registers `measure find`)

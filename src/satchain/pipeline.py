@@ -245,6 +245,30 @@ def _manifest(result: RunResult) -> dict[str, Any]:
     }
 
 
+#: the Figure 1 overview: at most this many pixels, each costing about this many bytes while it is plotted
+MAX_OVERVIEW_PX = 64e6
+_OVERVIEW_BYTES_PER_PX = 40
+
+
+def _check_overview(config: RunConfig) -> None:
+    """Refuse, before anything runs, an overview figure that could not be rendered (``overview_pixel_m``
+    far below the scene's size), saying how large and how much memory it would need."""
+    from satchain._safety import check_memory
+    from satchain.errors import ResourceLimitError
+    from satchain.scene import load_layout
+
+    p = config.scene.overview_pixel_m
+    rows, cols = load_layout(config.layout_source()).shape_px(p)
+    n, need = float(rows) * cols, float(rows) * cols * _OVERVIEW_BYTES_PER_PX
+    what = f"scene.overview_pixel_m = {p:g}: the scene overview (Figure 1) would be {cols} x {rows} px"
+    if n > MAX_OVERVIEW_PX:
+        raise ResourceLimitError(
+            f"{what} and need about {need / 2**30:.3g} GiB of memory; must be >= "
+            f"{p * (n / MAX_OVERVIEW_PX) ** 0.5:.3g} m (at most {MAX_OVERVIEW_PX / 1e6:.0f} Mpx); nothing was written"
+        )
+    check_memory(need, what, fix="use a larger scene.overview_pixel_m")
+
+
 def _check_out_dir(out: Path) -> None:
     from satchain._safety import check_run_dir, clean_stale
 
@@ -262,6 +286,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
 
     out = Path(out_dir).resolve()
     _check_out_dir(out)
+    _check_overview(config)
     out.parent.mkdir(parents=True, exist_ok=True)
     with terminate_as_interrupt():
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
