@@ -103,23 +103,25 @@ def check_distinct_paths(
 
 
 # ---------------------------------------------------------------------------------------------- run directories
-def write_run_marker(directory: str | os.PathLike) -> Path:
-    """Write the run marker into ``directory`` (which satchain has just created)."""
+def write_run_marker(directory: str | os.PathLike, *, kind: str = "run") -> Path:
+    """Write the marker into ``directory`` (which satchain has just created, or found empty): ``kind`` is
+    ``"run"`` (``satchain run``) or ``"budget"`` (``satchain budget -o``)."""
     path = Path(directory) / MARKER
-    path.write_text(json.dumps(MARKER_CONTENT) + "\n")
+    path.write_text(json.dumps({**MARKER_CONTENT, "kind": kind}) + "\n")
     return path
 
 
-def _is_marked(directory: Path) -> bool:
+def _is_marked(directory: Path, kind: str = "run") -> bool:
     try:
         data = json.loads((directory / MARKER).read_text())
     except (OSError, ValueError):
         return False
-    return isinstance(data, dict) and data.get("tool") == "satchain" and data.get("kind") == "run"
+    return isinstance(data, dict) and data.get("tool") == "satchain" and data.get("kind") == kind
 
 
-def check_run_dir(out: str | os.PathLike) -> None:
-    """Allow ``out`` to be replaced only when missing, empty, or marked as a satchain run.
+def check_run_dir(out: str | os.PathLike, *, kind: str = "run") -> None:
+    """Allow ``out`` to be replaced (``kind="run"``) or written into (``kind="budget"``) only when missing,
+    empty, or marked as satchain's output of that kind.
 
     Raises
     ------
@@ -133,11 +135,11 @@ def check_run_dir(out: str | os.PathLike) -> None:
             f"-o {str(out)!r}: exists and is not a directory; choose a new or empty directory, nothing was changed"
         )
     entries = sorted(p.name for p in out.iterdir())
-    if not entries or _is_marked(out):
+    if not entries or _is_marked(out, kind):
         return
     shown = ", ".join(entries[:5]) + (f", ... ({len(entries)} entries)" if len(entries) > 5 else "")
     raise SatchainIOError(
-        f"-o {str(out)!r}: not a satchain run directory (no {MARKER}; it holds {shown}); "
+        f"-o {str(out)!r}: not a satchain {kind} directory (no {MARKER}; it holds {shown}); "
         "choose a new or empty directory, nothing was changed"
     )
 

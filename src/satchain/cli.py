@@ -19,6 +19,7 @@ from satchain._safety import (
     check_inputs_outside,
     check_memory,
     check_output_files,
+    check_run_dir,
     check_sidecars,
 )
 from satchain.engine.memory import check_simulation_memory
@@ -42,10 +43,32 @@ _handle_errors = handle_errors
 
 @app.callback()
 def _main(
+    ctx: typer.Context,
     debug: Annotated[bool, typer.Option("--debug", help="show the traceback of an error (for bug reports)")] = False,
 ) -> None:
     """Satellite image-chain simulation and image-quality measurement."""
     set_debug(debug or os.environ.get("SATCHAIN_DEBUG", "") not in ("", "0"))
+    _show_warnings(ctx)
+
+
+def _show_warnings(ctx: typer.Context) -> None:
+    """While a command runs, print satchain's warnings (an input used other than as it stands) as one
+    ``warning: ...`` line each, once; other warnings as Python shows them."""
+    import warnings
+
+    from satchain.errors import SatchainWarning
+
+    previous, seen = warnings.showwarning, set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, SatchainWarning):
+            return previous(message, category, filename, lineno, file, line)
+        if str(message) not in seen:
+            seen.add(str(message))
+            print_warning(str(message))
+
+    warnings.showwarning = show
+    ctx.call_on_close(lambda: setattr(warnings, "showwarning", previous))
 
 
 def _system(preset: str | None, system: Path | None):
@@ -126,11 +149,16 @@ def budget(
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
     check_dir_outputs(out, ["*.json", "*.csv", "*.png"], {"--system": system})
+    if out is not None:
+        check_run_dir(out, kind="budget")  # a user's folder (their budget.json) is refused, never overwritten
     s = _system(preset, system)
     res = _budget(s, _parse_floats("--freqs", freqs))
     if out is not None:
+        from satchain._safety import write_run_marker
         from satchain.report.budget import write_budget_outputs
 
+        out.mkdir(parents=True, exist_ok=True)
+        write_run_marker(out, kind="budget")  # satchain's own: a later budget -o may write here again
         written = write_budget_outputs(s, res, out)
         if not as_json:
             console.print("wrote " + ", ".join(str(p) for p in written), markup=False, highlight=False)

@@ -73,6 +73,9 @@ def _load(path: Path, pixel_m: float | None):
         pixel_m = check_positive("--pixel-m", pixel_m)
     elif meta.get("pixel_m") is not None:
         pixel_m = float(meta["pixel_m"])
+    elif "invalid_pixel_m" in meta:  # a bad pixel size in the file is refused, never silently dropped
+        raise ConfigError(f"IMAGE {str(path)!r}: its pixel size {meta['invalid_pixel_m']!r} is not a ground pixel "
+                          "size in (0, 1e6] m; give --pixel-m")  # fmt: skip
     return image, pixel_m, meta
 
 

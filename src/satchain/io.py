@@ -9,6 +9,11 @@ Pixel-size metadata is written three ways so that every kind of reader finds it:
 * The TIFF ``ImageDescription`` holds JSON ``{"satchain": {"pixel_m": ..., "origin_m": [x0, y0], ...}}``.
 * PNG files carry the same JSON in a ``satchain`` text chunk and ``pHYs`` in pixels per metre.
 
+Reading warns (:class:`~satchain.errors.SatchainWarning`) where a file is not used as it stands: a colour or
+palette image converted to grey (the conversion named), a multi-page TIFF (page 1 is used), a pixel size that
+is implausible for the ground (below 1 mm or above 100 km), resolution tags that disagree with the stated pixel
+size, a print resolution (72 dpi) that is not a ground pixel size, or a pixel scale in degrees (a geographic CRS).
+
 Every write goes to a temporary file in the destination directory and is moved into place with
 ``os.replace``, so a failed write never leaves a partial file under the final name.
 
@@ -29,6 +34,7 @@ import json
 import math
 import os
 import tempfile
+import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -39,7 +45,7 @@ from PIL import Image, PngImagePlugin
 
 from satchain._safety import check_memory, clean_stale_temp_files
 from satchain._validate import check_positive
-from satchain.errors import InputError, SatchainIOError
+from satchain.errors import InputError, SatchainIOError, SatchainWarning
 
 __all__ = [
     "BIGTIFF_THRESHOLD_BYTES",
@@ -274,11 +280,35 @@ def write_npy(path: str | os.PathLike, image: np.ndarray) -> None:
         raise SatchainIOError(f"cannot write NPY {str(path)!r}: {exc}") from exc
 
 
+#: a ground pixel size outside this range (m) is used, with a warning that it looks wrong
+PLAUSIBLE_PIXEL_M = (1e-3, 1e5)
+
+
+def _warn(path, message: str) -> None:
+    warnings.warn(f"image = {str(path)!r}: {message}", SatchainWarning, stacklevel=3)
+
+
 def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with tifffile.TiffFile(path) as tf:
         page = _first_page(tf, path)
         check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(path)!r}")
-        return page.asarray(), _tiff_meta(tf, page)
+        return _to_grey(page.asarray(), page, path), _tiff_meta(tf, page, path)
+
+
+def _to_grey(arr: np.ndarray, page, path: Path) -> np.ndarray:
+    """One band from a TIFF page with several samples per pixel: RGB(A) by ITU-R BT.601 luma, other kinds
+    (multispectral, extra samples) by their first band; either way with a warning naming the conversion."""
+    spp = int(getattr(page, "samplesperpixel", 1))
+    if spp <= 1 or arr.ndim != 3:
+        return arr
+    axis = -1 if arr.shape[-1] == spp else 0
+    bands = np.moveaxis(arr, axis, -1)
+    if getattr(page, "photometric", None) == tifffile.PHOTOMETRIC.RGB and spp >= 3:
+        _warn(path, f"RGB image ({spp} samples per pixel) converted to grey by luma 0.299 R + 0.587 G + 0.114 B")
+        grey = bands[..., :3].astype(np.float64) @ np.array([0.299, 0.587, 0.114])
+        return grey.astype(np.float32) if arr.dtype.kind == "f" else np.rint(grey).astype(arr.dtype)
+    _warn(path, f"{spp} samples (bands) per pixel: band 1 is used, the others are ignored")
+    return np.ascontiguousarray(bands[..., 0])
 
 
 def _first_page(tf, path: Path):
@@ -291,8 +321,11 @@ def _nbytes(shape, dtype) -> int:
     return int(np.prod([int(v) for v in shape], dtype=np.float64) * max(np.dtype(dtype).itemsize, 4))
 
 
-def _tiff_meta(tf, page) -> dict[str, Any]:
+def _tiff_meta(tf, page, path=None) -> dict[str, Any]:
     meta: dict[str, Any] = {"format": "tiff", "bigtiff": tf.is_bigtiff, "bits_per_sample": page.bitspersample}
+    pages = [p for p in tf.pages if not getattr(p, "is_reduced", False)]  # overviews of a COG are not images
+    if len(pages) > 1:
+        _warn(path or tf.filename, f"the TIFF holds {len(pages)} images (pages); page 1 is used, the others ignored")
     desc = page.tags.get(270)
     if desc is not None:
         with contextlib.suppress(ValueError, TypeError, AttributeError):
@@ -308,21 +341,54 @@ def _tiff_meta(tf, page) -> dict[str, Any]:
         i, j = float(tie.value[0]), float(tie.value[1])
         px = meta.get("pixel_m", 1.0)
         meta["origin_m"] = [float(tie.value[3]) - i * px, -(float(tie.value[4]) + j * px)]
-    return _checked_meta(meta)
+    if scale is not None and _geographic(page):
+        meta["invalid_pixel_m"] = f"{meta.pop('pixel_m')!r} (degrees: the GeoTIFF has a geographic CRS)"
+    meta = _checked_meta(meta, path or tf.filename)
+    _check_resolution_tags(page, meta, path or tf.filename)
+    return meta
 
 
-def _checked_meta(meta: dict[str, Any]) -> dict[str, Any]:
-    """A stated pixel size must be a number in (0, 1e6] m; otherwise it moves to ``invalid_pixel_m``."""
+def _geographic(page) -> bool:
+    """GTModelTypeGeoKey (1024) = 2: the model space is latitude/longitude, so the pixel scale is in degrees."""
+    keys = page.tags.get(_GEO_KEY_DIRECTORY)
+    with contextlib.suppress(TypeError, ValueError, IndexError):
+        v = [int(x) for x in keys.value]
+        return any(v[k] == 1024 and v[k + 1] == 0 and v[k + 3] == 2 for k in range(4, 4 + 4 * v[3], 4))
+    return False
+
+
+def _check_resolution_tags(page, meta: dict[str, Any], path) -> None:
+    """Warn when the TIFF resolution tags state a ground-like pixel size that differs from the one used."""
+    unit = {2: 0.0254, 3: 0.01}.get(int(getattr(page.tags.get(296), "value", 0) or 0))  # ResolutionUnit
+    res = page.tags.get(282)  # XResolution (pixels per unit)
+    if unit is None or res is None or meta.get("pixel_m") is None:
+        return
+    with contextlib.suppress(TypeError, ValueError, ZeroDivisionError, IndexError):
+        v = res.value
+        per_unit = float(v[0]) / float(v[1]) if isinstance(v, tuple) else float(v)
+        tag_m = unit / per_unit
+        if tag_m >= PLAUSIBLE_PIXEL_M[0] and not math.isclose(tag_m, meta["pixel_m"], rel_tol=0.01):
+            _warn(path, f"its resolution tags say {tag_m:.6g} m per pixel, its pixel size {meta['pixel_m']:.6g} m; "
+                  f"{meta['pixel_m']:.6g} m is used")  # fmt: skip
+
+
+def _checked_meta(meta: dict[str, Any], path=None) -> dict[str, Any]:
+    """A stated pixel size must be a number in (0, 1e6] m; otherwise it moves to ``invalid_pixel_m`` (which the
+    users of a pixel size refuse unless one is given). A valid one outside :data:`PLAUSIBLE_PIXEL_M` warns."""
     v = meta.get("pixel_m")
     if v is None:
         return meta
     try:
         f = float(v)
-        ok = math.isfinite(f) and 0 < f <= 1e6
+        ok = not isinstance(v, (bool, str)) and math.isfinite(f) and 0 < f <= 1e6
     except (TypeError, ValueError):
         ok = False
     if ok:
         meta["pixel_m"] = f
+        if not PLAUSIBLE_PIXEL_M[0] <= f <= PLAUSIBLE_PIXEL_M[1]:
+            lo, hi = PLAUSIBLE_PIXEL_M
+            _warn(path, f"its pixel size {f:g} m is implausible for a ground pixel (outside [{lo:g}, {hi:g}] m); "
+                  "check it, or give the pixel size (--pixel-m / --scene-pixel-m)")  # fmt: skip
     else:
         meta.pop("pixel_m")
         meta["invalid_pixel_m"] = v
@@ -340,24 +406,32 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
                 meta.update(json.loads(text))
         with contextlib.suppress(TypeError, ValueError, ZeroDivisionError, IndexError):
             if "pixel_m" not in meta and img.info.get("dpi"):
-                meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
+                dpi_m = 0.0254 / float(img.info["dpi"][0])
+                if dpi_m >= PLAUSIBLE_PIXEL_M[0]:
+                    meta["pixel_m"] = dpi_m
+                else:
+                    _warn(path, f"its resolution {float(img.info['dpi'][0]):g} dpi ({dpi_m * 1e3:.3g} mm per pixel) "
+                          "is a print resolution, not a ground pixel size: ignored (give --pixel-m)")  # fmt: skip
         if img.mode in ("I;16", "I;16B", "I;16L"):
             arr = np.array(img, dtype=np.uint16)
         elif img.mode == "I":
             arr = np.array(img).astype(np.uint16)
-        elif img.mode in ("L", "P", "1"):
+        elif img.mode in ("L", "1"):
             arr = np.array(img.convert("L"))
         else:
+            how = {"P": "palette image: its colours"}.get(img.mode, f"{img.mode} image")
+            _warn(path, f"{how} converted to grey by luma 0.299 R + 0.587 G + 0.114 B (alpha ignored)")
             arr = np.array(img.convert("L"))
             meta["converted_from"] = img.mode
-    return arr, _checked_meta(meta)
+    return arr, _checked_meta(meta, path)
 
 
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
     """Read a TIFF/GeoTIFF, PNG or NPY image: ``(array, metadata)``.
 
     ``metadata["pixel_m"]`` is present when the file states a pixel size (GeoTIFF scale tag, satchain
-    description, PNG text chunk or pHYs). Colour images are converted to grayscale (luma).
+    description, PNG text chunk or pHYs). Colour images are converted to grayscale (luma), with a
+    :class:`~satchain.errors.SatchainWarning`, as are the other surprises listed in the module docstring.
     """
     p = Path(path)
     if not p.is_file():
@@ -423,7 +497,7 @@ class ImageReader:
     def _open_tiff(self) -> None:
         self._tf = tf = tifffile.TiffFile(self.path)
         page = _first_page(tf, self.path)
-        self.meta = _tiff_meta(tf, page)
+        self.meta = _tiff_meta(tf, page, self.path)
         self._page = page
         if page.samplesperpixel != 1 or len(page.shape) != 2 or getattr(page, "imagedepth", 1) > 1:
             check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(self.path)!r}")
