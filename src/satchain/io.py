@@ -351,7 +351,7 @@ def _tiff_meta(tf, page, path=None) -> dict[str, Any]:
 def _geographic(page) -> bool:
     """GTModelTypeGeoKey (1024) = 2: the model space is latitude/longitude, so the pixel scale is in degrees."""
     keys = page.tags.get(_GEO_KEY_DIRECTORY)
-    with contextlib.suppress(TypeError, ValueError, IndexError):
+    with contextlib.suppress(TypeError, ValueError, IndexError, AttributeError):
         v = [int(x) for x in keys.value]
         return any(v[k] == 1024 and v[k + 1] == 0 and v[k + 3] == 2 for k in range(4, 4 + 4 * v[3], 4))
     return False
