@@ -103,6 +103,13 @@ HOSTILE = {
     "simulate seed=True": (lambda: satchain.simulate(IMG, SYSTEM, pixel_m=0.1, seed=True), "seed", "True"),
     "simulate pixel_m='0.035'": (lambda: satchain.simulate(IMG, SYSTEM, pixel_m="0.035"), "pixel_m", "'0.035'"),
     "simulate system=None": (lambda: satchain.simulate(IMG, None, pixel_m=0.1), "system", "None"),
+    "SystemOTF(None)": (lambda: satchain.SystemOTF(None), "system", "None"),
+    "SystemOTF('ankarasat3')": (lambda: satchain.SystemOTF("ankarasat3"), "system", "'ankarasat3'"),
+    "load_layout(42)": (lambda: satchain.load_layout(42), "source", "42"),
+    "read_truth(42)": (lambda: satchain.read_truth(42), "source", "42"),
+    "load_run_config(42)": (lambda: satchain.load_run_config(42), "path", "42"),
+    "compare(None, None)": (lambda: satchain.compare(None, None), "tolerances", "compare()"),
+    "coltman_ctf('x', 'y')": (lambda: satchain.coltman_ctf("x", "y"), "f", "'x'"),
 }
 
 

@@ -74,7 +74,8 @@ _LAZY = {
 }
 #: entry points whose arguments are type-checked on the way in (satchain._argcheck; one-line errors)
 _CHECKED = {"simulate", "measure_edge", "measure_star", "measure_bars", "measure_wedge", "measure_auto", "measure_snr",
-            "find_edges", "measure_found_edges"}  # fmt: skip
+            "find_edges", "measure_found_edges", "coltman_ctf", "mtf_from_ctf", "load_layout", "read_truth", "compare",
+            "load_run_config"}  # fmt: skip
 
 __all__ = [
     "ConfigError",

@@ -39,6 +39,9 @@ __all__ = ["checked", "check_argument"]
 F = TypeVar("F", bound=Callable[..., Any])
 
 _NUMBER_TYPES = {"float", "int"}
+#: annotation names checked by isinstance (paths, mappings) and the project's classes that appear beside them
+_TYPES = {"str": (str,), "Path": (str, os.PathLike), "Mapping": (Mapping,), "dict": (dict,)}
+_CLASSES = {"Truth", "RunConfig", "ImagingSystem", "Predictions"}
 
 
 def _parts(annotation: Any) -> set[str]:
@@ -81,6 +84,11 @@ def _numbers(value: Any, n: int | None = None) -> bool:
     except (TypeError, ValueError):
         return False
     return (n is None or len(items) == n) and all(_is_number(v) for v in items)
+
+
+def _is_instance(value: Any, parts: set[str]) -> bool:
+    types = tuple(t for p in parts for t in _TYPES.get(p, ()))
+    return isinstance(value, types) or any(c.__name__ in parts for c in type(value).__mro__)
 
 
 def _by_name(name: str, value: Any) -> str | None:
@@ -133,6 +141,9 @@ def check_argument(function: str, name: str, value: Any, annotation: Any = inspe
             why = f"must be a string, not {_kind(value)}"
         elif "bool" not in parts and isinstance(value, (bool, np.bool_)) and parts & _NUMBER_TYPES:
             why = "must not be a boolean"
+        elif parts - {"None"} <= set(_TYPES) | _CLASSES and not _is_instance(value, parts):
+            allowed = " or ".join(sorted(parts - {"None"}))
+            why = f"must be {allowed}{' or None' if optional else ''}, not {_kind(value)}"
     if why is not None:
         shown = repr(value) if not isinstance(value, np.ndarray) else f"array of shape {value.shape}"
         shown = shown if len(shown) <= 60 else shown[:57] + "..."
