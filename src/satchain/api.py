@@ -49,15 +49,27 @@ Progress = Callable[[str, int, int], None]
 
 def as_run_config(config: RunConfig | Mapping[str, Any] | str | Path | None) -> RunConfig:
     """A RunConfig from a RunConfig, a dict (as in the TOML), a TOML path, or None (the defaults)."""
+    import os
+
+    from satchain.errors import ParameterTypeError
     from satchain.runconfig import load_run_config
 
     if isinstance(config, RunConfig):
         return config
     if isinstance(config, Mapping):
         return RunConfig.from_dict(dict(config))
+    if config is not None and not isinstance(config, (str, Path, os.PathLike)):
+        shown = repr(config) if len(repr(config)) <= 60 else repr(config)[:57] + "..."
+        raise ParameterTypeError(
+            f"run(): config = {shown}: must be a RunConfig, a dict (as in the TOML), a TOML path or None"
+        )
     return load_run_config(config)
 
 
+from satchain._argcheck import checked  # noqa: E402  (here, beside its one use: the types above stay apart)
+
+
+@checked
 def run(
     config: RunConfig | Mapping[str, Any] | str | Path | None = None,
     *,

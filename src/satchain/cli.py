@@ -19,6 +19,7 @@ from satchain._safety import (
     check_inputs_outside,
     check_memory,
     check_output_files,
+    check_run_dir,
     check_sidecars,
 )
 from satchain.errors import ConfigError
@@ -40,10 +41,32 @@ _handle_errors = handle_errors
 
 @app.callback()
 def _main(
+    ctx: typer.Context,
     debug: Annotated[bool, typer.Option("--debug", help="show the traceback of an error (for bug reports)")] = False,
 ) -> None:
     """Satellite image-chain simulation and image-quality measurement."""
     set_debug(debug or os.environ.get("SATCHAIN_DEBUG", "") not in ("", "0"))
+    _show_warnings(ctx)
+
+
+def _show_warnings(ctx: typer.Context) -> None:
+    """While a command runs, print satchain's warnings (an input used other than as it stands) as one
+    ``warning: ...`` line each, once; other warnings as Python shows them."""
+    import warnings
+
+    from satchain.errors import SatchainWarning
+
+    previous, seen = warnings.showwarning, set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, SatchainWarning):
+            return previous(message, category, filename, lineno, file, line)
+        if str(message) not in seen:
+            seen.add(str(message))
+            print_warning(str(message))
+
+    warnings.showwarning = show
+    ctx.call_on_close(lambda: setattr(warnings, "showwarning", previous))
 
 
 def _system(preset: str | None, system: Path | None):
@@ -124,11 +147,16 @@ def budget(
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
     check_dir_outputs(out, ["*.json", "*.csv", "*.png"], {"--system": system})
+    if out is not None:
+        check_run_dir(out, kind="budget")  # a user's folder (their budget.json) is refused, never overwritten
     s = _system(preset, system)
     res = _budget(s, _parse_floats("--freqs", freqs))
     if out is not None:
+        from satchain._safety import write_run_marker
         from satchain.report.budget import write_budget_outputs
 
+        out.mkdir(parents=True, exist_ok=True)
+        write_run_marker(out, kind="budget")  # satchain's own: a later budget -o may write here again
         written = write_budget_outputs(s, res, out)
         if not as_json:
             console.print("wrote " + ", ".join(str(p) for p in written), markup=False, highlight=False)
@@ -361,14 +389,37 @@ def run(
         bar.start_task(tasks[stage])
         bar.update(tasks[stage], completed=done, total=total)
 
-    with bar:
-        result = satchain.run(cfg, out_dir=out, progress=update)
+    previous = out.is_dir() and any(out.iterdir())
+    try:
+        with bar:
+            result = satchain.run(cfg, out_dir=out, progress=update)
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (satchain._safety.Interrupted)
+        raise typer.Exit(_interrupted(exc, out, previous)) from None
     _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}", markup=False, highlight=False)
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
         raise typer.Exit(1)
+
+
+def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
+    """Say what an interrupted run left (the staging folder is already removed); the exit status 128 + signal."""
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    kept = (
+        f"the previous results in {str(out)!r} were kept unchanged"
+        if previous
+        else f"nothing was written to {str(out)!r}"
+    )
+    err_console.print(
+        Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
+        + Text(f"the run stopped and its staging folder was removed; {kept}"),
+        highlight=False,
+        soft_wrap=True,
+    )
+    return 128 + int(signum)
 
 
 from satchain.cli_measure import measure_app  # noqa: E402

@@ -267,6 +267,30 @@ def _manifest(result: RunResult) -> dict[str, Any]:
     }
 
 
+#: the Figure 1 overview: at most this many pixels, each costing about this many bytes while it is plotted
+MAX_OVERVIEW_PX = 64e6
+_OVERVIEW_BYTES_PER_PX = 40
+
+
+def _check_overview(config: RunConfig) -> None:
+    """Refuse, before anything runs, an overview figure that could not be rendered (``overview_pixel_m``
+    far below the scene's size), saying how large and how much memory it would need."""
+    from satchain._safety import check_memory
+    from satchain.errors import ResourceLimitError
+    from satchain.scene import load_layout
+
+    p = config.scene.overview_pixel_m
+    rows, cols = load_layout(config.layout_source()).shape_px(p)
+    n, need = float(rows) * cols, float(rows) * cols * _OVERVIEW_BYTES_PER_PX
+    what = f"scene.overview_pixel_m = {p:g}: the scene overview (Figure 1) would be {cols} x {rows} px"
+    if n > MAX_OVERVIEW_PX:
+        raise ResourceLimitError(
+            f"{what} and need about {need / 2**30:.3g} GiB of memory; must be >= "
+            f"{p * (n / MAX_OVERVIEW_PX) ** 0.5:.3g} m (at most {MAX_OVERVIEW_PX / 1e6:.0f} Mpx); nothing was written"
+        )
+    check_memory(need, what, fix="use a larger scene.overview_pixel_m")
+
+
 def _check_out_dir(out: Path) -> None:
     from satchain._safety import check_run_dir, clean_stale
 
@@ -275,26 +299,34 @@ def _check_out_dir(out: Path) -> None:
 
 
 def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> RunResult:
-    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result."""
+    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result.
+
+    Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
+    or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
+    """
+    from satchain._safety import terminate_as_interrupt
+
     out = Path(out_dir).resolve()
     _check_out_dir(out)
+    _check_overview(config)
     out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
-    _claim_run_dir(staging)
-    try:
-        result = run_in_memory(config, progress=progress)
-        t0 = time.perf_counter()
-        timings = dict(result.timings_s)
-        write_run_directory(result, staging, progress=progress)
-        timings["report"] = round(time.perf_counter() - t0, 3)
-        result = dataclasses.replace(result, timings_s=timings)
-        from satchain.report._save import write_text
+    with terminate_as_interrupt():
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        try:
+            _claim_run_dir(staging)
+            result = run_in_memory(config, progress=progress)
+            t0 = time.perf_counter()
+            timings = dict(result.timings_s)
+            write_run_directory(result, staging, progress=progress)
+            timings["report"] = round(time.perf_counter() - t0, 3)
+            result = dataclasses.replace(result, timings_s=timings)
+            from satchain.report._save import write_text
 
-        write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
-        _swap_in(staging, out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+            write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
+            _swap_in(staging, out)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
     return result
 
 
@@ -325,6 +357,10 @@ def _swap_in(staging: Path, out: Path) -> None:
         if old is not None:
             os.replace(old, out)
         raise
+    from satchain._safety import OWNER
+
+    with contextlib.suppress(OSError):
+        (out / OWNER).unlink()  # the results no longer belong to a process
     if old is not None:
         with contextlib.suppress(OSError):
             shutil.rmtree(old)

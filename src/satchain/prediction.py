@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from satchain._argcheck import checked
 from satchain.errors import InputError
 from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
 
@@ -291,6 +292,7 @@ def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...
     return tuple(out)
 
 
+@checked
 def predict(
     system: Any,
     truth: Mapping[str, Any],

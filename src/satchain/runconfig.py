@@ -10,9 +10,10 @@ import sys
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from satchain.errors import ConfigError, SatchainIOError
+from satchain.sections import _StrictNumbers
 from satchain.system import ImagingSystem, _config_error, load_preset
 
 if sys.version_info >= (3, 11):
@@ -23,7 +24,7 @@ else:  # pragma: no cover
 __all__ = ["DEFAULT_CONFIG_TOML", "RunConfig", "load_run_config", "system_differences"]
 
 
-class _Frozen(BaseModel):
+class _Frozen(_StrictNumbers):  # no bool, string or NaN where a number is wanted
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
@@ -294,6 +295,10 @@ def load_run_config(path: str | Path | None) -> RunConfig:
         raise SatchainIOError(f"--config {str(p)!r}: not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"--config {str(p)!r}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError as exc:
+        from satchain._safety import not_utf8
+
+        raise not_utf8(p, exc, "--config") from None
     return RunConfig.from_dict(data, base_dir=p.parent)
 
 
