@@ -23,13 +23,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from satchain._argcheck import checked
 from satchain.errors import InputError
 from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
+
+if TYPE_CHECKING:
+    from satchain.scene.truth import Truth
 
 __all__ = [
     "DIRECTIONS",
@@ -295,7 +298,7 @@ def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...
 @checked
 def predict(
     system: Any,
-    truth: Mapping[str, Any],
+    truth: Mapping[str, Any] | Truth,
     *,
     otf: Any = None,
     quality: Mapping[str, float] | None = None,
