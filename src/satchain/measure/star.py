@@ -15,7 +15,10 @@ Angles are measured in image axes (x = column to the right, y = row downwards).
 
 Validation and estimation (issue 10).  The centre is estimated to sub-pixel from the data (or a given
 approximate centre refined): the per-annulus fits' residual is minimised over the centre (see
-:mod:`satchain.measure._starfit`), with its covariance.  The claimed ``cycles`` must be the dominant angular
+:mod:`satchain.measure._starfit`), with its covariance.  That minimisation needs a start within ~1 px, so a
+given centre is first searched, within 6 px, for the point about which the ``cycles``-th angular harmonic adds
+up coherently (issue 18: a centre 3 px off was refused with a message about ``--cycles``); a centre farther
+off is refused naming the centre.  The claimed ``cycles`` must be the dominant angular
 harmonic of the outer radii and stand well above the other harmonics (the noise), otherwise the call is
 refused naming the count found.  The input (zero-frequency) modulation is, unless given, extrapolated from
 the outer radii by a weighted fit of ``log m(f) = c0 + c1 f + c2 f^2`` (exact for a Gaussian MTF, and
@@ -139,12 +142,8 @@ def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
     try:
         _check_cycles(data, n, cx, cy, r_in, r_out)
     except InputError:
-        if given and at_limit:  # the harmonic peaks on the search border: the centre, not the cycles
-            raise InputError(
-                f"center = ({given_xy[0]:g}, {given_xy[1]:g}): no centre of a {n}-cycle star found within "
-                f"{CENTER_SEARCH_PX:g} px of it; give the centre within {CENTER_SEARCH_PX:g} px, or omit it to "
-                "estimate it from the data"
-            ) from None
+        if given and at_limit:  # the harmonic peaks on the search border: the centre or the cycles?
+            _far_centre(data, n, given_xy, r_in)  # always raises
         raise
     x, y, cov = fit_center(data, n, (cx, cy), r_lo, r_out, search_px=1.0)
     if cov is None:
@@ -156,6 +155,27 @@ def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
             f"{moved:.1f} px from it; give a centre within {CENTER_SEARCH_PX:g} px"
         )
     return (x, y), (float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))), "refined" if given else "estimated"
+
+
+def _far_centre(data, n, given_xy, r_in) -> None:
+    """A given centre from which no ``n``-cycle star is found: refused about the centre when the region's
+    centre of point symmetry holds an ``n``-cycle star (or none at all), about the cycles (naming the count
+    found there) when another count dominates there."""
+    sx, sy = symmetry_center(data)
+    ny, nx = data.shape
+    r_out = min(sx, sy, nx - 1 - sx, ny - 1 - sy)
+    where = ""
+    try:
+        _check_cycles(data, n, sx, sy, r_in, r_out)
+        where = f" (a {n}-cycle star is centred near ({sx:.1f}, {sy:.1f}))"
+    except InputError as exc:
+        if "dominant angular harmonic" in str(exc):  # another count dominates at the star's centre
+            raise
+    raise InputError(
+        f"center = ({given_xy[0]:g}, {given_xy[1]:g}): no centre of a {n}-cycle star found within "
+        f"{CENTER_SEARCH_PX:g} px of it{where}; give the centre within {CENTER_SEARCH_PX:g} px, or omit it to "
+        "estimate it from the data"
+    )
 
 
 def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
@@ -215,15 +235,17 @@ def measure_star(
     cycles : int
         Periods per revolution of the star (>= 4); checked against the data.
     center : (x, y), optional
-        Approximate star centre in pixels of the (cropped) image (refined from the data unless
-        ``refine_center=False``); by default estimated from the data, starting at the region's centre.
+        Approximate star centre in pixels of the (cropped) image, within 6 px of the star's (searched for the
+        coherent ``cycles``-th angular harmonic, then refined from the data, unless ``refine_center=False``);
+        by default estimated from the data, starting at the region's centre of point symmetry.
     radius_px : float, optional
         Outer radius used; the largest circle inside the region by default.
     roi : (x0, y0, x1, y1), optional
     input_modulation : float, optional
         Modulation (max - min) / (max + min) of the star itself, in (0, 1] (``ConfigError`` otherwise).  When
         not given it is extrapolated to zero frequency from the outer radii by a weighted fit of
-        ``log m = c0 + c1 f + c2 f^2`` (see the module docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
+        ``log m = c0 + c1 f + c2 f^2`` (see the module docstring); a flag is raised when the outer MTF is below
+        0.8 (far extrapolation).
     annulus_px : float
         Spacing of the radii reported (px); each is fitted on the pixels within ``1.5 annulus_px`` of it.
     f_max_cy_per_px : float
