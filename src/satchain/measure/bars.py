@@ -41,7 +41,8 @@ functions; this module keeps its own so measurement stays independent of predict
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import re
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -65,7 +66,8 @@ class BarsResult(ResultMixin):
     group's region (px along the profile); ``noise_std`` the profile noise per group; ``flags`` warnings.
     MTF values outside [0, 1.2] (noise in the inverse series) are reported as NaN and flagged.
     ``ctf_correction`` is what the target's joint MTF added to each group's measured modulation to give the
-    square-wave CTF (None: fewer than three groups, or ``bars_per_group=None``).
+    square-wave CTF (None: fewer than three groups, or ``bars_per_group=None``).  ``refused`` lists
+    ``(index, reason)`` of the groups refused alone (their CTF and MTF are NaN; the others are measured).
     """
 
     f_cy_per_px: np.ndarray
@@ -83,6 +85,7 @@ class BarsResult(ResultMixin):
     noise_std: np.ndarray | None = None
     flags: tuple = ()
     ctf_correction: np.ndarray | None = None
+    refused: tuple = ()
 
 
 def coltman_inverse_coefficients(n_terms: int = 40) -> list[tuple[int, float]]:
@@ -239,14 +242,17 @@ def _misfit_on_hump(prof: np.ndarray, period: float, fit: GroupFit) -> float:
 def _validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars, flags):
     """A group the periodic model misfit (a short group on the hump of a wide blur) is kept only when the
     target's MTF model, rendering the whole group as it lies in its region, reproduces its profile (rms
-    misfit, after a gain and an offset, within 25 % of the bar amplitude); otherwise the original refusal."""
+    misfit, after a gain and an offset, within 25 % of the bar amplitude); otherwise it is refused with the
+    original reason.  Returns the flags and ``{index: reason}`` of the refused."""
+    refused = {}
     for i, msg in deferred.items():
         p, prof = float(periods[i]), np.asarray(profiles[i], dtype=float)
         centres = None
         if model is not None and n_bars is not None:
             centres, _ = group_centres(fits[i].x0, p, prof.size, int(n_bars))
         if centres is None:
-            raise InputError(msg)
+            refused[i] = msg
+            continue
         synth = model.render_group(p, centres, prof.size, c_large)
         d = np.column_stack([synth, np.ones_like(synth)])
         coef = np.linalg.lstsq(d, prof, rcond=None)[0]
@@ -258,13 +264,14 @@ def _validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars
         amp = abs(float(np.sum(fits[i].amps)))
         misfit = float(np.sqrt(max(s2, 0.0)))
         if not (coef[0] > 0 and misfit <= 0.25 * amp):
-            raise InputError(msg)
+            refused[i] = msg
+            continue
         flags.append(
             f"group {i}: the bars sit on the hump of a short group under a wide blur ({fits[i].misfit / amp:.0%} "
             f"misfit for a periodic profile); the target's MTF model renders the group within {misfit / amp:.0%}: "
             "measured, with the square-wave correction"
         )
-    return flags
+    return flags, refused
 
 
 def _sampled_floor(prof: np.ndarray, noise: float) -> float:
@@ -389,17 +396,124 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    fits, floors, profiles, flags, noises, deferred = [], [], [], [], [], {}
+    groups = _measure_groups(image, periods, group_rois, direction)
+    kept = [i for i in range(periods.size) if i not in groups.refused]
+    t = _target_ctf(groups, kept, periods, levels, bars_per_group)
+    for j, msg in t.deferred_refused.items():  # refused against the target's MTF model
+        groups.refused[kept[j]] = msg
+    keep = np.array([i not in groups.refused for i in range(periods.size)])
+    ctf, ctf_std = _scatter(t.ctf, kept, periods.size), _scatter(t.ctf_std, kept, periods.size)
+    ctf[~keep], ctf_std[~keep] = np.nan, np.nan
+    f = 1.0 / periods
+    mtf, mtf_std = np.full(f.size, np.nan), np.full(f.size, np.nan)
+    mtf[keep], mtf_std[keep] = _mtf_with_std(f[keep], ctf[keep], ctf_std[keep])
+    flags = _renumber(t.flags, kept) + _refusal_flags(groups.refused)
+    bad = keep & ~((mtf >= 0) & (mtf <= CTF_MAX))
+    if np.any(bad):
+        flags.append(f"MTF outside [0, {CTF_MAX}] at {np.round(f[bad], 4).tolist()} cy/px (noise): set to NaN")
+        mtf = np.where(bad, np.nan, mtf)
+    return BarsResult(
+        f_cy_per_px=f,
+        periods_px=periods,
+        ctf=ctf,
+        mtf=mtf,
+        large_area_contrast=float(t.c_large),
+        direction=direction,
+        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
+        ctf_std=ctf_std,
+        mtf_std=mtf_std,
+        phase_px=_scatter(t.phase, kept, periods.size),
+        large_area_contrast_std=float(t.c_std),
+        levels_from=t.levels_from,
+        noise_std=_scatter(t.noise, kept, periods.size),
+        flags=tuple(flags),
+        ctf_correction=None if t.corr is None else _scatter(t.corr, kept, periods.size),
+        refused=tuple(sorted(groups.refused.items())),
+    )
+
+
+@dataclass
+class _Groups:
+    """Per group (all of them): profile, fit, noise, flags; ``refused`` maps an index to its reason."""
+
+    profiles: dict = field(default_factory=dict)
+    fits: dict = field(default_factory=dict)
+    noises: dict = field(default_factory=dict)
+    flags: dict = field(default_factory=dict)
+    deferred: dict = field(default_factory=dict)
+    refused: dict = field(default_factory=dict)
+
+
+def _measure_groups(image, periods, group_rois, direction) -> _Groups:
+    """Profile, fit and check every group.  In a target of two or more groups, a group that is not bars at its
+    period (or too short, or without a significant modulation) is refused alone (its reason kept) and the others
+    measured; the call is refused when none is left, or for a lone group."""
+    g = _Groups()
+    deferred = {} if periods.size >= 3 else None
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
-        prof, noise, fl = _profile(image, roi, direction, p, i)
-        noises.append(noise)
-        fit = fit_group(prof, p, noise)
-        flags += fl + _check_group(fit, prof, p, i, deferred if periods.size >= 3 else None)
-        if i in deferred:  # kept out of the joint model until the model has explained it
+        try:
+            prof, noise, fl = _profile(image, roi, direction, p, i)
+            fit = fit_group(prof, p, noise)
+            fl = fl + _check_group(fit, prof, p, i, deferred)
+        except InputError as exc:
+            if periods.size < 2:
+                raise
+            g.refused[i] = str(exc)
+            continue
+        if deferred is not None and i in deferred:  # kept out of the joint model until the model has explained it
             fit = replace(fit, cov=None)
-        fits.append(fit)
-        floors.append(_sampled_floor(prof, fit.noise))
-        profiles.append(prof)
+            g.deferred[i] = deferred.pop(i)
+        g.profiles[i], g.fits[i], g.noises[i], g.flags[i] = prof, fit, noise, fl
+    if len(g.refused) == periods.size:
+        reasons = "; ".join(f"group {i}: {m}" for i, m in sorted(g.refused.items()))
+        raise InputError(f"group_rois: no group is measurable ({reasons})")
+    return g
+
+
+def _scatter(values, kept, n: int) -> np.ndarray:
+    """Per-kept-group values placed at their indices among ``n`` groups (NaN elsewhere)."""
+    out = np.full(n, np.nan)
+    out[np.asarray(kept, dtype=int)] = np.asarray(values, dtype=float)
+    return out
+
+
+def _renumber(flags, kept) -> list[str]:
+    """Flags of the kept groups (numbered 0..k-1 by the target's core) renumbered to the caller's indices."""
+    out = []
+    for f in flags:
+        m = re.match(r"group (\d+): ", f)
+        out.append(f"group {kept[int(m.group(1))]}: {f[m.end() :]}" if m else f)
+    return out
+
+
+def _refusal_flags(refused: dict) -> list[str]:
+    return [f"group {i}: refused (the other groups are measured): {msg}" for i, msg in sorted(refused.items())]
+
+
+@dataclass
+class _TargetCtf:
+    ctf: np.ndarray
+    ctf_std: np.ndarray
+    phase: np.ndarray
+    noise: np.ndarray
+    corr: np.ndarray | None
+    c_large: float
+    c_std: float
+    levels_from: str
+    flags: list
+    deferred_refused: dict
+
+
+def _target_ctf(groups: _Groups, kept, periods_all, levels, bars_per_group) -> _TargetCtf:
+    """CTF of the kept groups (indices 0..k-1 here, in ``kept`` order): levels, joint MTF model, plateaus,
+    finite-group correction, bounds."""
+    periods = periods_all[np.asarray(kept, dtype=int)]
+    fits = [groups.fits[i] for i in kept]
+    profiles = [groups.profiles[i] for i in kept]
+    noises = [groups.noises[i] for i in kept]
+    flags = [_local(f, i, j) for j, i in enumerate(kept) for f in groups.flags[i]]
+    deferred = {j: groups.deferred[i] for j, i in enumerate(kept) if i in groups.deferred}  # caller's numbering
+    floors = [_sampled_floor(prof, fit.noise) for prof, fit in zip(profiles, fits, strict=True)]
     c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
     fits, flags, model, joint = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
     mod = np.array([ft.modulation for ft in fits])
@@ -422,8 +536,9 @@ def measure_bars(
             "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
             "or a sharp system they can differ by a few %"
         )
+    refused = {}
     if deferred:
-        flags = _validate_deferred(deferred, model, fits, profiles, periods, c_large, bars_per_group, flags)
+        flags, refused = _validate_deferred(deferred, model, fits, profiles, periods, c_large, bars_per_group, flags)
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
@@ -432,29 +547,23 @@ def measure_bars(
             f"{CTF_MAX}; the large-area contrast is too small (wrong levels?)"
         )
     ctf, ctf_std = _bounded_ctf(mod / c_large + corr, mod_std, c_large, c_std, floor, periods, flags, corr_std)
-    f = 1.0 / periods
-    mtf, mtf_std = _mtf_with_std(f, ctf, ctf_std)
-    bad = ~((mtf >= 0) & (mtf <= CTF_MAX))
-    if np.any(bad):
-        flags.append(f"MTF outside [0, {CTF_MAX}] at {np.round(f[bad], 4).tolist()} cy/px (noise): set to NaN")
-        mtf = np.where(bad, np.nan, mtf)
-    return BarsResult(
-        f_cy_per_px=f,
-        periods_px=periods,
-        ctf=ctf,
-        mtf=mtf,
-        large_area_contrast=float(c_large),
-        direction=direction,
-        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
-        ctf_std=ctf_std,
-        mtf_std=mtf_std,
-        phase_px=np.array([ft.x0 for ft in fits]),
-        large_area_contrast_std=float(c_std),
-        levels_from=levels_from,
-        noise_std=np.array([ft.noise for ft in fits]),
-        flags=tuple(flags),
-        ctf_correction=corr if model is not None and bars_per_group is not None else None,
+    return _TargetCtf(
+        ctf,
+        ctf_std,
+        np.array([ft.x0 for ft in fits]),
+        np.array([ft.noise for ft in fits]),
+        corr if model is not None and bars_per_group is not None else None,
+        float(c_large),
+        float(c_std),
+        levels_from,
+        flags,
+        refused,
     )
+
+
+def _local(msg: str, i: int, j: int) -> str:
+    """A group's message numbered ``i`` (the caller's index) renumbered ``j`` (its place among the kept)."""
+    return msg.replace(f"group {i}: ", f"group {j}: ", 1).replace(f"group_rois[{i}]", f"group_rois[{j}]")
 
 
 def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):
