@@ -183,10 +183,12 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, def
     if fit.misfit > 0.25 * amp:
         on_hump = _misfit_on_hump(prof, period, fit)
         if not on_hump <= 0.25 * amp:
+            ratio = f"{fit.misfit / amp:.0%}" if fit.misfit < 100 * amp else f"{fit.misfit / amp:.1e} x"
             msg = (
                 f"group_rois[{index}]: the profile is not a bar pattern of period {period:g} px (rms misfit "
-                f"{fit.misfit:.3g} = {fit.misfit / amp:.0%} of the bar amplitude, also with a smooth envelope: a "
-                "single bar or edge, or bars too blurred for the few samples in the region)"
+                f"{fit.misfit:.3g} = {ratio} of the bar amplitude {amp:.3g}, also with a smooth envelope: a "
+                "single bar or edge, bars too blurred for the few samples in the region, or samples on the bars' "
+                "edges)"
             )
             if deferred is None:
                 raise InputError(msg)
