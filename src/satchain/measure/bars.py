@@ -306,7 +306,7 @@ def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags, extra_std=
     return ctf, std
 
 
-def _levels(fits, periods, levels, profiles):
+def _levels(fits, periods, levels, profiles, noises=None):
     """Large-area contrast, its 1-sigma and where it came from."""
     if levels is not None:
         dark, bright = (float(v) for v in levels)
@@ -319,18 +319,20 @@ def _levels(fits, periods, levels, profiles):
             "(dark, bright) levels"
         )
     i = int(np.argmax(periods))
-    return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
+    return _plateau_contrast(profiles[i], fits[i], float(periods[i]), None if noises is None else noises[i])
 
 
-def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
+def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float, noise: float | None = None):
     """Large-area contrast from the widest group's plateaus; refused when it has none (the CTF would be
     inflated)."""
-    found, spread = _plateau(prof, fit, period)
+    found, spread = _plateau(prof, fit, period, noise=_rows_noise(noise))
     if found is None:
         raise InputError(
             f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops (period under "
-            f"8 px, or samples within P/8 of a bar or gap centre spread by {spread:.0%} of the amplitude): its "
-            "modulation is below the large-area contrast and would inflate every CTF; give the (dark, bright) levels"
+            f"8 px, or tops dropping by {spread:.1%} of the amplitude within P/8 of a bar or gap centre, over 0.5 %: "
+            "a blur too wide for the bars, or a long-tailed PSF such as diffraction, which also holds the tops "
+            "below the large-area levels): its modulation is below the large-area contrast and would inflate every "
+            "CTF; give the (dark, bright) levels"
         )
     return found[0], found[1], f"plateaus of the widest group (period {period:g} px)"
 
@@ -516,13 +518,13 @@ def _target_ctf(groups: _Groups, kept, periods_all, levels, bars_per_group) -> _
     flags = [_local(f, i, j) for j, i in enumerate(kept) for f in groups.flags[i]]
     deferred = {j: groups.deferred[i] for j, i in enumerate(kept) if i in groups.deferred}  # caller's numbering
     floors = [_sampled_floor(prof, fit.noise) for prof, fit in zip(profiles, fits, strict=True)]
-    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
+    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles, noises)
     fits, flags, model, joint = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
     plateau = np.zeros(len(fits), dtype=bool)
     for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
-        found, _ = _plateau(prof, fit, float(p))
+        found, _ = _plateau(prof, fit, float(p), noise=_rows_noise(noises[i]))
         if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
             mod[i], mod_std[i] = found
             plateau[i] = True
@@ -561,6 +563,11 @@ def _target_ctf(groups: _Groups, kept, periods_all, levels, bars_per_group) -> _
         flags,
         refused,
     )
+
+
+def _rows_noise(noise) -> float | None:
+    """The rows' noise of a profile (None: a single row, no noise estimate: the fit residual is used)."""
+    return None if noise is None else float(noise)
 
 
 def _local(msg: str, i: int, j: int) -> str:
