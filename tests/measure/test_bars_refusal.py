@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from _render import render_bar_group
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from test_bars import _coltman, _group
@@ -80,3 +81,31 @@ def test_still_refused_when_nothing_or_one_group_is_left():
     img, rois = _target((12.0, 2.0), 0.0)
     with pytest.raises(InputError, match="levels"):  # one group left cannot be its own reference
         measure_bars(img, periods_px=[12.0, 2.0], group_rois=rois)
+
+
+# ------------------------------------------------ issue 18: default levels under diffraction, across the grid phase
+
+DIFFRACTION_TARGET = (16.0, 12.0, 8.0, 6.0, 5.0, 4.0, 3.0)
+
+
+def _diffraction_target(phase, q, s, rows=4):
+    blocks, rois, x0 = [], [], 0
+    for p in DIFFRACTION_TARGET:
+        img, roi = render_bar_group(p, phase, 3, q=q, eps=0.33, blur_sigma_px=s, rows=rows)
+        blocks.append(img)
+        rois.append((roi[0] + x0, 0, roi[2] + x0, rows))
+        x0 += img.shape[1]
+    return np.hstack(blocks), rois
+
+
+@settings(max_examples=5, deadline=None)
+@given(phase=st.floats(0.0, 1.0, exclude_max=True), q=st.sampled_from([1.0, 1.2]), s=st.sampled_from([0.0, 0.3]))
+@example(phase=0.0, q=1.0, s=0.0)  # refused (curved tops) ...
+@example(phase=0.5, q=1.0, s=0.0)  # ... where it was measured 8 % high: the flat-looking tops sit below the levels
+def test_default_levels_under_diffraction_refused_at_every_phase(phase, q, s):
+    """An obscured pupil's line spread falls as 1 / x^2: the 16 px group's tops look flat at some grid phases but
+    sit 4 % below the large-area levels (the CTFs read 8 % high).  Without levels the target is refused at every
+    phase, naming the curved tops; never measured off."""
+    img, rois = _diffraction_target(phase, q, s)
+    with pytest.raises(InputError, match=r"no flat bar tops .*long-tailed PSF"):
+        measure_bars(img, periods_px=DIFFRACTION_TARGET, group_rois=rois)
