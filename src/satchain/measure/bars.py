@@ -13,12 +13,15 @@ centre, ``|sum_k A_k| / a`` (Coltman's definition), divided by the large-area co
 
 Validation.  A group must cover 1.5 periods, its profile's dominant period must be the claimed one, the
 periodic model must explain the profile, and the fitted modulation must stand above the noise; otherwise
-the call is refused.  Without ``levels`` the large-area levels are the plateaus of the widest group (its
-samples near bar and gap centres), only if they are flat (else refused: the CTF would be inflated, the old
-default's 7.8 %); a single group cannot be its own reference.  The fitted CTF is kept within [the samples'
-own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.  Where a
-group's samples within P/8 of its bar and gap centres are flat (wide bars), their means are the peak and
-trough themselves and give the CTF directly (no truncated series).
+the group is refused: alone in a target of two or more groups (``BarsResult.refused`` and a flag give the
+reason, its CTF and MTF are NaN, the other groups are measured), the call for a lone group.  Without
+``levels`` the large-area levels are the plateaus of the widest group (its samples near bar and gap
+centres), only if they are flat at every grid phase (else refused: the CTF would be inflated, the old
+default's 7.8 %; a long-tailed PSF holds even flat-looking tops below the levels, see
+:func:`satchain.measure._barfit.plateau`); a single group cannot be its own reference.  The fitted CTF is
+kept within [the samples' own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged
+when clipped.  Where a group's samples within P/8 of its bar and gap centres are flat (wide bars), their
+means are the peak and trough themselves and give the CTF directly (no truncated series).
 
 Targets of three or more groups (``_barjoint``, ``_barfinite``).  One group's samples cannot tell every
 harmonic apart (at 4 px harmonic 3 folds onto the fundamental; at some phases its samples are exactly those
@@ -32,6 +35,13 @@ difference from the model's Coltman CTF is added (``ctf_correction``; its model 
 within 0.022 of Coltman's at every phase and period from 2.5 to 12 px for Gaussian and obscured-pupil systems
 (``benchmarks/bench_targets.py``).  A lone group keeps its flags.  ``bars_per_group`` (3 by default) gives
 the group's length; ``None`` (a long grating) applies no finite-group correction.
+
+Levels.  The CTF is relative to the large-area contrast, so an error of the image's offset (in the units the
+levels are given in) moves every CTF: an offset ``e`` too large lowers a group's mean level ``a`` and raises its
+CTF by ``e / a``.  The positive residuals of the default ``satchain run`` (+0.005 to +0.013 without noise) are
+of this kind: ``measure auto`` calibrates the image on the medians of finite uniform areas, which the long
+diffraction tail pulls toward their surroundings (``benchmarks/bench_bar_residuals.py``); with the sensor's
+true response the residuals are +0.001 to +0.003, the bar targets' 2-D geometry (bars five widths long).
 
 The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
 discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
