@@ -220,8 +220,10 @@ def test_given_centre_a_few_px_off_is_found(dist, angle):
     assert r.center_from == "refined"
     assert abs(r.center_xy_px[0] - centre[0]) < 0.01 and abs(r.center_xy_px[1] - centre[1]) < 0.01
     ok = r.f_cy_per_px <= 0.5
+    ref = measure_star(img, cycles=n, center=centre, input_modulation=0.4)  # the true centre given
     for k, a in DIRS.items():
         assert np.max(np.abs(r.mtf[k] - _truth(r.f_cy_per_px, mtf, a))[ok]) < 0.01, k
+        assert np.all(np.abs(r.mtf[k] - ref.mtf[k]) <= np.maximum(2 * ref.mtf_std[k], 1e-4)), k  # same as given
 
 
 def test_centre_too_far_off_is_refused_about_the_centre():

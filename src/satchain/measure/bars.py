@@ -303,12 +303,12 @@ def measure_bars(
         f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
         ctf_std=ctf_std,
         mtf_std=mtf_std,
-        phase_px=scatter(t.phase, kept, periods.size),
+        phase_px=np.where(keep, scatter(t.phase, kept, periods.size), np.nan),
         large_area_contrast_std=float(t.c_std),
         levels_from=t.levels_from,
-        noise_std=scatter(t.noise, kept, periods.size),
+        noise_std=np.where(keep, scatter(t.noise, kept, periods.size), np.nan),
         flags=tuple(flags),
-        ctf_correction=None if t.corr is None else scatter(t.corr, kept, periods.size),
+        ctf_correction=None if t.corr is None else np.where(keep, scatter(t.corr, kept, periods.size), np.nan),
         refused=tuple(sorted(groups.refused.items())),
     )
 

@@ -284,7 +284,8 @@ def measure_star(
     _check_extent(n, r_in, r_out, annulus_px, f_max)
     (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
     ny, nx = data.shape
-    r_out = min(r_out, xc, yc, nx - 1 - xc, ny - 1 - yc)
+    r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
+    r_out = r_fit if radius_px is None else min(r_out, r_fit)
     _check_extent(n, r_in, r_out, annulus_px, f_max)
     radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
     f = n / (2 * np.pi * radii)
