@@ -20,11 +20,12 @@ None``, with ``reason``), never a failure.
 
 Every row carries ``sigma``, the 1-sigma of its ``error``, or ``sigma_null_means`` saying why not. The
 prediction is exact for the simulated system model, so sigma is the measurement's: the edge's
-``mtf_at_nyquist_sigma``; the star's MTF 1-sigma at the direction and frequency of the largest error; the
-bars' ``ctf_std`` at the group of the largest error; the NIIRS's RER (bounded from each edge's MTF 1-sigma,
-:func:`_rer_sigma`) and SNR (:data:`SNR_REL_SIGMA`) sigmas through GIQE 5. ``z = error / sigma``; a row whose
-tolerance is below :data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise`` (it can fail on noise alone).
-For star and bars the error is a maximum over many points, so its z is biased high (a maximum of noise).
+``mtf_at_nyquist_sigma`` and the angle's from its per-line position noise (:func:`edge_angle_sigma_deg`);
+the star's MTF 1-sigma at the direction and frequency of the largest error; the bars' ``ctf_std`` at the
+group of the largest error; the NIIRS's RER (bounded from each edge's MTF 1-sigma, :func:`_rer_sigma`) and
+SNR (:data:`SNR_REL_SIGMA`) sigmas through GIQE 5. ``z = error / sigma``; a row whose tolerance is below
+:data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise`` (it can fail on noise alone). For star and bars
+the error is a maximum over many points, so its z is biased high (a maximum of noise).
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ __all__ = [
     "StarCheck",
     "WedgeCheck",
     "compare",
+    "edge_angle_sigma_deg",
     "row_texts",
     "signed_text",
 ]
@@ -357,11 +359,57 @@ def _measured_dict(measured: Any) -> dict[str, Any]:
     if isinstance(measured, Mapping):
         return dict(measured)
     if hasattr(measured, "auto"):  # satchain.api.Measurements
-        out = dict(measured.auto.to_dict())
+        out = _with_edge_cnr(measured.auto)
         if getattr(measured, "snr", None) is not None:
             out["snr"] = measured.snr.to_dict()
         return out
-    return dict(measured.to_dict())
+    return _with_edge_cnr(measured)
+
+
+def _with_edge_cnr(auto: Any) -> dict[str, Any]:
+    """``auto.to_dict()`` with each edge's contrast-to-noise ratio (from its EdgeResult) for the angle's sigma."""
+    out = dict(auto.to_dict())
+    cnr = {}
+    for it in getattr(auto, "items", ()):
+        r = getattr(it, "result", None)
+        c, n = getattr(r, "contrast", None), getattr(r, "noise_sigma", None)
+        if it.kind == "slanted_edge" and c is not None and n:
+            cnr[it.id] = abs(float(c)) / float(n)
+    out["slanted_edges"] = [dict(e, cnr=e.get("cnr", cnr.get(e.get("id")))) for e in out.get("slanted_edges", [])]
+    return out
+
+
+def edge_angle_sigma_deg(*, cnr: float, n_lines: int, width_px: int, angle_deg: float) -> float:
+    """1-sigma (deg) of a slanted edge's measured angle, from the noise of its per-line edge positions.
+
+    measure_edge locates the edge on each line as the centroid of the central-difference derivative within
+    ``h = max(4, min(12, width_px // 6))`` px of the fitted line, then fits a straight line to the ``n``
+    positions. With white pixel noise of 1 / ``cnr`` of the step, a centroid's 1-sigma is
+    ``sqrt(sum c_j^2) / cnr`` px, where ``c_j`` are the weights the centroid gives each pixel's noise
+    (-1 inside the window, ``h / 2`` and ``(h - 1) / 2`` at its two ends on each side:
+    ``sum c_j^2 = 2h - 1 + (h^2 + (h - 1)^2) / 2``); the least-squares slope of ``n`` unit-spaced positions
+    then has ``sigma_c sqrt(12 / (n (n^2 - 1)))``, and the angle ``sigma_slope cos^2(angle)`` rad. Sub-pixel
+    bias of a centroid and noise correlated between lines are not included (an estimate, not a bound).
+    """
+    h = max(4, min(12, int(width_px) // 6))
+    s_c = math.sqrt(2 * h - 1 + (h * h + (h - 1) ** 2) / 2) / cnr
+    n = int(n_lines)
+    s_slope = s_c * math.sqrt(12.0 / (n * (n * n - 1)))
+    return math.degrees(s_slope * math.cos(math.radians(angle_deg)) ** 2)
+
+
+def _edge_angle_sigma(e: Mapping[str, Any]) -> float | None:
+    """The edge's own angle sigma when it reports one, else :func:`edge_angle_sigma_deg` (None without a
+    finite CNR, line count and region)."""
+    own = _finite(e.get("angle_deg_sigma", e.get("angle_deg_std")))
+    if own is not None:
+        return own
+    cnr, n, roi, a = _finite(e.get("cnr")), e.get("n_lines"), e.get("roi_px"), _finite(e.get("edge_angle_deg_image"))
+    if cnr is None or cnr <= 0 or not n or n < 3 or not roi or a is None:
+        return None
+    width = roi[2] - roi[0] if str(e.get("direction")).upper() == "ACT" else roi[3] - roi[1]
+    tilt = a if str(e.get("direction")).upper() == "ACT" else 90.0 - a
+    return edge_angle_sigma_deg(cnr=cnr, n_lines=int(n), width_px=int(width), angle_deg=tilt)
 
 
 def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[EdgeCheck], list[CheckRow]]:
@@ -404,8 +452,7 @@ def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Edge
             )
         )  # fmt: skip
         why = None if a_err is not None else "no measured or true angle"
-        a_sig = _finite(e.get("angle_deg_sigma", e.get("angle_deg_std")))
-        sig = _sigma_or_why(a_sig, a_err, "the edge measurement reports no uncertainty of its angle")
+        sig = _sigma_or_why(_edge_angle_sigma(e), a_err, "no contrast-to-noise, line count or region for the edge")
         rows.append(
             CheckRow(
                 f"edge {e['id']} angle (deg)", "edge_angle", e["id"], a, a_true, a_err, tol.edge_angle_deg,

@@ -9,6 +9,7 @@ so the page needs nothing outside itself. The report reads its inputs only throu
 from __future__ import annotations
 
 import base64
+import re
 from pathlib import Path
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -65,6 +66,14 @@ def table1_rows(ctx) -> tuple[list[dict], bool]:
         for i in range(f.size)
     ]
     return rows, is_paper
+
+
+def micro_sign(text) -> str:
+    """Write micrometres as "µm" (system descriptions are free text and may say "5.88 um")."""
+    return _UM.sub(r"\1µm", str(text or ""))
+
+
+_UM = re.compile(r"(\d\s?)um\b")
 
 
 def _data_uri(png: bytes) -> str:
@@ -210,6 +219,7 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
         loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"])
     )
     env.tests["group_flag"] = lambda f: str(f).startswith("group ")
+    env.filters["micro"] = micro_sign
     t1, is_paper = table1_rows(ctx)
     if curve_files is None:
         curve_files = sorted(p.name for p in (out / "curves").glob("*.csv"))
