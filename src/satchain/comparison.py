@@ -20,10 +20,10 @@ None``, with ``reason``), never a failure.
 
 Every row carries ``sigma``, the 1-sigma of its ``error``, or ``sigma_null_means`` saying why not. The
 prediction is exact for the simulated system model, so sigma is the measurement's: the edge's
-``mtf_at_nyquist_sigma`` and the angle's from its per-line position noise (:func:`edge_angle_sigma_deg`);
-the star's MTF 1-sigma at the direction and frequency of the largest error; the bars' ``ctf_std`` at the
-group of the largest error; the NIIRS's RER (bounded from each edge's MTF 1-sigma, :func:`_rer_sigma`) and
-SNR (:data:`SNR_REL_SIGMA`) sigmas through GIQE 5. ``z = error / sigma``; a row whose tolerance is below
+``mtf_at_nyquist_sigma`` and the angle's from its per-line position noise; the star's MTF 1-sigma at the
+direction and frequency of the largest error; the bars' ``ctf_std`` at the group of the largest error; the
+NIIRS's RER (bounded from each edge's MTF 1-sigma) and SNR (:data:`SNR_REL_SIGMA`) sigmas through GIQE 5
+(the formulas in :mod:`satchain.check_sigma`). ``z = error / sigma``; a row whose tolerance is below
 :data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise`` (it can fail on noise alone). For star and bars
 the error is a maximum over many points, so its z is biased high (a maximum of noise).
 """
@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from satchain import ctf as _ctf
+from satchain.check_sigma import SNR_REL_SIGMA, edge_angle_sigma, edge_angle_sigma_deg, niirs_sigma, rer_sigma_bound
 from satchain.prediction import NYQUIST_CY_PER_PX, WEDGE_AXES, Predictions
 
 __all__ = [
@@ -68,10 +69,6 @@ BAR_COMPARE_MAX_CY_PER_PX = 0.4
 STAR_F_MIN_CY_PER_PX = 0.05
 #: A tolerance narrower than this many sigma of its error is "inside the noise": the check can fail on noise.
 NOISE_SIGMAS = 2.0
-#: Relative 1-sigma taken for the measured contrast SNR (measure_snr gives none): the sampling error of a
-#: MAD-based noise sigma from one 16 x 16 px background patch (~240 pixel differences, 37 % efficiency:
-#: 1 / sqrt(2 * 0.37 * 240) ~ 0.075, rounded down to 0.05 because the noise is the median over many patches).
-SNR_REL_SIGMA = 0.05
 #: Why a prediction carries no sigma: it is computed from the very system model the image was simulated with.
 PREDICTION_SIGMA_NOTE = "the prediction is exact for the simulated system model (its sigma is 0)"
 
@@ -379,39 +376,6 @@ def _with_edge_cnr(auto: Any) -> dict[str, Any]:
     return out
 
 
-def edge_angle_sigma_deg(*, cnr: float, n_lines: int, width_px: int, angle_deg: float) -> float:
-    """1-sigma (deg) of a slanted edge's measured angle, from the noise of its per-line edge positions.
-
-    measure_edge locates the edge on each line as the centroid of the central-difference derivative within
-    ``h = max(4, min(12, width_px // 6))`` px of the fitted line, then fits a straight line to the ``n``
-    positions. With white pixel noise of 1 / ``cnr`` of the step, a centroid's 1-sigma is
-    ``sqrt(sum c_j^2) / cnr`` px, where ``c_j`` are the weights the centroid gives each pixel's noise
-    (-1 inside the window, ``h / 2`` and ``(h - 1) / 2`` at its two ends on each side:
-    ``sum c_j^2 = 2h - 1 + (h^2 + (h - 1)^2) / 2``); the least-squares slope of ``n`` unit-spaced positions
-    then has ``sigma_c sqrt(12 / (n (n^2 - 1)))``, and the angle ``sigma_slope cos^2(angle)`` rad. Sub-pixel
-    bias of a centroid and noise correlated between lines are not included (an estimate, not a bound).
-    """
-    h = max(4, min(12, int(width_px) // 6))
-    s_c = math.sqrt(2 * h - 1 + (h * h + (h - 1) ** 2) / 2) / cnr
-    n = int(n_lines)
-    s_slope = s_c * math.sqrt(12.0 / (n * (n * n - 1)))
-    return math.degrees(s_slope * math.cos(math.radians(angle_deg)) ** 2)
-
-
-def _edge_angle_sigma(e: Mapping[str, Any]) -> float | None:
-    """The edge's own angle sigma when it reports one, else :func:`edge_angle_sigma_deg` (None without a
-    finite CNR, line count and region)."""
-    own = _finite(e.get("angle_deg_sigma", e.get("angle_deg_std")))
-    if own is not None:
-        return own
-    cnr, n, roi, a = _finite(e.get("cnr")), e.get("n_lines"), e.get("roi_px"), _finite(e.get("edge_angle_deg_image"))
-    if cnr is None or cnr <= 0 or not n or n < 3 or not roi or a is None:
-        return None
-    width = roi[2] - roi[0] if str(e.get("direction")).upper() == "ACT" else roi[3] - roi[1]
-    tilt = a if str(e.get("direction")).upper() == "ACT" else 90.0 - a
-    return edge_angle_sigma_deg(cnr=cnr, n_lines=int(n), width_px=int(width), angle_deg=tilt)
-
-
 def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[EdgeCheck], list[CheckRow]]:
     details, rows = [], []
     for e in measured.get("slanted_edges", []):
@@ -452,7 +416,7 @@ def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Edge
             )
         )  # fmt: skip
         why = None if a_err is not None else "no measured or true angle"
-        sig = _sigma_or_why(_edge_angle_sigma(e), a_err, "no contrast-to-noise, line count or region for the edge")
+        sig = _sigma_or_why(edge_angle_sigma(e), a_err, "no contrast-to-noise, line count or region for the edge")
         rows.append(
             CheckRow(
                 f"edge {e['id']} angle (deg)", "edge_angle", e["id"], a, a_true, a_err, tol.edge_angle_deg,
@@ -616,25 +580,9 @@ def _mean_rer(edges: list[EdgeCheck], direction: str) -> float | None:
     return float(np.mean(v)) if v else None
 
 
-def _rer_sigma(e: EdgeCheck) -> float | None:
-    """A bound on the 1-sigma of an edge's RER from its MTF's per-frequency 1-sigma.
-
-    RER = ESF(0.5) - ESF(-0.5) = 2 int_0^inf MTF(f) sinc(f) df (f in cy/px, a symmetric LSF), so its
-    1-sigma is at most ``2 int |sinc(f)| sigma_MTF(f) df`` (the noise of all frequencies fully correlated:
-    an upper bound whatever their correlation), over the measured band."""
-    if not e.mtf_sigma or not e.f_cy_per_px:
-        return None
-    f = np.asarray(e.f_cy_per_px, float)
-    sd = np.array(_floats(e.mtf_sigma, f.size), float)
-    ok = np.isfinite(sd)
-    if ok.sum() < 2:
-        return None
-    return float(2 * np.trapezoid(np.abs(np.sinc(f[ok])) * sd[ok], f[ok]))
-
-
 def _mean_rer_sigma(edges: list[EdgeCheck], direction: str) -> float | None:
     """1-sigma of the mean RER of the edges along ``direction`` (independent noise per edge)."""
-    sig = [_rer_sigma(e) for e in edges if e.direction == direction and e.rer_measured is not None]
+    sig = [rer_sigma_bound(e.f_cy_per_px, e.mtf_sigma) for e in edges if e.direction == direction and e.rer_measured]
     if not sig or any(v is None for v in sig):
         return None
     return float(np.sqrt(np.sum(np.square(sig))) / len(sig))
@@ -642,25 +590,12 @@ def _mean_rer_sigma(edges: list[EdgeCheck], direction: str) -> float | None:
 
 def _niirs_sigma(r_act: float, r_alt: float, snr_m: float, edges: list[EdgeCheck], gsd_in: float,
                  elevation_deg: float) -> tuple[float | None, str | None]:  # fmt: skip
-    """1-sigma of the measured GIQE 5 NIIRS: the RER (per axis) and SNR sigmas through GIQE 5 by central
-    differences, in quadrature. The SNR's relative sigma is :data:`SNR_REL_SIGMA`."""
-    from satchain.quality import giqe5, giqe5_rer
-
     s_act, s_alt = _mean_rer_sigma(edges, "ACT"), _mean_rer_sigma(edges, "ALT")
     if s_act is None or s_alt is None:
         return None, "an edge gave no MTF sigma, so the RER has none"
-
-    def niirs(a: float, b: float, s: float) -> float:
-        return giqe5(gsd_in=gsd_in, rer=giqe5_rer(a, b), snr=s, elevation_deg=elevation_deg)
-
-    x = np.array([r_act, r_alt, snr_m])
-    sx = np.array([s_act, s_alt, SNR_REL_SIGMA * snr_m])
-    var = 0.0
-    for k in range(3):
-        h = np.zeros(3)
-        h[k] = 1e-4 * x[k]
-        var += ((niirs(*(x + h)) - niirs(*(x - h))) / (2 * h[k]) * sx[k]) ** 2
-    return float(math.sqrt(var)), None
+    sig = niirs_sigma(r_act, r_alt, snr_m, rer_act_sigma=s_act, rer_alt_sigma=s_alt, gsd_in=gsd_in,
+                      elevation_deg=elevation_deg)  # fmt: skip
+    return sig, None
 
 
 def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictions, tol: Any):
