@@ -22,13 +22,15 @@ __all__ = ["overlay_svg"]
 
 _LINE = 'vector-effect="non-scaling-stroke" fill="none"'
 _COMPARED, _NOT_COMPARED, _NOT_MEASURED = "#ff8c00", "#3fa0ff", "#c0c0c0"
+#: Width of an average character in ems (sans-serif), to fit a label into a box.
+_CHAR_EM = 0.6
 
 
 def _text(x: float, y: float, s: str, size: float, colour: str, anchor: str = "start", rotate: bool = False) -> str:
     rot = f' transform="rotate(90 {x:.3f} {y:.3f})"' if rotate else ""
     return (
         f'<text x="{x:.3f}" y="{y:.3f}" font-size="{size:.3f}" fill="{colour}" text-anchor="{anchor}" '
-        f'stroke="#000" stroke-width="{size / 6:.3f}" paint-order="stroke"{rot}>{escape(s)}</text>'
+        f'stroke="#000" stroke-width="{size / 8:.3f}" stroke-opacity="0.6" paint-order="stroke"{rot}>{escape(s)}</text>'
     )
 
 
@@ -83,7 +85,7 @@ def _star(it: dict, m: dict, gsd: float, size: float) -> list[str]:
     if radii:
         for r in radii:
             out.append(_circle(cx, cy, float(r) * gsd, "#40c0ff"))
-        out.append(_text(cx, cy - float(radii[1]) * gsd - 0.3 * size, "measured annulus", size, "#40c0ff", "middle"))
+        out.append(_text(cx, cy - float(radii[1]) * gsd + 1.3 * size, "measured annulus", size, "#40c0ff", "middle"))
     r_nyq = float(it["cycles"]) * gsd / math.pi
     out.append(_circle(cx, cy, r_nyq, "#ff4040", "4 3"))
     out.append(_text(cx + r_nyq + 0.3 * size, cy, f"Nyquist (r = {r_nyq:.1f} m)", size, "#ff4040"))
@@ -105,8 +107,10 @@ def _bars(it: dict, m: dict, gsd: float, lim: float, size: float) -> list[str]:
         x0, y0, x1, y1 = g["bbox_m"]
         out.append(_rect(g["bbox_m"], colour, "" if word == "compared" else "3 2"))
         p_text = f"{period * 100:.0f} cm" if period < 1 else f"{period:g} m"
-        out.append(_text(0.5 * (x0 + x1), y0 + 1.1 * size, p_text, size, colour, "middle"))
-        out.append(_text(0.5 * (x0 + x1), y1 - 0.4 * size, word, 0.8 * size, colour, "middle"))
+        p_size = min(size, (x1 - x0) / (_CHAR_EM * len(p_text)))  # shrunk to fit the group's width
+        out.append(_text(0.5 * (x0 + x1), y0 + 1.1 * p_size, p_text, p_size, colour, "middle"))
+        w_size = min(0.8 * size, (x1 - x0) / (_CHAR_EM * len(word)))
+        out.append(_text(0.5 * (x0 + x1), y1 - 0.4 * w_size, word, w_size, colour, "middle"))
     return out
 
 
@@ -132,7 +136,7 @@ def _wedge(it: dict, m: dict, size: float) -> list[str]:
         )
     ]
     rot = orient == "vertical"
-    out.append(_text(*xy(0.3 * length, 0.55 * (2 * n) * w0), "scan, wide end first", size, "#40ff40", rotate=rot))
+    out.append(_text(*xy(0.6 * length, 0.55 * (2 * n) * w0), "scan, wide end first", size, "#40ff40", rotate=rot))
     res = m.get("resolution_m")
     if res:
         s = w0 * x0 / float(res) - x0
