@@ -384,3 +384,38 @@ def test_bars_show_raw_and_corrected_ctf_with_the_correction_stated(run):
         assert "correction ranges from" in section
     rows = _read_csv(run.out / "curves" / "bars_ctf.csv")
     assert {"ctf_raw_measured", "ctf_measured", "ctf_correction_square_wave", "ctf_std_measured"} <= set(rows[0])
+
+
+def test_printed_differences_keep_the_sign_of_the_error(run):
+    """Every signed difference in the summary table has the sign of results.json's error (NIIRS -0.0039 was
+    printed "+0.00")."""
+    checked = 0
+    for r in run.res["summary"]:
+        if r["kind"] == "niirs":
+            pattern = r'NIIRS \(GIQE 5\)</td>.*?data-label="difference">([^<]*)<'
+        elif r["kind"] == "edge_mtf_at_nyquist":
+            pattern = rf'slanted edge {r["id"]}</td>.*?data-label="difference">([^<]*)<'
+        else:
+            continue
+        text = re.search(pattern, run.html, flags=re.S).group(1)
+        if r["error"]:
+            assert text[0] == ("-" if r["error"] < 0 else "+") and float(text.split()[0]) != 0, (r, text)
+            checked += 1
+    assert checked >= 3
+
+
+def test_summary_table_marks_a_tolerance_inside_the_noise():
+    from satchain.report import tables
+
+    res = {
+        "tolerances": {"edge_mtf_at_nyquist": 0.004},
+        "slanted_edges": [{"id": "e", "direction": "ACT", "mtf_at_nyquist_measured": 0.2069,
+                           "mtf_at_nyquist_predicted": 0.1983, "pass": False, "flags": ["low_cnr"]}],
+        "summary": [{"kind": "edge_mtf_at_nyquist", "id": "e", "error": 0.0086, "sigma": 0.0038, "z": 2.26,
+                     "tolerance_value": 0.004, "tolerance_inside_noise": True, "pass": False}],
+    }  # fmt: skip
+    (row,) = tables.summary_rows(res)
+    assert row["noise"] is True and row["sigma"] == "0.0038" and row["z"] == "+2.3" and row["n_flags"] == 1
+    res["summary"][0].update(sigma=None, z=None, tolerance_inside_noise=None, sigma_null_means="no MTF sigma")
+    (row,) = tables.summary_rows(res)
+    assert row["noise"] is False and row["sigma"] == "–" and row["sigma_note"] == "no MTF sigma"
