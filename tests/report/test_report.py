@@ -392,9 +392,9 @@ def test_printed_differences_keep_the_sign_of_the_error(run):
     checked = 0
     for r in run.res["summary"]:
         if r["kind"] == "niirs":
-            pattern = r'NIIRS \(GIQE 5\)</td>.*?data-label="difference">([^<]*)<'
+            pattern = r'data-label="">NIIRS \(GIQE 5\)</td>.*?data-label="difference">([^<]*)<'
         elif r["kind"] == "edge_mtf_at_nyquist":
-            pattern = rf'slanted edge {r["id"]}</td>.*?data-label="difference">([^<]*)<'
+            pattern = rf'slanted edge {r["id"]}(?: · <a [^>]*>[^<]*</a>)?</td>.*?data-label="difference">([^<]*)<'
         else:
             continue
         text = re.search(pattern, run.html, flags=re.S).group(1)
