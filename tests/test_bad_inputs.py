@@ -220,3 +220,93 @@ def test_bad_inputs_in_a_real_process(files, args):
     p = subprocess.run([sys.executable, "-m", "satchain.cli", *argv], capture_output=True, text=True, env=env)
     assert p.returncode == 2, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and p.stderr.startswith("error: ")
+
+
+# ------------------------------------------------------------------------------- issue 18: the CLI hostile test
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory, reduced_scene_toml):
+    """A small rendered scene (image + truth) and the hostile files of issue 18."""
+    d = tmp_path_factory.mktemp("hostile")
+    (d / "scene.toml").write_text(reduced_scene_toml)
+    args = ["scene", "--layout", str(d / "scene.toml"), "--pixel-m", "0.5", "-o", str(d / "sc.tif")]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    image = tifffile.imread(d / "sc.tif")
+    f = {"dir": d, "image": d / "sc.tif", "truth": d / "sc.truth.json"}
+    f["nan_image"] = d / "nan.tif"
+    nan = np.full(image.shape, np.nan, np.float32)
+    tifffile.imwrite(f["nan_image"], nan, description='{"satchain": {"pixel_m": 0.5}}')
+    f["wrong_pixel"] = d / "wrong_pixel.tif"
+    tifffile.imwrite(f["wrong_pixel"], image, description='{"satchain": {"pixel_m": 5.0}}')
+    f["other_truth"] = d / "other.truth.json"
+    f["other_truth"].write_text(json.dumps({"format": "satchain-scene-truth/1", "items": []}))
+    text = PRESET.read_text()
+    for key, value in (("alt_true", "true"), ("alt_nan", "nan"), ("alt_text", '"500000"')):
+        f[key] = d / f"{key}.toml"
+        f[key].write_text(text.replace("altitude_m = 567000.0", f"altitude_m = {value}"))
+        assert f[key].read_text() != text
+    f["latin1"] = d / "latin1.toml"
+    f["latin1"].write_bytes(text.replace('name = "', 'name = "Ankara Üniversitesi ', 1).encode("latin-1"))
+    f["cfg_seed"] = d / "cfg_seed.toml"
+    f["cfg_seed"].write_text("[simulation]\nseed = true\n")
+    f["cfg_overview"] = d / "cfg_overview.toml"
+    f["cfg_overview"].write_text("[scene]\noverview_pixel_m = 1e-4\n")
+    f["user_dir"] = d / "mybudget"
+    f["user_dir"].mkdir()
+    (f["user_dir"] / "budget.json").write_text('{"my": "own budget"}')
+    return f
+
+
+HOSTILE_CLI = {
+    # bools, strings and NaN are never numbers (altitude_m = true was taken as 1 m: NIIRS -71.9, exit 0)
+    "altitude_m = true": (["budget", "--system", "{alt_true}"], "orbit.altitude_m = True: must be a number"),
+    "altitude_m = nan": (["budget", "--system", "{alt_nan}"], "orbit.altitude_m = nan: not a finite number"),
+    "altitude_m = '500000'": (["budget", "--system", "{alt_text}"], "not a string"),
+    "run seed = true": (["run", "--config", "{cfg_seed}", "-o", "{dir}/r"], "simulation.seed = True"),
+    "edge --pixel-m nan": (["measure", "edge", "{image}", "--pixel-m", "nan"], "--pixel-m = nan: not a finite"),
+    # a Latin-1 system file: named, with the byte offset (was 'unexpected UnicodeDecodeError')
+    "Latin-1 system file": (["budget", "--system", "{latin1}"], "not UTF-8 text (byte 0xdc at offset"),
+    # impossible work refused up front with its memory (was a generic out-of-memory after 109 s)
+    "overview_pixel_m = 1e-4": (["run", "--config", "{cfg_overview}", "-o", "{dir}/r"], "GiB of memory; must be >="),
+    # measure auto measured nothing (was exit 0)
+    "auto on an all-NaN image": (["measure", "auto", "{nan_image}", "--truth", "{truth}"], "every pixel is NaN"),
+    "auto at a wrong pixel size": (
+        ["measure", "auto", "{wrong_pixel}", "--truth", "{truth}"],
+        "nothing was measured: all 4 targets",
+    ),
+    "auto with a truth of no targets": (["measure", "auto", "{image}", "--truth", "{other_truth}"], "no target"),
+    # budget -o over a user's folder (was: their budget.json overwritten)
+    "budget -o a user's folder": (["budget", "-o", "{user_dir}"], "not a satchain budget directory"),
+}
+
+
+@pytest.mark.parametrize("name", list(HOSTILE_CLI))
+def test_issue18_hostile_cli_inputs_exit_2_with_one_line(hostile, name, monkeypatch):
+    monkeypatch.setenv("SATCHAIN_MEMORY_LIMIT", "2G")
+    args, expected = HOSTILE_CLI[name]
+    before = _snapshot(hostile["dir"])
+    r = CliRunner().invoke(app, [a.format(**{k: str(v) for k, v in hostile.items()}) for a in args])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2, (r.exit_code, r.output)
+    assert lines[-1].startswith("error: ") and expected in lines[-1], r.stderr
+    assert "unexpected" not in r.stderr and "Traceback" not in r.output
+    assert _snapshot(hostile["dir"]) == before  # nothing of the user's changed
+    assert not (hostile["dir"] / "r").exists()
+
+
+def test_issue18_auto_with_its_own_truth_and_pixel_still_measures(hostile):
+    """The control for the refusals above: the same image, its truth and pixel size, measure and exit 0."""
+    r = CliRunner().invoke(app, ["measure", "auto", str(hostile["image"]), "--truth", str(hostile["truth"]), "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert len(out["slanted_edges"]) == 2 and len(out["siemens_star"]) == 1
+
+
+def test_issue18_budget_writes_again_into_its_own_directory(tmp_path):
+    out = tmp_path / "b"
+    for _ in range(2):  # a new directory, then the same one (marked as satchain's budget output)
+        r = CliRunner().invoke(app, ["budget", "-o", str(out)])
+        assert r.exit_code == 0, r.output
+    assert json.loads((out / ".satchain-run.json").read_text())["kind"] == "budget"
+    r = CliRunner().invoke(app, ["run", "-o", str(out)])  # a run does not replace a budget directory
+    assert r.exit_code == 2 and "not a satchain run directory" in r.stderr

@@ -1,6 +1,7 @@
 """Known answers for the comparison core: predictions from closed-form 2-D MTFs, measurements made up so the
 expected error of every check is known exactly, and the tolerance boundary itself."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,7 +12,7 @@ from hypothesis import strategies as st
 from satchain import units
 from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX, compare
 from satchain.ctf import band_limited, wedge_resolution_m
-from satchain.prediction import predict, predict_from_mtf, saturation_warnings
+from satchain.prediction import DIRECTIONS, AxisMTF, WedgePrediction, predict, predict_from_mtf, saturation_warnings
 from satchain.quality import giqe5, giqe5_rer
 from satchain.runconfig import Tolerances
 
@@ -213,50 +214,46 @@ def triangle(fx, fy):  # cutoff 1 cy/px along x (ACT), 0.4 cy/px along y (ALT)
     return np.clip(1.0 - np.hypot(fx / 1.0, fy / 0.4), 0.0, None)
 
 
-WEDGES = {
-    "items": [{"kind": "hyperbolic_wedge", "id": o, "orientation": o} for o in ("horizontal", "vertical", "diagonal")]
-}
-
-
 def wedge_closed_form(cutoff, gsd, thr, limit):  # (4/pi)(1 - f/fc) = thr above fc / 3
     f = cutoff * (1.0 - math.pi * thr / 4.0)
     assert f > cutoff / 3
     return max(gsd / (2 * f), limit)
 
 
-def test_wedge_resolution_closed_form_per_axis_including_the_sampling_limit():
+def test_coltman_wedge_resolution_closed_form_per_axis_including_the_sampling_limit():
+    """ctf.wedge_resolution_m (Coltman's CTF of an infinite square wave, clamped to the sampling limit); a run's
+    wedge prediction no longer uses it (tests/test_wedge_prediction.py)."""
     gsd, thr = 0.5, 0.15
-    p = predict_from_mtf(triangle, WEDGES, gsd_m=gsd, wedge_threshold=thr)
+    along = {d: AxisMTF(triangle, u) for d, u in DIRECTIONS.items()}
+    alt = wedge_resolution_m(along["ALT"], gsd_m=gsd, threshold=thr)
+    assert alt == pytest.approx(wedge_closed_form(0.4, gsd, thr, gsd), rel=1e-7) and alt > 1.4 * gsd
+    assert wedge_resolution_m(along["ACT"], gsd_m=gsd, threshold=thr) == gsd  # 0.567 GSD, limited by sampling
     c_diag = 1.0 / math.sqrt(0.5 * (1.0 + 1.0 / 0.4**2))
-    assert p.wedges["ALT"].resolution_m == pytest.approx(wedge_closed_form(0.4, gsd, thr, gsd), rel=1e-7)
-    assert p.wedges["ALT"].resolution_m > 1.4 * gsd
-    assert p.wedges["ACT"].resolution_m == gsd  # 0.567 GSD, limited by sampling
-    expected = wedge_closed_form(c_diag, gsd, thr, gsd / math.sqrt(2))
-    assert p.wedges["D135"].resolution_m == pytest.approx(expected, rel=1e-7)
+    diag = wedge_resolution_m(along["D135"], gsd_m=gsd, threshold=thr, sampling_limit_m=gsd / math.sqrt(2))
+    assert diag == pytest.approx(wedge_closed_form(c_diag, gsd, thr, gsd / math.sqrt(2)), rel=1e-7)
 
 
-def test_wedge_resolution_of_a_perfect_system_is_the_sampling_limit_and_hopeless_is_nan():
+def test_coltman_wedge_resolution_of_a_perfect_system_is_the_sampling_limit_and_hopeless_is_nan():
     one = band_limited(lambda f: np.ones_like(f), cutoff=100.0)
     assert wedge_resolution_m(one, gsd_m=2.0, threshold=0.15) == 2.0
-    sharp = predict_from_mtf(lambda fx, fy: np.clip(1.0 - np.hypot(fx, fy) / 2.0, 0, None), WEDGES, gsd_m=2.0)
-    assert sharp.wedges["ALT"].resolution_m == sharp.wedges["ACT"].resolution_m == 2.0  # one GSD along an axis
-    assert sharp.wedges["D135"].resolution_m == pytest.approx(2.0 / math.sqrt(2), rel=1e-12)  # GSD/sqrt2 diagonally
     tiny = band_limited(lambda f: 0.01 * (1.0 - f / 5.0), cutoff=5.0)
     assert math.isnan(wedge_resolution_m(tiny, gsd_m=2.0, threshold=0.15))
 
 
 @pytest.mark.parametrize(("orientation", "axis"), [("horizontal", "ALT"), ("vertical", "ACT"), ("diagonal", "D135")])
 def test_wedge_check_relative_error_on_the_right_axis(orientation, axis):
-    p = predict_from_mtf(triangle, WEDGES, gsd_m=0.5)
-    pred = p.wedges[axis].resolution_m
+    p0 = predict_from_mtf(triangle, {"items": []}, gsd_m=0.5)
+    p = dataclasses.replace(p0, wedges={"w": WedgePrediction("w", axis, 0.6, 0.5)})
+    pred = p.wedges["w"].resolution_m
     for factor, ok in ((1.1, True), (0.9, True), (1.2, False), (0.8, False)):
         m = {"hyperbolic_wedge": [{"id": "w", "orientation": orientation, "resolution_m": pred * factor}]}
         (row,) = rows_of(compare(m, p, TOL), "wedge_resolution")
         assert row.error == pytest.approx(factor - 1, abs=1e-12) and row.passed is ok
+        assert axis in row.figure
     m = {"hyperbolic_wedge": [{"id": "w", "orientation": orientation, "resolution_m": None}]}
     assert rows_of(compare(m, p, TOL), "wedge_resolution")[0].passed is None
     m["hyperbolic_wedge"][0]["resolution_m"] = 1.0  # a wedge the prediction was not asked for: n/a, said why
-    row = rows_of(compare(m, predict_from_mtf(triangle, {"items": []}, gsd_m=0.5), TOL), "wedge_resolution")[0]
+    row = rows_of(compare(m, p0, TOL), "wedge_resolution")[0]
     assert row.passed is None and "no prediction" in row.reason
 
 

@@ -139,7 +139,7 @@ def test_in_memory_run_writes_nothing_and_matches_the_run_directory(reduced_run,
     assert np.array_equal(on_disk, result.simulation.image.astype(np.uint16))
     assert result.to_json_dict()["summary"] == res["summary"]
     assert result.measurements.auto.pixel_m == pytest.approx(0.49)
-    typed = result.scene.typed_truth  # the typed truth gives the same predictions and SNR as the dict
+    typed = result.scene.truth  # the typed truth gives the same predictions and SNR as the dict
     assert satchain.predict(result.system, typed).edges == result.predictions.edges
     assert satchain.measure_snr(result.simulation.image, typed, pixel_m=0.49) == result.measurements.snr
 

@@ -394,3 +394,112 @@ def test_float_image_in_0_255_is_refused_not_saturated(tmp_path):
     ref = _tif(tmp_path / "f02.tif", np.full((300, 300), 0.2, np.float32))
     assert runner.invoke(app, ["simulate", str(ref), "--no-noise", "-o", str(tmp_path / "r.tif")]).exit_code == 0
     np.testing.assert_array_equal(tifffile.imread(tmp_path / "o.tif"), tifffile.imread(tmp_path / "r.tif"))
+
+
+# ------------------------------------------------------------ issue 18: inputs not used as they stand
+def _read_warns(path, match):
+    from satchain.errors import SatchainWarning
+
+    with pytest.warns(SatchainWarning, match=match):
+        return io.read_image(path)
+
+
+def test_rgb_and_palette_images_are_converted_to_grey_with_a_warning(tmp_path):
+    from PIL import Image
+
+    rng = np.random.default_rng(3)
+    rgb = rng.integers(0, 256, (20, 30, 3), dtype=np.uint8)
+    luma = rgb.astype(float) @ [0.299, 0.587, 0.114]  # ITU-R BT.601, computed here
+    tifffile.imwrite(tmp_path / "rgb.tif", rgb, photometric="rgb")
+    img, _ = _read_warns(tmp_path / "rgb.tif", r"RGB image \(3 samples per pixel\) converted to grey by luma")
+    assert img.shape == (20, 30) and np.max(np.abs(img - luma)) <= 0.5
+    Image.fromarray(rgb).save(tmp_path / "rgb.png")
+    img, meta = _read_warns(tmp_path / "rgb.png", "RGB image converted to grey by luma")
+    assert img.shape == (20, 30) and np.max(np.abs(img - luma)) <= 1.0 and meta["converted_from"] == "RGB"
+    grey = rng.integers(0, 256, (20, 30), dtype=np.uint8)
+    Image.fromarray(grey).convert("P").save(tmp_path / "pal.png")  # a grey palette: the values come back
+    img, _ = _read_warns(tmp_path / "pal.png", "palette image: its colours converted to grey")
+    assert np.array_equal(img, grey)
+    bands = rng.random((4, 20, 30)).astype(np.float32)  # a 4-band image that is not RGB: band 1, said so
+    tifffile.imwrite(tmp_path / "ms.tif", bands, planarconfig="separate", photometric="minisblack")
+    img, _ = _read_warns(tmp_path / "ms.tif", r"4 samples \(bands\) per pixel: band 1 is used")
+    assert np.array_equal(img, bands[0])
+
+
+def test_multi_page_tiff_warns_that_page_1_is_used(tmp_path):
+    a, b = np.full((16, 16), 0.25, np.float32), np.full((16, 16), 0.75, np.float32)
+    with tifffile.TiffWriter(tmp_path / "two.tif") as w:
+        w.write(a, description=json.dumps({"satchain": {"pixel_m": 0.5}}))
+        w.write(b)
+    img, meta = _read_warns(tmp_path / "two.tif", r"holds 2 images \(pages\); page 1 is used")
+    assert np.array_equal(img, a) and meta["pixel_m"] == 0.5
+    from satchain.errors import SatchainWarning
+
+    with pytest.warns(SatchainWarning, match="page 1 is used"), io.open_image(tmp_path / "two.tif") as r:
+        assert np.array_equal(r.read(0, 0, 16, 16), a)
+
+
+def test_implausible_pixel_sizes_and_resolution_tags_warn(tmp_path):
+    from PIL import Image
+
+    from satchain.errors import SatchainWarning
+
+    img = np.zeros((8, 8), np.uint8)
+    _tif(tmp_path / "tiny.tif", img, pixel_m=1e-7)
+    _, meta = _read_warns(tmp_path / "tiny.tif", r"pixel size 1e-07 m is implausible for a ground pixel")
+    assert meta["pixel_m"] == 1e-7  # used as stated (in range), but said
+    Image.fromarray(img).save(tmp_path / "print.png", dpi=(72, 72))  # a print resolution, not the ground
+    _, meta = _read_warns(tmp_path / "print.png", r"72(\.\d+)? dpi \(0.353 mm per pixel\) is a print resolution")
+    assert "pixel_m" not in meta
+    Image.fromarray(img).save(tmp_path / "ground.png", dpi=(0.0254 / 0.5, 0.0254 / 0.5))  # pHYs of 2 px/m
+    with warnings_as_errors():
+        _, meta = io.read_image(tmp_path / "ground.png")
+    assert meta["pixel_m"] == pytest.approx(0.5, rel=1e-3)
+    tifffile.imwrite(tmp_path / "res.tif", img, description=json.dumps({"satchain": {"pixel_m": 0.5}}),
+                     resolution=(1 / 200.0, 1 / 200.0), resolutionunit="CENTIMETER")  # fmt: skip  # 2 m per pixel
+    _, meta = _read_warns(tmp_path / "res.tif", r"resolution tags say 2 m per pixel, its pixel size 0.5 m")
+    assert meta["pixel_m"] == 0.5
+    # satchain's own files (pixel size, tags and GeoTIFF keys agree) read without any warning
+    io.write_tiff(tmp_path / "own.tif", img.astype(np.float32), pixel_m=0.5)
+    with warnings_as_errors():
+        assert io.read_image(tmp_path / "own.tif")[1]["pixel_m"] == 0.5
+    with pytest.warns(SatchainWarning):  # and the warnings are SatchainWarnings, not errors
+        io.read_image(tmp_path / "tiny.tif")
+
+
+def test_geographic_pixel_scale_is_not_taken_for_metres(tmp_path):
+    """A GeoTIFF in latitude/longitude (GTModelTypeGeoKey = 2) states its pixel size in degrees."""
+    keys = (1, 1, 0, 2, 1024, 0, 1, 2, 1025, 0, 1, 1)  # ModelType = geographic, RasterType = PixelIsArea
+    tags = [(33550, "d", 3, (1e-5, 1e-5, 0.0), False), (34735, "H", len(keys), keys, False)]
+    tifffile.imwrite(tmp_path / "geo.tif", np.zeros((8, 8), np.float32), extratags=tags)
+    _, meta = io.read_image(tmp_path / "geo.tif")
+    assert "pixel_m" not in meta and "degrees" in meta["invalid_pixel_m"]
+    r = runner.invoke(app, ["measure", "edge", str(tmp_path / "geo.tif")])
+    assert r.exit_code == 2 and "degrees" in r.stderr and "--pixel-m" in r.stderr
+
+
+def test_cli_prints_each_input_warning_once_as_one_line(tmp_path):
+    y, x = np.mgrid[0:96, 0:96]
+    edge = (0.2 + 0.5 * (x - 48 > 0.1 * (y - 48))).astype(np.float32)
+    with tifffile.TiffWriter(tmp_path / "two.tif") as w:
+        w.write(edge, description=json.dumps({"satchain": {"pixel_m": 0.5}}))
+        w.write(edge)
+    r = runner.invoke(app, ["measure", "edge", str(tmp_path / "two.tif")])
+    assert r.exit_code == 0, r.output
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
+    assert lines == [f"warning: image = {str(tmp_path / 'two.tif')!r}: the TIFF holds 2 images (pages); page 1 is "
+                     "used, the others ignored"]  # fmt: skip
+
+
+class warnings_as_errors:  # noqa: N801
+    """``with warnings_as_errors():`` -- any warning inside fails the test."""
+
+    def __enter__(self):
+        import warnings
+
+        self._ctx = warnings.catch_warnings()
+        self._ctx.__enter__()
+        warnings.simplefilter("error")
+
+    def __exit__(self, *exc):
+        return self._ctx.__exit__(*exc)

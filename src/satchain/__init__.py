@@ -11,8 +11,11 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
 * a whole run: :func:`run` (:class:`RunConfig` -> :class:`RunResult`), :func:`predict`, :func:`compare`;
 * images: :func:`simulate`, :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
-  :func:`measure_auto`, :func:`measure_snr`;
+  :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`;
 * errors: :class:`SatchainError` and its subclasses.
+
+Every entry point checks the types of its arguments and refuses a wrong one (a string or a boolean for a
+number, None for an image, a file name for a truth record) with a one-line :class:`ParameterTypeError`.
 
 Examples
 --------
@@ -30,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 from satchain.errors import (
     ConfigError,
     InputError,
+    ParameterTypeError,
     ResourceLimitError,
     SatchainError,
     SatchainIOError,
@@ -65,12 +69,19 @@ _LAZY = {
     "measure_wedge": "satchain.measure.wedge",
     "measure_auto": "satchain.measure.auto",
     "measure_snr": "satchain.measure.snr",
+    "find_edges": "satchain.measure.find",
+    "measure_found_edges": "satchain.measure.find_mtf",
 }
+#: entry points whose arguments are type-checked on the way in (satchain._argcheck; one-line errors)
+_CHECKED = {"simulate", "measure_edge", "measure_star", "measure_bars", "measure_wedge", "measure_auto", "measure_snr",
+            "find_edges", "measure_found_edges", "coltman_ctf", "mtf_from_ctf", "load_layout", "read_truth", "compare",
+            "load_run_config"}  # fmt: skip
 
 __all__ = [
     "ConfigError",
     "ImagingSystem",
     "InputError",
+    "ParameterTypeError",
     "ResourceLimitError",
     "SatchainError",
     "SatchainIOError",
@@ -86,6 +97,10 @@ def __getattr__(name: str) -> Any:
     if module is None:
         raise AttributeError(f"module 'satchain' has no attribute {name!r}")
     value = getattr(importlib.import_module(module), name)
+    if name in _CHECKED:
+        from satchain._argcheck import checked
+
+        value = checked(value)
     globals()[name] = value
     return value
 
@@ -103,6 +118,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.auto import measure_auto  # noqa: F401
     from satchain.measure.bars import measure_bars  # noqa: F401
     from satchain.measure.edge import measure_edge  # noqa: F401
+    from satchain.measure.find import find_edges  # noqa: F401
+    from satchain.measure.find_mtf import measure_found_edges  # noqa: F401
     from satchain.measure.snr import measure_snr  # noqa: F401
     from satchain.measure.star import measure_star  # noqa: F401
     from satchain.measure.wedge import measure_wedge  # noqa: F401

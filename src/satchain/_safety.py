@@ -8,6 +8,8 @@ cannot fit in memory (or on disk) before allocating, and clean what a killed run
   directory or a missing one may be replaced by ``satchain run``.
 * :func:`claim` / :func:`clean_stale` -- staging folders and temporary files carry the id of the process
   that owns them; the next run removes those whose process is gone (never one a live process owns).
+* :func:`terminate_as_interrupt` -- while a run writes, SIGTERM raises :class:`Interrupted` (a
+  ``KeyboardInterrupt``) like Ctrl-C does, so the staging folder is removed and the previous results kept.
 * :func:`check_memory` / :func:`check_disk` -- the need in GiB against a limit: ``SATCHAIN_MEMORY_LIMIT``
   (bytes, or with a K/M/G/T suffix) or 80 % of the memory available now.
 """
@@ -18,9 +20,11 @@ import contextlib
 import json
 import os
 import shutil
+import signal
 import socket
+import threading
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 from satchain.errors import ConfigError, ResourceLimitError, SatchainIOError
@@ -28,6 +32,7 @@ from satchain.errors import ConfigError, ResourceLimitError, SatchainIOError
 __all__ = [
     "MARKER",
     "OWNER",
+    "Interrupted",
     "check_disk",
     "check_distinct_paths",
     "check_memory",
@@ -42,6 +47,9 @@ __all__ = [
     "clean_stale",
     "clean_stale_temp_files",
     "memory_limit_bytes",
+    "not_utf8",
+    "nothing_measured",
+    "terminate_as_interrupt",
     "write_run_marker",
 ]
 
@@ -95,23 +103,25 @@ def check_distinct_paths(
 
 
 # ---------------------------------------------------------------------------------------------- run directories
-def write_run_marker(directory: str | os.PathLike) -> Path:
-    """Write the run marker into ``directory`` (which satchain has just created)."""
+def write_run_marker(directory: str | os.PathLike, *, kind: str = "run") -> Path:
+    """Write the marker into ``directory`` (which satchain has just created, or found empty): ``kind`` is
+    ``"run"`` (``satchain run``) or ``"budget"`` (``satchain budget -o``)."""
     path = Path(directory) / MARKER
-    path.write_text(json.dumps(MARKER_CONTENT) + "\n")
+    path.write_text(json.dumps({**MARKER_CONTENT, "kind": kind}) + "\n")
     return path
 
 
-def _is_marked(directory: Path) -> bool:
+def _is_marked(directory: Path, kind: str = "run") -> bool:
     try:
         data = json.loads((directory / MARKER).read_text())
     except (OSError, ValueError):
         return False
-    return isinstance(data, dict) and data.get("tool") == "satchain" and data.get("kind") == "run"
+    return isinstance(data, dict) and data.get("tool") == "satchain" and data.get("kind") == kind
 
 
-def check_run_dir(out: str | os.PathLike) -> None:
-    """Allow ``out`` to be replaced only when missing, empty, or marked as a satchain run.
+def check_run_dir(out: str | os.PathLike, *, kind: str = "run") -> None:
+    """Allow ``out`` to be replaced (``kind="run"``) or written into (``kind="budget"``) only when missing,
+    empty, or marked as satchain's output of that kind.
 
     Raises
     ------
@@ -125,11 +135,11 @@ def check_run_dir(out: str | os.PathLike) -> None:
             f"-o {str(out)!r}: exists and is not a directory; choose a new or empty directory, nothing was changed"
         )
     entries = sorted(p.name for p in out.iterdir())
-    if not entries or _is_marked(out):
+    if not entries or _is_marked(out, kind):
         return
     shown = ", ".join(entries[:5]) + (f", ... ({len(entries)} entries)" if len(entries) > 5 else "")
     raise SatchainIOError(
-        f"-o {str(out)!r}: not a satchain run directory (no {MARKER}; it holds {shown}); "
+        f"-o {str(out)!r}: not a satchain {kind} directory (no {MARKER}; it holds {shown}); "
         "choose a new or empty directory, nothing was changed"
     )
 
@@ -153,34 +163,61 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _owner_gone(directory: Path, *, min_age_s: float) -> bool:
+def _owner_gone(directory: Path, *, min_age_s: float | None) -> bool:
+    """True when ``directory``'s owner file names a process of this host that no longer runs; without an owner
+    file (killed before claiming), when it is empty and older than ``min_age_s`` (never, if that is None)."""
     try:
         data = json.loads((directory / OWNER).read_text())
         pid, host = int(data["pid"]), str(data["host"])
     except (OSError, ValueError, KeyError, TypeError):
-        # no owner recorded (killed before claiming): stale only when empty and not brand new
         try:
-            return not any(directory.iterdir()) and time.time() - directory.stat().st_mtime > min_age_s
+            return (
+                min_age_s is not None
+                and not any(directory.iterdir())
+                and time.time() - directory.stat().st_mtime > min_age_s
+            )
         except OSError:
             return False
     return host == socket.gethostname() and not _alive(pid)
 
 
 def clean_stale(out: str | os.PathLike, *, min_age_s: float = 60.0) -> list[Path]:
-    """Remove ``.NAME.staging-*`` / ``.NAME.old-*`` folders beside ``out`` whose owning process is gone.
+    """Remove the staging folders (``.NAME.staging-*``) and old-results folders (``.NAME.old-*``) in the parent of
+    ``out`` whose owning process is gone, for ``out``'s name and for any other run's.
 
-    Returns the folders removed. A folder owned by a live process (or by another host) is kept.
+    Another name's folder is touched only when its owner file (pid and host) proves it satchain's and its process
+    dead; a folder owned by a live process, or by another host, is kept. An old-results folder whose run died
+    between the two renames of the swap (``NAME`` missing) is renamed back to ``NAME``, never removed.
+    Returns the folders removed or restored.
     """
     out = Path(out)
-    removed = []
+    removed: list[Path] = []
     if not out.parent.is_dir():
         return removed
-    for pattern in (f".{out.name}.staging-*", f".{out.name}.old-*"):
-        for d in out.parent.glob(pattern):
-            if d.is_dir() and not d.is_symlink() and _owner_gone(d, min_age_s=min_age_s):
-                shutil.rmtree(d, ignore_errors=True)
-                removed.append(d)
+    for d in sorted(out.parent.glob(".*.staging-*")) + sorted(out.parent.glob(".*.old-*")):
+        if not d.is_dir() or d.is_symlink():
+            continue
+        name, kind = _leftover_name(d)
+        if name is None or not _owner_gone(d, min_age_s=min_age_s if name == out.name else None):
+            continue
+        final = out.parent / name
+        if kind == "old" and not final.exists() and not final.is_symlink():
+            with contextlib.suppress(OSError):
+                os.replace(d, final)  # the previous results, orphaned mid-swap: put them back
+                (final / OWNER).unlink()
+        else:
+            shutil.rmtree(d, ignore_errors=True)
+        removed.append(d)
     return removed
+
+
+def _leftover_name(directory: Path) -> tuple[str | None, str]:
+    """``(NAME, "staging" | "old")`` of a ``.NAME.staging-XXXX`` / ``.NAME.old-XXXX`` folder, else ``(None, "")``."""
+    for kind in ("staging", "old"):
+        head, sep, _ = directory.name.rpartition(f".{kind}-")
+        if sep and head.startswith(".") and len(head) > 1:
+            return head[1:], kind
+    return None, ""
 
 
 def clean_stale_temp_files(final: str | os.PathLike) -> list[Path]:
@@ -196,6 +233,41 @@ def clean_stale_temp_files(final: str | os.PathLike) -> list[Path]:
                 f.unlink()
                 removed.append(f)
     return removed
+
+
+# ---------------------------------------------------------------------------------------------- interruption
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by a signal (SIGINT or SIGTERM); ``signum`` says which (exit status ``128 + signum``)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    @property
+    def signal_name(self) -> str:
+        return signal.Signals(self.signum).name
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Interrupted` (as Ctrl-C raises KeyboardInterrupt), so
+    ``finally`` / ``except BaseException`` clean-ups run. Only in the main thread, and only where SIGTERM has
+    its default action (a handler the caller installed is left alone); the previous handler is restored."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGTERM) not in (
+        signal.SIG_DFL,
+        None,
+    ):
+        yield
+        return
+
+    def _raise(signum, frame):
+        raise Interrupted(signum)
+
+    previous = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 # ---------------------------------------------------------------------------------------------- resources
@@ -331,6 +403,39 @@ def check_input_file(path: str | os.PathLike, name: str, *, max_bytes: int = 64 
     if size > max_bytes:
         raise SatchainIOError(f"{name} {str(p)!r}: {size / 2**20:.0f} MiB is far too large for a {name}; wrong file?")
     return p
+
+
+def not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError, name: str) -> ConfigError:
+    """The error for a text input that is not UTF-8 (a Latin-1 or Windows-1252 file): the file and the byte offset."""
+    byte = exc.object[exc.start : exc.start + 1].hex() if isinstance(exc.object, bytes) else "?"
+    return ConfigError(
+        f"{name} {str(path)!r}: not UTF-8 text (byte 0x{byte} at offset {exc.start} cannot be decoded); TOML and "
+        "JSON files must be UTF-8: save it as UTF-8 (e.g. iconv -f latin1 -t utf-8)"
+    )
+
+
+def nothing_measured(skipped, image, pixel_m: float | None, truth_path) -> Exception:
+    """``measure auto`` measured no target: the error that says why (no finite pixel, every target skipped and
+    the commonest reasons) and what to check, instead of an exit status 0 with empty tables."""
+    import numpy as np
+
+    from satchain.errors import InputError
+
+    if image.size and not np.isfinite(image).any():
+        return InputError("IMAGE: every pixel is NaN or inf; nothing was measured")
+    targets = [s for s in skipped if not str(s.get("reason", "")).startswith("no measurement defined")]
+    if not targets:
+        return InputError(f"--truth {str(truth_path)!r}: lists no target to measure; nothing was measured")
+    reasons: dict[str, int] = {}
+    for s in targets:
+        key = str(s.get("reason", "")).split(":", 1)[0]
+        reasons[key] = reasons.get(key, 0) + 1
+    common = "; ".join(f"{n} x {r}" for r, n in sorted(reasons.items(), key=lambda kv: -kv[1])[:3])
+    scale = "unknown" if pixel_m is None else f"{pixel_m:g} m"
+    return InputError(
+        f"nothing was measured: all {len(targets)} targets of --truth {str(truth_path)!r} were skipped ({common}); "
+        f"check that the truth file belongs to this image and the pixel size ({scale}; --pixel-m)"
+    )
 
 
 def _written_by_satchain(path: Path) -> bool:

@@ -35,11 +35,17 @@ def check_range(
     >>> check_range("optics.obscuration_ratio", 0.3, 0, 1, hi_open=True)
     0.3
     """
+    allowed = _interval(lo, hi, lo_open, hi_open)
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        kind = "a boolean" if isinstance(value, (bool, np.bool_)) else "a string"
+        raise error(f"{name} = {value!r}: must be a number in {allowed}, not {kind}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise error(f"{name} = {value!r}: must be a number in {_interval(lo, hi, lo_open, hi_open)}") from None
-    bad = not math.isfinite(v)
+        raise error(f"{name} = {value!r}: must be a number in {allowed}") from None
+    if not math.isfinite(v):
+        raise error(f"{name} = {value!r}: not a finite number; must be in {allowed}")
+    bad = False
     if lo is not None:
         bad |= v <= lo if lo_open else v < lo
     if hi is not None:
@@ -64,6 +70,7 @@ def check_choice(name: str, value: str, choices: Iterable[str], *, error: type[E
 
 def as_float_array(name: str, value, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
     """Convert to a float64 array, refusing NaN/inf (when ``finite``) and wrong dimensionality."""
+    _check_array_like(name, value)
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -74,3 +81,19 @@ def as_float_array(name: str, value, *, ndim: int | None = None, finite: bool = 
         n = int(np.count_nonzero(~np.isfinite(a)))
         raise InputError(f"{name}: contains {n} NaN/inf value(s); all values must be finite")
     return a
+
+
+def _check_array_like(name: str, value) -> None:
+    """Refuse, naming the parameter, what is not an array of numbers: None, a path or string (a file name
+    where the image's pixels are wanted), a mapping, a boolean or complex/object/string array."""
+    import os
+    from collections.abc import Mapping
+
+    if value is None or isinstance(value, (str, bytes, os.PathLike, Mapping, bool)):
+        shown = repr(value) if not isinstance(value, Mapping) else f"a {type(value).__name__}"
+        path = isinstance(value, (str, os.PathLike)) and "image" in name
+        hint = " (read a file with satchain.io.read_image first)" if path else ""
+        raise InputError(f"{name} = {shown[:80]}: must be an array of numbers{hint}")
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    if kind is not None and kind not in "biuf":
+        raise InputError(f"{name}: must be an array of real numbers, got dtype {value.dtype}")

@@ -19,10 +19,9 @@ from satchain._safety import (
     check_inputs_outside,
     check_memory,
     check_output_files,
+    check_run_dir,
     check_sidecars,
 )
-from satchain.engine.memory import check_simulation_memory
-from satchain.engine.stream import choose_streamed
 from satchain.errors import ConfigError
 
 app = typer.Typer(
@@ -42,10 +41,32 @@ _handle_errors = handle_errors
 
 @app.callback()
 def _main(
+    ctx: typer.Context,
     debug: Annotated[bool, typer.Option("--debug", help="show the traceback of an error (for bug reports)")] = False,
 ) -> None:
     """Satellite image-chain simulation and image-quality measurement."""
     set_debug(debug or os.environ.get("SATCHAIN_DEBUG", "") not in ("", "0"))
+    _show_warnings(ctx)
+
+
+def _show_warnings(ctx: typer.Context) -> None:
+    """While a command runs, print satchain's warnings (an input used other than as it stands) as one
+    ``warning: ...`` line each, once; other warnings as Python shows them."""
+    import warnings
+
+    from satchain.errors import SatchainWarning
+
+    previous, seen = warnings.showwarning, set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, SatchainWarning):
+            return previous(message, category, filename, lineno, file, line)
+        if str(message) not in seen:
+            seen.add(str(message))
+            print_warning(str(message))
+
+    warnings.showwarning = show
+    ctx.call_on_close(lambda: setattr(warnings, "showwarning", previous))
 
 
 def _system(preset: str | None, system: Path | None):
@@ -126,11 +147,16 @@ def budget(
 ) -> None:
     """Predicted MTF/CTF budget, derived quantities (GSD, Nyquist, Q, ...) of a system."""
     check_dir_outputs(out, ["*.json", "*.csv", "*.png"], {"--system": system})
+    if out is not None:
+        check_run_dir(out, kind="budget")  # a user's folder (their budget.json) is refused, never overwritten
     s = _system(preset, system)
     res = _budget(s, _parse_floats("--freqs", freqs))
     if out is not None:
+        from satchain._safety import write_run_marker
         from satchain.report.budget import write_budget_outputs
 
+        out.mkdir(parents=True, exist_ok=True)
+        write_run_marker(out, kind="budget")  # satchain's own: a later budget -o may write here again
         written = write_budget_outputs(s, res, out)
         if not as_json:
             console.print("wrote " + ", ".join(str(p) for p in written), markup=False, highlight=False)
@@ -214,22 +240,25 @@ def _check_scene_size(layout: str, pixel_m: float | None, win, out: Path) -> Non
     check_disk(4.0 * rows * cols, [out], what, fix=fix)
 
 
-_IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".npy")
-#: reflectance an image input may hold after scaling (glints above 1 allowed; 255 or 65535 are not reflectance)
-REFLECTANCE_RANGE = (-0.5, 4.0)
+class _StageBars:
+    """``progress(stage, done, total)`` shown as one rich progress bar per stage (see :func:`_progress`)."""
 
+    def __init__(self) -> None:
+        self._stage: str | None = None
+        self._bar = self._update = None
 
-def _ground_truth(input_: str, scene_pixel_m: float | None, input_scale: float | None = None):
-    from satchain.engine.sources import SceneSource
-    from satchain.scene import ImageScene, load_layout
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if stage != self._stage:
+            self.close()
+            self._bar, self._update = _progress(stage)
+            self._bar.start()
+            self._stage = stage
+        self._update(done, total)
 
-    if Path(input_).suffix.lower() in _IMAGE_SUFFIXES:
-        img = ImageScene(input_, pixel_m=scene_pixel_m, scale=input_scale, valid_range=REFLECTANCE_RANGE)
-        return SceneSource(img), None
-    if input_scale is not None:
-        raise ConfigError(f"--input-scale {input_scale:g}: applies to image inputs only, not to scene {input_!r}")
-    sc = load_layout(input_)
-    return SceneSource(sc, pixel_m=scene_pixel_m), sc
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+        self._stage, self._bar = None, None
 
 
 @app.command()
@@ -260,137 +289,40 @@ def simulate(
     out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF")] = ...,
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size)."""
-    import numpy as np
+    from satchain.engine.files import simulate_file
 
-    from satchain import io
-    from satchain._validate import check_choice
-    from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
-    from satchain.engine.simulate import Simulator
-
-    check_choice("--units", units_, OUTPUT_UNITS)
-    check_choice("--focal-plane-grid", fp_grid, ("input", "coarse"))
-    if seed < 0:
-        raise ConfigError(f"--seed {seed}: must be >= 0")
-    in_file = input_ if Path(input_).exists() else None
-    check_output_files({"-o": out, "--focal-plane": focal_plane})
-    check_distinct_paths(
-        {"-o": out, "-o (preview)": out.with_suffix(".png"), "--focal-plane": focal_plane},
-        {"INPUT": in_file, "--system": system},
-    )
-    check_sidecars({"-o (preview)": out.with_suffix(".png")})
-    s = _system(preset, system)
-    src, _ = _ground_truth(input_, scene_pixel_m, input_scale)
-    sensor = sensor_from_system(s) if (units_ != "reflectance" or not no_noise) else None
-    sim = Simulator(s, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
-    fp = fp_grid if focal_plane is not None else None
-    streamed = choose_streamed(sim, focal_plane=fp)
-    if not streamed:
-        check_simulation_memory(sim, focal_plane=fp)
-        sim.check_frame()
-    if min(src.shape_px) < 8:
-        raise ConfigError(
-            f"INPUT {input_!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; a "
-            "ground truth needs at least 8 px a side: check --scene-pixel-m"
-        )
-    out.parent.mkdir(parents=True, exist_ok=True)
-    meta = {
-        "system": s.name,
-        "seed": seed,
-        "noise": not no_noise,
-        "gsd_act_m": s.gsd_act_m,
-        "gsd_alt_m": s.gsd_alt_m,
-        "input": str(input_),
-        "input_pixel_m": src.pixel_m,
-    }
-    bits = sensor.bit_depth if sensor is not None else s.detector.bit_depth
-    if streamed:
-        _simulate_streamed(
-            sim,
-            src,
-            out,
-            sensor=sensor,
-            units=units_,
-            noise=not no_noise,
-            seed=seed,
-            bits=bits,
-            meta=meta,
-            scheduler=scheduler,
-        )
-        return
-    if focal_plane is not None:
-        focal_plane.parent.mkdir(parents=True, exist_ok=True)
-    bar, update = _progress(f"simulating {src.shape_px[0]}x{src.shape_px[1]} px")
-    with bar:
-        if scheduler is not None:
-            from satchain.engine.distributed import decimate_distributed
-
-            coarse = decimate_distributed(sim, src, scheduler=scheduler, progress=update)
-        else:
-            coarse = sim.decimate(src, progress=update)
-    img = sim.run(src, sensor=sensor, units=units_, noise=not no_noise, seed=seed, coarse=coarse)
-    io.write_simulated(out, img, units=units_, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)
-    console.print(
-        f"wrote {out} ({img.shape[0]} x {img.shape[1]} px, {units_}) and {out.with_suffix('.png')}",
-        markup=False,
-        highlight=False,
-    )
-    if focal_plane is not None:
-        fp = sim.focal_plane(coarse, grid=fp_grid)
-        fp_pixel = src.pixel_m * (sim.D if fp_grid == "coarse" else 1)
-        meta = {"units": "input (reflectance) filtered by the optics and motion", "system": s.name, "grid": fp_grid}
-        io.write_tiff(focal_plane, fp.astype(np.float32), pixel_m=fp_pixel, metadata=meta)
-        console.print(f"wrote {focal_plane} (focal-plane image, {fp_pixel:g} m samples)", markup=False, highlight=False)
+    check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
+    bars = _StageBars()
+    try:
+        r = simulate_file(
+            input_, out, _system(preset, system), scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+            units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
+            scheduler=scheduler, progress=bars, notify=_say, names=_SIMULATE_OPTIONS,
+        )  # fmt: skip
+    finally:
+        bars.close()
+    how = ", streamed" if r.streamed else ""
+    preview = " (subsampled preview)" if r.streamed else ""
+    _say(f"wrote {r.path} ({r.shape_px[0]} x {r.shape_px[1]} px, {r.units}{how}) and {r.preview}{preview}")
+    if r.focal_plane_path is not None:
+        _say(f"wrote {r.focal_plane_path} (focal-plane image, {r.focal_plane_pixel_m:g} m samples)")
 
 
-def _simulate_streamed(sim, src, out: Path, *, sensor, units: str, noise: bool, seed: int, bits, meta, scheduler):
-    """``satchain simulate`` for an input whose coarse frame does not fit in memory: the coarse grid on disk
-    beside ``out``, stage 2 tile by tile, the image written band by band (:mod:`satchain.engine.stream`)."""
-    from satchain._safety import check_disk, clean_stale, memory_limit_bytes
-    from satchain.engine.stream import coarse_store, stream_bytes, stream_tile_px, write_streamed
-    from satchain.io import simulated_dtype
+#: satchain.engine.files.simulate_file's parameters as `satchain simulate` names them in its messages
+_SIMULATE_OPTIONS = {
+    "input": "INPUT",
+    "out": "-o",
+    "focal_plane": "--focal-plane",
+    "focal_plane_grid": "--focal-plane-grid",
+    "scene_pixel_m": "--scene-pixel-m",
+    "input_scale": "--input-scale",
+    "units": "--units",
+    "seed": "--seed",
+}
 
-    ny, nx = sim.n_coarse
-    oy, ox = sim.output_shape
-    image_bytes = float(oy) * ox * simulated_dtype(units, bits).itemsize
-    check_disk(4.0 * ny * nx + image_bytes, [out], f"streaming {sim.input_shape[0]} x {sim.input_shape[1]} input px")
-    clean_stale(out)  # scratch folders of killed runs
-    t, m = stream_tile_px(sim), sim.params.stream_margin_px
-    console.print(
-        f"streamed: the full-frame path would exceed the memory limit ({memory_limit_bytes() / 2**30:.1f} GiB); "
-        f"the coarse grid ({ny} x {nx}, {4.0 * ny * nx / 2**30:.2f} GiB) goes to disk beside {out}, the image is "
-        f"formed in {t} x {t} px tiles with {m} px margins (about {stream_bytes(sim) / 2**30:.2f} GiB of memory)",
-        markup=False,
-        highlight=False,
-    )
-    with coarse_store(sim, out.parent, prefix=f".{out.name}.staging-") as coarse:
-        bar, update = _progress(f"stage 1: {sim.input_shape[0]}x{sim.input_shape[1]} px")
-        with bar:
-            if scheduler is not None:
-                from satchain.engine.distributed import decimate_distributed
 
-                decimate_distributed(sim, src, scheduler=scheduler, progress=update, out=coarse)
-            else:
-                sim.decimate(src, progress=update, out=coarse)
-        bar, update = _progress(f"stage 2: {oy}x{ox} px in {t}-px tiles")
-        with bar:
-            write_streamed(
-                out,
-                sim,
-                coarse,
-                sensor=sensor,
-                units=units,
-                noise=noise,
-                seed=seed,
-                bit_depth=bits,
-                pixel_m=sim.system.gsd_act_m,
-                metadata=meta,
-                progress=update,
-            )
-    console.print(
-        f"wrote {out} ({oy} x {ox} px, {units}, streamed) and {out.with_suffix('.png')} (subsampled preview)",
-        markup=False,
-        highlight=False,
-    )
+def _say(message: str) -> None:
+    console.print(message, markup=False, highlight=False)
 
 
 def _print_run(result) -> None:
@@ -446,7 +378,9 @@ def run(
         print(DEFAULT_CONFIG_TOML, end="")
         return
     cfg = load_run_config(config)
-    check_inputs_outside(out, {"--config": config, "system.file": cfg.system_path()})
+    check_inputs_outside(
+        out, {"--config": config, "system.file": cfg.system_path(), "as_built.file": cfg.as_built_path()}
+    )
     if preset is not None:
         cfg = RunConfig.from_dict({**cfg.to_dict(), "system": {"preset": preset}}, base_dir=cfg.base_dir)
     bar = Progress(
@@ -463,14 +397,37 @@ def run(
         bar.start_task(tasks[stage])
         bar.update(tasks[stage], completed=done, total=total)
 
-    with bar:
-        result = satchain.run(cfg, out_dir=out, progress=update)
+    previous = out.is_dir() and any(out.iterdir())
+    try:
+        with bar:
+            result = satchain.run(cfg, out_dir=out, progress=update)
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (satchain._safety.Interrupted)
+        raise typer.Exit(_interrupted(exc, out, previous)) from None
     _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}", markup=False, highlight=False)
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
         raise typer.Exit(1)
+
+
+def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
+    """Say what an interrupted run left (the staging folder is already removed); the exit status 128 + signal."""
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    kept = (
+        f"the previous results in {str(out)!r} were kept unchanged"
+        if previous
+        else f"nothing was written to {str(out)!r}"
+    )
+    err_console.print(
+        Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
+        + Text(f"the run stopped and its staging folder was removed; {kept}"),
+        highlight=False,
+        soft_wrap=True,
+    )
+    return 128 + int(signum)
 
 
 from satchain.cli_measure import measure_app  # noqa: E402

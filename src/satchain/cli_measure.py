@@ -73,6 +73,9 @@ def _load(path: Path, pixel_m: float | None):
         pixel_m = check_positive("--pixel-m", pixel_m)
     elif meta.get("pixel_m") is not None:
         pixel_m = float(meta["pixel_m"])
+    elif "invalid_pixel_m" in meta:  # a bad pixel size in the file is refused, never silently dropped
+        raise ConfigError(f"IMAGE {str(path)!r}: its pixel size {meta['invalid_pixel_m']!r} is not a ground pixel "
+                          "size in (0, 1e6] m; give --pixel-m")  # fmt: skip
     return image, pixel_m, meta
 
 
@@ -597,6 +600,10 @@ def auto(
     res = measure_auto(data, _read_truth(truth), pixel_m=p, origin_m=_origin(origin_m, meta), wedge_threshold=threshold)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
     _emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))
+    if not res.items:  # a run that measured nothing is not a success (exit status 2, the reasons on stderr)
+        from satchain._safety import nothing_measured
+
+        raise nothing_measured(res.skipped, data, p, truth)
 
 
 from satchain import cli_find as _cli_find  # noqa: E402,F401  (registers `measure find`)

@@ -11,7 +11,8 @@ the report plots. No I/O, no system object. The checks:
   diagonals) over 0.05..0.5 cy/px: ``<= star_mtf``;
 * bar target -- the largest ``|measured - Coltman|`` CTF along the bars' modulation axis, for groups with
   at least 2.5 px per period (:data:`BAR_COMPARE_MAX_CY_PER_PX`): ``<= bar_ctf``;
-* hyperbolic wedge -- resolvable line width: ``|measured / predicted - 1| <= wedge_resolution_rel``;
+* hyperbolic wedge -- resolvable line width: ``|measured / predicted - 1| <= wedge_resolution_rel``, the
+  prediction being the same 15 % crossing measured on the wedge's noise-free predicted image;
 * NIIRS -- GIQE 5 from the measured edge RERs and image SNR vs the predicted GIQE 5: ``<= niirs``.
 
 Every limit is inclusive. A check whose measurement is missing (the target could not be measured -- it is
@@ -220,7 +221,15 @@ class BarCheck(_Detail):
 @dataclass(frozen=True)
 class WedgeCheck(_Detail):
     """A hyperbolic wedge: resolvable line width (ground m) measured and predicted across the stripes along
-    ``axis``, the GSD (m), their ratios, and the measured contrast scan (``position_m``, ``contrast``)."""
+    ``axis``, the GSD (m), their ratios, and the contrast scan (``position_m`` along the wedge from its wide end,
+    ``line_width_m``) measured (``contrast``) and predicted (``contrast_predicted``: the same scan on the wedge's
+    noise-free predicted image, :mod:`satchain.wedge_prediction`). 1-sigma: ``resolution_m_std`` (the measured
+    crossing's, from the image noise: the predicted image re-measured with the sensor's noise added; the
+    measurement's own, larger, slope-based estimate is ``resolution_m_std_measure``), ``relative_error_sigma``
+    (of ``relative_error``: ``resolution_m_std / resolution_predicted_m``) and, reported beside them,
+    ``resolution_predicted_m_std``: the prediction's spread over sub-pixel placements of the pixel grid
+    (``resolution_predicted_by_placement_m``), the uncertainty of a prediction for a wedge whose placement is
+    unknown (a run's placement is known, so it is not part of the sigma)."""
 
     id: str
     orientation: str
@@ -234,6 +243,13 @@ class WedgeCheck(_Detail):
     threshold: float | None
     position_m: list | None
     contrast: list | None
+    contrast_predicted: list | None = None
+    line_width_m: list | None = None
+    resolution_m_std: float | None = None
+    resolution_m_std_measure: float | None = None
+    resolution_predicted_m_std: float | None = None
+    resolution_predicted_by_placement_m: list | None = None
+    relative_error_sigma: float | None = None
 
 
 @dataclass(frozen=True)
@@ -535,13 +551,33 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCh
     return [BarCheck.from_dict(d) for d in details], rows
 
 
+def _wedge_sigma(res, pr, p, sd_measure) -> tuple[float | None, float | None, str | None]:
+    """(1-sigma of the measured crossing in m, 1-sigma of ``res / pr - 1``, why None).
+
+    The crossing's 1-sigma from noise is the prediction's parametric bootstrap (the predicted image re-measured
+    with the sensor's noise added), else the measurement's own estimate. The prediction is made at the image's
+    own placement on the pixel grid, which the run knows exactly, so the spread over placements is reported
+    beside it (``resolution_predicted_m_std``) and not added."""
+    sd = None if p is None else _finite(p.resolution_noise_m_std)
+    sd = sd_measure if sd is None else sd
+    if res is None or pr is None:
+        return sd, None, "no relative error (a resolution is missing)"
+    if sd is None:
+        return None, None, "no noise model (no sensor) and no uncertainty from the measurement"
+    return sd, sd / pr, None
+
+
 def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[WedgeCheck], list[CheckRow]]:
     details, rows = [], []
     for w in measured.get("hyperbolic_wedge", []):
         axis = WEDGE_AXES[w["orientation"]]
-        p = pred.wedges.get(axis)
+        p = pred.wedges.get(str(w["id"]))
         res, pr = _finite(w.get("resolution_m")), None if p is None else _finite(p.resolution_m)
+        sd_measure, sd_pred = _finite(w.get("resolution_m_std")), None if p is None else _finite(p.resolution_m_std)
         rel = None if res is None or pr is None else res / pr - 1.0
+        sd_noise, sigma, sigma_why = _wedge_sigma(res, pr, p, sd_measure)
+        pos = w.get("position_m_along_wedge")
+        c_pred = None if p is None or pos is None else p.contrast_at(pos).tolist()
         details.append(
             {
                 "id": w["id"],
@@ -554,22 +590,29 @@ def _wedge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Wed
                 "relative_error": rel,
                 "pass": _within(rel, tol.wedge_resolution_rel),
                 "threshold": w.get("threshold"),
-                "position_m": w.get("position_m_along_wedge"),
+                "position_m": pos,
                 "contrast": w.get("contrast"),
+                "contrast_predicted": c_pred,
+                "line_width_m": w.get("line_width_m"),
+                "resolution_m_std": sd_noise,
+                "resolution_m_std_measure": sd_measure,
+                "resolution_predicted_m_std": sd_pred,
+                "resolution_predicted_by_placement_m": None if p is None else list(p.resolutions_by_placement_m),
+                "relative_error_sigma": sigma,
             }
         )
         why = None
         if res is None:
             why = "the wedge gave no resolution (its contrast never crossed the threshold inside it)"
         elif p is None:
-            why = f"no prediction for a wedge along {axis} (not in the truth record given to predict)"
+            why = f"no prediction for wedge {w['id']!r} (not in the truth record given to predict)"
         elif pr is None:
-            why = "no predicted resolution (the predicted CTF stays below the threshold)"
+            why = "no predicted resolution: " + (p.reason or "the predicted contrast never falls to the threshold")
         rows.append(
             CheckRow(
                 f"wedge {w['id']} resolution (m, {axis})", "wedge_resolution", w["id"], res, pr, rel,
                 tol.wedge_resolution_rel, f"±{tol.wedge_resolution_rel:.0%}", _within(rel, tol.wedge_resolution_rel),
-                why,
+                why, sigma, sigma_why,
             )
         )  # fmt: skip
     return [WedgeCheck.from_dict(d) for d in details], rows

@@ -26,3 +26,13 @@ class SatchainIOError(SatchainError, OSError):
 
 class ResourceLimitError(SatchainError, MemoryError):
     """Work refused up front because it would not fit in the allowed memory."""
+
+
+class ParameterTypeError(ConfigError, TypeError):
+    """A public function called with an argument of the wrong type (a string or a boolean where a number is
+    wanted, None for an image, a file name where a truth record is wanted); also a ``TypeError``."""
+
+
+class SatchainWarning(UserWarning):
+    """An input used other than as it stands (a colour image converted to grey, page 1 of a multi-page TIFF, an
+    implausible pixel size); the command line prints it as ``warning: ...``."""

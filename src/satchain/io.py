@@ -9,6 +9,11 @@ Pixel-size metadata is written three ways so that every kind of reader finds it:
 * The TIFF ``ImageDescription`` holds JSON ``{"satchain": {"pixel_m": ..., "origin_m": [x0, y0], ...}}``.
 * PNG files carry the same JSON in a ``satchain`` text chunk and ``pHYs`` in pixels per metre.
 
+Reading warns (:class:`~satchain.errors.SatchainWarning`) where a file is not used as it stands: a colour or
+palette image converted to grey (the conversion named), a multi-page TIFF (page 1 is used), a pixel size that
+is implausible for the ground (below 1 mm or above 100 km), resolution tags that disagree with the stated pixel
+size, a print resolution (72 dpi) that is not a ground pixel size, or a pixel scale in degrees (a geographic CRS).
+
 Every write goes to a temporary file in the destination directory and is moved into place with
 ``os.replace``, so a failed write never leaves a partial file under the final name.
 
@@ -26,7 +31,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 import os
 import tempfile
 from collections.abc import Iterable, Iterator
@@ -37,6 +41,16 @@ import numpy as np
 import tifffile
 from PIL import Image, PngImagePlugin
 
+from satchain._imagemeta import (  # the checks of what a file says of itself
+    _GEO_KEY_DIRECTORY,
+    _MODEL_PIXEL_SCALE,
+    _MODEL_TIEPOINT,
+    PLAUSIBLE_PIXEL_M,
+    _checked_meta,
+    _tiff_meta,
+    _to_grey,
+    _warn,
+)
 from satchain._safety import check_memory, clean_stale_temp_files
 from satchain._validate import check_positive
 from satchain.errors import InputError, SatchainIOError
@@ -58,9 +72,6 @@ __all__ = [
 
 #: classic TIFF offsets are 32-bit; switch to BigTIFF well before 4 GiB (with room for tags)
 BIGTIFF_THRESHOLD_BYTES = 2_000_000_000
-_MODEL_PIXEL_SCALE = 33550
-_MODEL_TIEPOINT = 33922
-_GEO_KEY_DIRECTORY = 34735
 
 
 @contextlib.contextmanager
@@ -278,7 +289,7 @@ def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     with tifffile.TiffFile(path) as tf:
         page = _first_page(tf, path)
         check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(path)!r}")
-        return page.asarray(), _tiff_meta(tf, page)
+        return _to_grey(page.asarray(), page, path), _tiff_meta(tf, page, path)
 
 
 def _first_page(tf, path: Path):
@@ -289,44 +300,6 @@ def _first_page(tf, path: Path):
 
 def _nbytes(shape, dtype) -> int:
     return int(np.prod([int(v) for v in shape], dtype=np.float64) * max(np.dtype(dtype).itemsize, 4))
-
-
-def _tiff_meta(tf, page) -> dict[str, Any]:
-    meta: dict[str, Any] = {"format": "tiff", "bigtiff": tf.is_bigtiff, "bits_per_sample": page.bitspersample}
-    desc = page.tags.get(270)
-    if desc is not None:
-        with contextlib.suppress(ValueError, TypeError, AttributeError):
-            meta.update({k: v for k, v in json.loads(desc.value).get("satchain", {}).items() if v is not None})
-    scale = page.tags.get(_MODEL_PIXEL_SCALE)
-    if scale is not None:
-        sx, sy = float(scale.value[0]), float(scale.value[1])
-        if not math.isclose(sx, sy, rel_tol=1e-9):
-            meta["pixel_m_xy"] = [sx, sy]
-        meta["pixel_m"] = sx
-    tie = page.tags.get(_MODEL_TIEPOINT)
-    if tie is not None and len(tie.value) >= 6:
-        i, j = float(tie.value[0]), float(tie.value[1])
-        px = meta.get("pixel_m", 1.0)
-        meta["origin_m"] = [float(tie.value[3]) - i * px, -(float(tie.value[4]) + j * px)]
-    return _checked_meta(meta)
-
-
-def _checked_meta(meta: dict[str, Any]) -> dict[str, Any]:
-    """A stated pixel size must be a number in (0, 1e6] m; otherwise it moves to ``invalid_pixel_m``."""
-    v = meta.get("pixel_m")
-    if v is None:
-        return meta
-    try:
-        f = float(v)
-        ok = math.isfinite(f) and 0 < f <= 1e6
-    except (TypeError, ValueError):
-        ok = False
-    if ok:
-        meta["pixel_m"] = f
-    else:
-        meta.pop("pixel_m")
-        meta["invalid_pixel_m"] = v
-    return meta
 
 
 def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
@@ -340,24 +313,32 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
                 meta.update(json.loads(text))
         with contextlib.suppress(TypeError, ValueError, ZeroDivisionError, IndexError):
             if "pixel_m" not in meta and img.info.get("dpi"):
-                meta["pixel_m"] = 0.0254 / float(img.info["dpi"][0])
+                dpi_m = 0.0254 / float(img.info["dpi"][0])
+                if dpi_m >= PLAUSIBLE_PIXEL_M[0]:
+                    meta["pixel_m"] = dpi_m
+                else:
+                    _warn(path, f"its resolution {float(img.info['dpi'][0]):g} dpi ({dpi_m * 1e3:.3g} mm per pixel) "
+                          "is a print resolution, not a ground pixel size: ignored (give --pixel-m)")  # fmt: skip
         if img.mode in ("I;16", "I;16B", "I;16L"):
             arr = np.array(img, dtype=np.uint16)
         elif img.mode == "I":
             arr = np.array(img).astype(np.uint16)
-        elif img.mode in ("L", "P", "1"):
+        elif img.mode in ("L", "1"):
             arr = np.array(img.convert("L"))
         else:
+            how = {"P": "palette image: its colours"}.get(img.mode, f"{img.mode} image")
+            _warn(path, f"{how} converted to grey by luma 0.299 R + 0.587 G + 0.114 B (alpha ignored)")
             arr = np.array(img.convert("L"))
             meta["converted_from"] = img.mode
-    return arr, _checked_meta(meta)
+    return arr, _checked_meta(meta, path)
 
 
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
     """Read a TIFF/GeoTIFF, PNG or NPY image: ``(array, metadata)``.
 
     ``metadata["pixel_m"]`` is present when the file states a pixel size (GeoTIFF scale tag, satchain
-    description, PNG text chunk or pHYs). Colour images are converted to grayscale (luma).
+    description, PNG text chunk or pHYs). Colour images are converted to grayscale (luma), with a
+    :class:`~satchain.errors.SatchainWarning`, as are the other surprises listed in the module docstring.
     """
     p = Path(path)
     if not p.is_file():
@@ -423,7 +404,7 @@ class ImageReader:
     def _open_tiff(self) -> None:
         self._tf = tf = tifffile.TiffFile(self.path)
         page = _first_page(tf, self.path)
-        self.meta = _tiff_meta(tf, page)
+        self.meta = _tiff_meta(tf, page, self.path)
         self._page = page
         if page.samplesperpixel != 1 or len(page.shape) != 2 or getattr(page, "imagedepth", 1) > 1:
             check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(self.path)!r}")

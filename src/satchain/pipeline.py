@@ -4,7 +4,9 @@ Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its 
 (the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
 of each measured figure and comparison -> report (``report.html``, ``results.json``, ``summary.csv``, images,
 ``manifest.json``).
-Each stage is a function of the typed results before it (:mod:`satchain.api`); only the report writes files.
+Each stage is a function of the typed results before it (:mod:`satchain.results`); only the report writes files.
+The truth record travels typed (:class:`satchain.scene.truth.Truth`); the JSON dict is made only where a
+function still reads that form (measure_auto, the report figures) and where it is written.
 
 Everything is written into a staging directory beside ``out_dir`` and swapped in only when the run has
 succeeded, so an existing ``out_dir`` is never left holding a mix of old and new results, and a failed
@@ -23,15 +25,19 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from satchain.api import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
-from satchain.comparison import Comparison
-from satchain.prediction import Predictions
-from satchain.runconfig import RunConfig
+from satchain.results import BudgetResult, Measurements, RunResult, SceneResult, SimulationResult
+
+if TYPE_CHECKING:
+    from satchain.comparison import Comparison
+    from satchain.prediction import Predictions
+    from satchain.runconfig import RunConfig
+    from satchain.system import ImagingSystem
 
 __all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
@@ -46,26 +52,32 @@ def _stage_budget(config: RunConfig, progress: Progress) -> BudgetResult:
     from satchain.tf.budget import SystemOTF
 
     s = config.load_system()
-    if abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
-        from satchain.errors import ConfigError
-
-        raise ConfigError(
-            f"system {s.name!r}: ground pixels of {s.gsd_act_m:.4g} m (ACT) x {s.gsd_alt_m:.4g} m (ALT); satchain run "
-            "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
-            "for this system"
-        )
+    _check_square(s, "system")
+    _check_square(config.load_as_built_system(s), "as_built")  # refused before any work is done
     otf = SystemOTF(s)
     result = BudgetResult(s, otf, budget_results(s, otf=otf))
     progress("budget", 1, 1)
     return result
 
 
+def _check_square(s, what: str) -> None:
+    if s is not None and abs(s.gsd_act_m - s.gsd_alt_m) > 1e-6 * s.gsd_alt_m:
+        from satchain.errors import ConfigError
+
+        raise ConfigError(
+            f"{what} {s.name!r}: ground pixels of {s.gsd_act_m:.4g} m (ACT) x {s.gsd_alt_m:.4g} m (ALT); satchain run "
+            "measures square ground pixels only (nadir, square pitch). Use 'satchain budget' and 'satchain simulate' "
+            "for this system"
+        )
+
+
 def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
     from satchain.scene import load_layout
+    from satchain.scene.truth import read_truth
 
     sc = config.scene
     scene = load_layout(config.layout_source())
-    result = SceneResult(scene, scene.truth(pixel_m=sc.pixel_m), sc.pixel_m)
+    result = SceneResult(scene, read_truth(scene.truth(pixel_m=sc.pixel_m)), sc.pixel_m)
     progress("scene", 1, 1)
     return result
 
@@ -77,32 +89,37 @@ def _stage_simulate(
     from satchain.engine.sensor import sensor_from_system
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.sources import SceneSource
+    from satchain.tf.budget import SystemOTF
 
     c = config.simulation
+    built = config.load_as_built_system(budget.system)  # the camera as built; None: as designed
+    system, otf = (budget.system, budget.otf) if built is None else (built, SystemOTF(built))
     src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
-    sim = Simulator(budget.system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=budget.otf)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=otf)
     check_simulation_memory(sim, focal_plane="coarse")
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
-    sensor = sensor_from_system(budget.system)
+    sensor = sensor_from_system(system)
     image = sim.run(src, sensor=sensor, units=c.units, noise=c.noise, seed=c.seed, coarse=coarse)
     focal_plane = sim.focal_plane(coarse, grid="coarse")  # D x smaller; exact band-limited samples
     progress("simulate", len(sim.tiles) + 1, len(sim.tiles) + 1)
-    return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim)
+    return SimulationResult(image, focal_plane, src.pixel_m * sim.D, c.units, sensor, sim, system=system)
 
 
-def _stage_measure(system, scene: SceneResult, sim: SimulationResult, progress: Progress) -> Measurements:
+def _stage_measure(
+    system: ImagingSystem, scene: SceneResult, sim: SimulationResult, progress: Progress
+) -> Measurements:
     from satchain.measure.auto import measure_auto
     from satchain.measure.snr import measure_snr
 
-    auto = measure_auto(sim.image, scene.truth, pixel_m=system.gsd_act_m)
+    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m)  # measure_auto reads the dict
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m)
     progress("measure", 1, 1)
     return Measurements(auto, snr)
 
 
-def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult, measured,
-                   progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
+def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
+                   measured: Measurements, progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
     from satchain.comparison import compare
     from satchain.prediction import predict
 
@@ -133,7 +150,7 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
     budget = timed("budget", _stage_budget, config)
     scene = timed("scene", _stage_scene, config)
     sim = timed("simulate", _stage_simulate, config, budget, scene)
-    measured = timed("measure", _stage_measure, budget.system, scene, sim)
+    measured = timed("measure", _stage_measure, sim.system or budget.system, scene, sim)  # the image's own GSD
     predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
     return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
 
@@ -142,8 +159,8 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
 class ReportInputs:
     """The read-only view of a run that the report code (report/html.py, report/run_figures.py) reads:
     ``out`` (the directory being written), ``config``, ``system``, ``otf``, ``budget`` (dict), ``scene``,
-    ``truth`` (dict), ``simulator``, ``image``, ``focal_plane``, ``sensor``, ``measured`` (dict),
-    ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
+    ``truth`` (the JSON dict the figures read), ``simulator``, ``image``, ``focal_plane``, ``sensor``,
+    ``measured`` (dict), ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
 
     result: RunResult
     out: Path
@@ -154,7 +171,6 @@ class ReportInputs:
     otf = property(lambda self: self.result.budget.otf)
     budget = property(lambda self: self.result.budget.budget)
     scene = property(lambda self: self.result.scene.scene)
-    truth = property(lambda self: self.result.scene.truth)
     simulator = property(lambda self: self.result.simulation.simulator)
     image = property(lambda self: self.result.simulation.image)
     focal_plane = property(lambda self: self.result.simulation.focal_plane)
@@ -162,6 +178,10 @@ class ReportInputs:
     measured = property(lambda self: self.result.measurements.to_dict())
     comparison = property(lambda self: {"results": self.results})
     timings_s = property(lambda self: self.result.timings_s)
+
+    @cached_property
+    def truth(self) -> dict[str, Any]:
+        return self.result.scene.truth_dict
 
 
 def _write_budget_and_scene(result: RunResult, out: Path) -> None:
@@ -172,16 +192,18 @@ def _write_budget_and_scene(result: RunResult, out: Path) -> None:
     b, sc = result.budget, result.scene
     write_budget_outputs(b.system, dict(b.budget), out / "budget", otf=b.otf)
     (out / "images").mkdir(parents=True, exist_ok=True)
-    write_text(out / "images" / "scene.truth.json", json.dumps(sc.truth, indent=1))
+    truth = sc.truth_dict
+    write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
     p = result.config.scene.overview_pixel_m
     overview = sc.scene.render(pixel_m=p)
-    run_figures.plot_scene_overview(overview, sc.truth, p, out / "figures" / "fig1_scene.png")
+    run_figures.plot_scene_overview(overview, truth, p, out / "figures" / "fig1_scene.png")
 
 
 def _write_images(result: RunResult, out: Path) -> None:
     from satchain import io
 
-    c, s, sim = result.config.simulation, result.system, result.simulation
+    c, sim = result.config.simulation, result.simulation
+    s = sim.system or result.system  # the camera simulated (as built)
     d = out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
     io.write_simulated(
@@ -248,6 +270,30 @@ def _manifest(result: RunResult) -> dict[str, Any]:
     }
 
 
+#: the Figure 1 overview: at most this many pixels, each costing about this many bytes while it is plotted
+MAX_OVERVIEW_PX = 64e6
+_OVERVIEW_BYTES_PER_PX = 40
+
+
+def _check_overview(config: RunConfig) -> None:
+    """Refuse, before anything runs, an overview figure that could not be rendered (``overview_pixel_m``
+    far below the scene's size), saying how large and how much memory it would need."""
+    from satchain._safety import check_memory
+    from satchain.errors import ResourceLimitError
+    from satchain.scene import load_layout
+
+    p = config.scene.overview_pixel_m
+    rows, cols = load_layout(config.layout_source()).shape_px(p)
+    n, need = float(rows) * cols, float(rows) * cols * _OVERVIEW_BYTES_PER_PX
+    what = f"scene.overview_pixel_m = {p:g}: the scene overview (Figure 1) would be {cols} x {rows} px"
+    if n > MAX_OVERVIEW_PX:
+        raise ResourceLimitError(
+            f"{what} and need about {need / 2**30:.3g} GiB of memory; must be >= "
+            f"{p * (n / MAX_OVERVIEW_PX) ** 0.5:.3g} m (at most {MAX_OVERVIEW_PX / 1e6:.0f} Mpx); nothing was written"
+        )
+    check_memory(need, what, fix="use a larger scene.overview_pixel_m")
+
+
 def _check_out_dir(out: Path) -> None:
     from satchain._safety import check_run_dir, clean_stale
 
@@ -256,26 +302,34 @@ def _check_out_dir(out: Path) -> None:
 
 
 def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progress | None = None) -> RunResult:
-    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result."""
+    """Run every stage and write the run directory ``out_dir`` (atomically replaced); return the result.
+
+    Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
+    or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
+    """
+    from satchain._safety import terminate_as_interrupt
+
     out = Path(out_dir).resolve()
     _check_out_dir(out)
+    _check_overview(config)
     out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
-    _claim_run_dir(staging)
-    try:
-        result = run_in_memory(config, progress=progress)
-        t0 = time.perf_counter()
-        timings = dict(result.timings_s)
-        write_run_directory(result, staging, progress=progress)
-        timings["report"] = round(time.perf_counter() - t0, 3)
-        result = dataclasses.replace(result, timings_s=timings)
-        from satchain.report._save import write_text
+    with terminate_as_interrupt():
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+        try:
+            _claim_run_dir(staging)
+            result = run_in_memory(config, progress=progress)
+            t0 = time.perf_counter()
+            timings = dict(result.timings_s)
+            write_run_directory(result, staging, progress=progress)
+            timings["report"] = round(time.perf_counter() - t0, 3)
+            result = dataclasses.replace(result, timings_s=timings)
+            from satchain.report._save import write_text
 
-        write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
-        _swap_in(staging, out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+            write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
+            _swap_in(staging, out)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
     return result
 
 
@@ -306,6 +360,10 @@ def _swap_in(staging: Path, out: Path) -> None:
         if old is not None:
             os.replace(old, out)
         raise
+    from satchain._safety import OWNER
+
+    with contextlib.suppress(OSError):
+        (out / OWNER).unlink()  # the results no longer belong to a process
     if old is not None:
         with contextlib.suppress(OSError):
             shutil.rmtree(old)

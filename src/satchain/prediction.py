@@ -1,9 +1,10 @@
 """Predicted figures of merit, evaluated the way each measurement sees them (the prediction half of a run).
 
-Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF and the wedge resolution
-(:mod:`satchain.ctf`) and GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the
-targets of a truth record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then
-puts measurements beside them without needing the system.
+Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF (:mod:`satchain.ctf`), the
+wedge resolution measured on the wedge's noise-free predicted image (:mod:`satchain.wedge_prediction`) and
+GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the targets of a truth
+record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements
+beside them without needing the system.
 
 Frequencies are in cycles per pixel (cy/px) along a direction ``(ux, uy)`` of the image plane: x = ACT
 (columns), y = ALT (rows). Square detector pixels are assumed for the cy/mm <-> cy/px conversion
@@ -22,12 +23,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from satchain.ctf import wedge_resolution_m
+from satchain._argcheck import checked
 from satchain.errors import InputError
+from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
+
+if TYPE_CHECKING:
+    from satchain.scene.truth import Truth
 
 __all__ = [
     "DIRECTIONS",
@@ -51,8 +56,6 @@ DIRECTIONS: dict[str, tuple[float, float]] = {
 }
 #: The Nyquist frequency of a sampled image along any axis of its pixel grid, cy/px.
 NYQUIST_CY_PER_PX = 0.5
-#: The axis across a wedge's stripes for each wedge orientation of the scene.
-WEDGE_AXES = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}
 
 MTF2D = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -82,6 +85,19 @@ class AxisMTF:
     def __call__(self, f_cy_per_px) -> np.ndarray:
         f = np.asarray(f_cy_per_px, dtype=float)
         return np.abs(np.asarray(self._mtf2d(f * self.ux, f * self.uy)))
+
+
+class _SystemOTF:
+    """A SystemOTF as a callable of cy/px, complex (the phase kept: a smear's sinc changes sign), with the
+    components named in ``exclude`` left out: what forms the predicted wedge image."""
+
+    def __init__(self, otf: Any, exclude: tuple[str, ...] = ()):
+        self._mtf = _SystemMTF(otf, exclude)
+        self.cutoff = self._mtf.cutoff
+
+    def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
+        m = self._mtf
+        return m._otf(np.asarray(fx_cy_per_px) * m._to_mm, np.asarray(fy_cy_per_px) * m._to_mm, exclude=m._exclude)
 
 
 class _SystemMTF:
@@ -135,15 +151,6 @@ class EdgePrediction:
 
 
 @dataclass(frozen=True)
-class WedgePrediction:
-    """A wedge axis' predicted resolvable line width (ground m) and the GSD along it (m)."""
-
-    axis: str
-    resolution_m: float
-    gsd_m: float
-
-
-@dataclass(frozen=True)
 class Predictions:
     """Everything :func:`satchain.comparison.compare` needs from the prediction side (no system object).
 
@@ -154,7 +161,9 @@ class Predictions:
     edges : mapping
         Truth id -> :class:`EdgePrediction` for every slanted edge of the truth record.
     wedges : mapping
-        Axis -> :class:`WedgePrediction` (ALT, ACT, D135) for the axes of the truth's wedges.
+        Wedge id -> :class:`~satchain.wedge_prediction.WedgePrediction` for every wedge of the truth record: its
+        resolution measured on its noise-free predicted image (never clamped to the GSD), the spread over
+        sub-pixel placements and the predicted contrast scan.
     giqe5, rer, snr : float
         Predicted NIIRS (GIQE 5), its RER (GIQE 5 combination of the axes) and contrast SNR.
     gsd_los_m, elevation_deg : float
@@ -195,11 +204,17 @@ def predict_from_mtf(
     gsd_los_m: float | None = None,
     elevation_deg: float = 90.0,
     warnings: tuple[str, ...] = (),
+    otf2d: MTF2D | None = None,
+    noise_sigma: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Predictions:
     """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres).
 
     ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as :func:`satchain.quality.predict_quality`
-    gives them); without it the NIIRS figures are NaN.
+    gives them); without it the NIIRS figures are NaN. ``otf2d`` is the complex OTF (cy/px) that forms the
+    predicted wedge images (default ``mtf2d``, exact when the OTF is real and non-negative); the wedges are
+    rendered at the truth's ``pixel_m`` on its ``background``
+    (:func:`satchain.wedge_prediction.predict_wedge`); ``noise_sigma`` (per-pixel noise in reflectance as a
+    function of reflectance, :func:`sensor_noise_reflectance`) gives their crossings' 1-sigma from noise.
     """
     along = {d: AxisMTF(mtf2d, u) for d, u in DIRECTIONS.items()}
     edges = {}
@@ -209,12 +224,7 @@ def predict_from_mtf(
         nx, ny = (float(v) for v in it["normal_to_bright"])
         m = AxisMTF(mtf2d, (nx, ny))
         edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
-    wedges = {}
-    axes = {WEDGE_AXES[it["orientation"]] for it in truth.get("items", []) if it.get("kind") == "hyperbolic_wedge"}
-    for axis in sorted(axes):
-        limit = gsd_m if axis in ("ALT", "ACT") else gsd_m / math.sqrt(2.0)
-        res = wedge_resolution_m(along[axis], gsd_m=gsd_m, threshold=wedge_threshold, sampling_limit_m=limit)
-        wedges[axis] = WedgePrediction(axis, res, gsd_m)
+    wedges = _predict_wedges(mtf2d if otf2d is None else otf2d, truth, gsd_m, wedge_threshold, noise_sigma)
     q = quality or {}
     return Predictions(
         mtf_along=along,
@@ -229,6 +239,44 @@ def predict_from_mtf(
         warnings=tuple(warnings),
         mtf2d=mtf2d,
     )
+
+
+def sensor_noise_reflectance(sensor: Any) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The per-pixel noise of ``sensor`` (a SensorModel) in reflectance units, as a function of reflectance:
+    shot noise of signal, path radiance and dark charge, read noise, PRNU, DSNU and (finite full well)
+    quantisation; None without a sensor."""
+    if sensor is None:
+        return None
+
+    def sigma(refl: np.ndarray) -> np.ndarray:
+        e = sensor.offset_e + sensor.dark_e + np.clip(refl, 0, None) * sensor.electrons_per_unit
+        q = (sensor.full_well_e / 2 ** int(sensor.bit_depth)) ** 2 / 12 if np.isfinite(sensor.full_well_e) else 0.0
+        var = e + sensor.read_noise_e**2 + (sensor.prnu * e) ** 2 + sensor.dsnu_e**2 + q
+        return np.sqrt(var) / sensor.electrons_per_unit
+
+    return sigma
+
+
+def _predict_wedges(
+    otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float, noise: Callable | None = None
+) -> dict:
+    """Wedge id -> WedgePrediction (resolution None, with the reason, when the predicted image has no wedge
+    the scan can measure)."""
+    out = {}
+    truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
+    background = float(truth.get("background", 0.2))
+    for it in truth.get("items", []):
+        if it.get("kind") != "hyperbolic_wedge":
+            continue
+        try:
+            out[str(it["id"])] = predict_wedge(
+                otf2d, it, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, threshold=threshold,
+                noise_sigma=noise,
+            )
+        except InputError as exc:
+            axis = WEDGE_AXES[str(it["orientation"]).lower()]
+            out[str(it["id"])] = WedgePrediction(str(it["id"]), axis, None, gsd_m, threshold=threshold, reason=str(exc))
+    return out
 
 
 def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...]:
@@ -247,9 +295,10 @@ def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...
     return tuple(out)
 
 
+@checked
 def predict(
     system: Any,
-    truth: Mapping[str, Any],
+    truth: Mapping[str, Any] | Truth,
     *,
     otf: Any = None,
     quality: Mapping[str, float] | None = None,
@@ -270,7 +319,7 @@ def predict(
     quality : mapping, optional
         :func:`satchain.quality.predict_quality` ``.to_dict()`` (computed when not given).
     sensor : SensorModel, optional
-        For saturation warnings.
+        For saturation warnings, and the image noise that gives the wedge crossings their 1-sigma.
     wedge_threshold : float
         Contrast at which a wedge stops resolving (the paper's 0.15).
     """
@@ -280,6 +329,7 @@ def predict(
     truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     otf = SystemOTF(system) if otf is None else otf
     quality = predict_quality(system, otf=otf).to_dict() if quality is None else quality
+    names = getattr(otf, "component_names", ())
     return predict_from_mtf(
         system_mtf_cy_per_px(otf, local=True),
         dict(truth),
@@ -289,4 +339,6 @@ def predict(
         gsd_los_m=system.gsd_los_m,
         elevation_deg=system.orbit.elevation_deg,
         warnings=saturation_warnings(sensor, truth),
+        otf2d=_SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names)),
+        noise_sigma=sensor_noise_reflectance(sensor),
     )

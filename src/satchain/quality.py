@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from satchain._argcheck import checked
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
 
@@ -333,6 +334,32 @@ def _axis_terms(system, otf, axis: str, kernel, df: float) -> dict[str, Any]:
     }
 
 
+#: frequency samples the edge-response integrals may use per axis, and the bytes each costs (measured:
+#: ~380 per sample with the OTF's wavelengths and the 9 overshoot positions)
+MAX_GRID_POINTS = 1_000_000
+_BYTES_PER_GRID_POINT = 400
+
+
+def _check_grid(system, df: float) -> None:
+    """Refuse a frequency step whose grid (0 to the optical cutoff) would be too large, before allocating."""
+    from satchain._safety import check_memory
+    from satchain.errors import ResourceLimitError
+    from satchain.units import cy_per_mm_to_cy_per_px
+
+    pitch = min(system.detector.pitch_x_m, system.detector.pitch_y_m)
+    f_top = max(float(np.max(cy_per_mm_to_cy_per_px(system.optical_cutoff_cy_per_mm, pitch_m=pitch))), 0.5) * 1.0001
+    n = f_top / df
+    need = n * _BYTES_PER_GRID_POINT
+    if n > MAX_GRID_POINTS:
+        raise ResourceLimitError(
+            f"df_cy_per_px = {df:g}: the frequency grid to the optical cutoff ({f_top:.3g} cy/px) would hold "
+            f"{n:.3g} points and need about {need / 2**30:.3g} GiB of memory; must be >= "
+            f"{f_top / MAX_GRID_POINTS:.2g} (at most {MAX_GRID_POINTS:,} points; the default 0.002 is accurate)"
+        )
+    check_memory(need, f"df_cy_per_px = {df:g}", fix="use a larger df_cy_per_px")
+
+
+@checked
 def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.002) -> QualityResult:
     """RER, overshoot, noise gain, contrast SNR, MTFA and GIQE 3/4/5 NIIRS of ``system`` at nadir.
 
@@ -355,8 +382,9 @@ def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.00
     from satchain.tf.budget import SystemOTF
     from satchain.units import m_to_inches
 
-    otf = SystemOTF(system) if otf is None else otf
     df = check_range("df_cy_per_px", df_cy_per_px, 0.0, 0.02, lo_open=True)
+    _check_grid(system, df)
+    otf = SystemOTF(system) if otf is None else otf
     per_axis = {axis: _axis_terms(system, otf, axis, kernel, df) for axis in ("act", "alt")}
     a, b = per_axis["act"], per_axis["alt"]
     rer_gm = math.sqrt(a["rer"] * b["rer"])

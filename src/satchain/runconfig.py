@@ -10,9 +10,10 @@ import sys
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from satchain.errors import ConfigError, SatchainIOError
+from satchain.sections import _StrictNumbers
 from satchain.system import ImagingSystem, _config_error, load_preset
 
 if sys.version_info >= (3, 11):
@@ -20,10 +21,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["DEFAULT_CONFIG_TOML", "RunConfig", "load_run_config"]
+__all__ = ["DEFAULT_CONFIG_TOML", "RunConfig", "load_run_config", "system_differences"]
 
 
-class _Frozen(BaseModel):
+class _Frozen(_StrictNumbers):  # no bool, string or NaN where a number is wanted
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
@@ -77,14 +78,39 @@ class Tolerances(_Frozen):
 
 
 class RunConfig(_Frozen):
-    """Everything one run needs; a frozen, validated object."""
+    """Everything one run needs; a frozen, validated object.
+
+    ``as_built`` (optional): the camera as built, a partial system (the sections and keys of a system file,
+    e.g. ``{"motion": {"smear_px": 3.0}}``) and/or ``file`` (a system file, relative to the config) deep-merged
+    over the design ``system``; it is applied to the simulation only, every prediction uses ``system``
+    (:meth:`load_as_built_system`).
+    """
 
     system: SystemRef = Field(default_factory=SystemRef)
+    as_built: dict[str, Any] | None = None
     scene: SceneConfig = Field(default_factory=SceneConfig)
     simulation: SimulationConfig = Field(default_factory=SimulationConfig)
     measurement: MeasurementConfig = Field(default_factory=MeasurementConfig)
     tolerances: Tolerances = Field(default_factory=Tolerances)
     base_dir: str = Field(default=".", description="directory that relative paths are resolved against")
+
+    @field_validator("as_built")
+    @classmethod
+    def _as_built_shape(cls, v: dict[str, Any] | None) -> dict[str, Any] | None:
+        if v is None:
+            return v
+        for key, value in v.items():
+            if key == "file":
+                if not isinstance(value, str) or not value:
+                    raise ValueError(f"as_built.file = {value!r}: must be a system file path (a string)")
+            elif key not in _SYSTEM_SECTIONS:
+                raise ValueError(
+                    f"as_built.{key}: unknown key; allowed: file, {', '.join(_SYSTEM_SECTIONS)} (the sections of a "
+                    "system file)"
+                )
+            elif not isinstance(value, dict):
+                raise ValueError(f"as_built.{key} = {value!r}: must be a table of {key} keys, e.g. {{ ... }}")
+        return v
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], *, base_dir: str | Path = ".") -> RunConfig:
@@ -101,6 +127,36 @@ class RunConfig(_Frozen):
         if ref.file is not None:
             return ImagingSystem.from_toml(Path(self.base_dir) / ref.file)
         return load_preset(ref.preset or "ankarasat3")
+
+    def as_built_path(self) -> Path | None:
+        """The as-built system file this configuration reads (absolute), or None."""
+        f = (self.as_built or {}).get("file")
+        return None if f is None else (Path(self.base_dir) / f).resolve()
+
+    def load_as_built_system(self, design: ImagingSystem | None = None) -> ImagingSystem | None:
+        """The camera as built (``as_built`` merged over the design system), or None when there is no
+        ``as_built``. Validated as a system file is; errors name the ``as_built.<section>.<key>``."""
+        if self.as_built is None:
+            return None
+        design = self.load_system() if design is None else design
+        sections: dict[str, dict[str, Any]] = {}
+        path = self.as_built_path()
+        if path is not None:
+            from satchain.system import _read_toml
+
+            try:
+                data = _read_toml(path)
+            except (ConfigError, SatchainIOError) as exc:
+                raise type(exc)(f"as_built.file: {exc}") from None
+            for key, value in data.items():
+                if key in _SYSTEM_SECTIONS and isinstance(value, dict):
+                    sections[key] = dict(value)
+                elif key not in ("name", "description", "provenance"):
+                    raise ConfigError(f"as_built.file {str(path)!r}: {key}: unknown key (a system file's sections)")
+        for key, value in self.as_built.items():
+            if key != "file":
+                sections[key] = _deep_merge(sections.get(key, {}), value)
+        return _merge_system(design, sections)
 
     def layout_source(self) -> str:
         if self.scene.layout == "paper":
@@ -119,15 +175,86 @@ class RunConfig(_Frozen):
         d = self.to_dict()
         if self.system.file is not None:
             d["system"] = {"file": str(self.system_path())}
+        if self.as_built is not None and "file" in self.as_built:
+            d["as_built"] = {**d["as_built"], "file": str(self.as_built_path())}
         if self.scene.layout != "paper":
             d["scene"] = {**d["scene"], "layout": str(Path(self.layout_source()).resolve())}
         return RunConfig.from_dict(d, base_dir=Path(self.base_dir).resolve())
+
+
+_SYSTEM_SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination", "atmosphere")
+#: Keys a system section accepts besides its fields (the system file's shorthands).
+_SHORTHANDS = {"optics": ("wavelength_m",), "detector": ("pitch_m", "fill_factor")}
+
+
+def _deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _deep_merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def _merge_system(design: ImagingSystem, sections: dict[str, dict[str, Any]]) -> ImagingSystem:
+    """``design`` with the keys of ``sections`` replaced (nested tables merged), validated."""
+    import re
+
+    current = design.model_dump(mode="python")
+    flat: dict[str, Any] = {}
+    for section, values in sections.items():
+        model = type(getattr(design, section))
+        allowed = set(model.model_fields) | set(_SHORTHANDS.get(section, ()))
+        for key, value in values.items():
+            if key not in allowed:
+                raise ConfigError(
+                    f"as_built.{section}.{key}: unknown key; {section} has {', '.join(sorted(allowed))}"
+                )
+            old = current[section].get(key)
+            nested = isinstance(value, dict) and isinstance(old, dict)
+            flat[f"{section}.{key}"] = _deep_merge(old, value) if nested else value
+    try:
+        return design.replace(flat)
+    except ConfigError as exc:
+        names = "|".join(_SYSTEM_SECTIONS)
+        msg = re.sub(rf"(^|; )({names})\.", r"\1as_built.\2.", str(exc).removeprefix("invalid imaging system: "))
+        raise ConfigError(f"invalid as-built system: {msg}") from None
+
+
+def system_differences(design: ImagingSystem, built: ImagingSystem | None) -> list[dict[str, Any]]:
+    """The parameters where ``built`` differs from ``design``: ``[{"key", "design", "as_built"}]`` (dotted keys of
+    the system file; name, description and provenance left out); empty when ``built`` is None.
+
+    Examples
+    --------
+    >>> from satchain.system import load_preset
+    >>> d = load_preset("ankarasat3")
+    >>> system_differences(d, d.replace({"motion.smear_px": 3.0}))
+    [{'key': 'motion.smear_px', 'design': 1.0325, 'as_built': 3.0}]
+    """
+    if built is None:
+        return []
+
+    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in d.items():
+            if not prefix and k in ("name", "description", "provenance"):
+                continue
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+        return out
+
+    a, b = flat(design.to_dict()), flat(built.to_dict())
+    return [
+        {"key": k, "design": a.get(k), "as_built": b.get(k)} for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)
+    ]
 
 
 DEFAULT_CONFIG_TOML = """\
 # satchain run configuration. Every key is optional; these are the defaults.
 [system]                       # one of: preset = "ankarasat3" (the default), file = "mycamera.toml", inline
 preset = "ankarasat3"
+
+# [as_built]                   # optional: the camera as built, simulated instead of the design (predictions
+# file = "built.toml"          #   still use [system]): a system file and/or keys of its sections, e.g.
+# motion = { smear_px = 3.0 }  #   merged over [system]; results.json and report.html list what differs
 
 [scene]
 layout = "paper"               # the reference paper's Figure 1 layout, or a scene file (.toml / .json)
@@ -168,6 +295,10 @@ def load_run_config(path: str | Path | None) -> RunConfig:
         raise SatchainIOError(f"--config {str(p)!r}: not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"--config {str(p)!r}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError as exc:
+        from satchain._safety import not_utf8
+
+        raise not_utf8(p, exc, "--config") from None
     return RunConfig.from_dict(data, base_dir=p.parent)
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from pydantic import Field, ValidationError
 
 from satchain import units
+from satchain._argcheck import checked
 from satchain.errors import ConfigError, SatchainIOError
 
 if sys.version_info >= (3, 11):
@@ -46,6 +47,7 @@ from satchain.sections import (  # noqa: F401  (re-exported: the sections are pa
     Orbit,
     Radiometry,
     Spiders,
+    _config_error,
     _Frozen,
 )
 
@@ -67,6 +69,7 @@ __all__ = [
 class ImagingSystem(_Frozen):
     """A complete satellite camera: orbit, optics, detector and motion, plus derived quantities."""
 
+    _error_title: ClassVar[str] = "invalid imaging system"
     name: str = "custom"
     description: str = ""
     orbit: Orbit
@@ -280,23 +283,6 @@ class ImagingSystem(_Frozen):
 _SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination", "atmosphere")
 
 
-def _config_error(exc: ValidationError) -> ConfigError:
-    """Turn pydantic's report into one ConfigError naming key, value and allowed range."""
-    lines = []
-    for e in exc.errors():
-        loc = ".".join(str(p) for p in e["loc"])
-        msg = e["msg"].removeprefix("Value error, ")
-        if e["type"] == "extra_forbidden":
-            lines.append(f"{loc}: unknown key (check the spelling; allowed keys are listed in the docs)")
-        elif e["type"] == "missing":
-            lines.append(f"{loc}: required key is missing")
-        elif loc and "input" in e and not isinstance(e["input"], dict) and not msg.startswith(loc):
-            lines.append(f"{loc} = {e['input']!r}: {msg[0].lower() + msg[1:]}")
-        else:
-            lines.append(f"{loc + ': ' if loc and not msg.startswith(loc) else ''}{msg}")
-    return ConfigError("invalid imaging system: " + "; ".join(lines))
-
-
 def _read_toml(path: str | Path) -> dict[str, Any]:
     from satchain._safety import check_input_file
 
@@ -308,6 +294,10 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
         raise SatchainIOError(f"system file {str(p)!r}: not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"system file {str(p)!r}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError as exc:
+        from satchain._safety import not_utf8
+
+        raise not_utf8(p, exc, "system file") from None
 
 
 def preset_names() -> list[str]:
@@ -332,6 +322,7 @@ def load_preset(name: str) -> ImagingSystem:
         return ImagingSystem.from_toml(p)
 
 
+@checked
 def load_system(path_or_preset: str | Path) -> ImagingSystem:
     """A preset name or a TOML file path."""
     s = str(path_or_preset)

@@ -294,10 +294,11 @@ def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None
     and the tolerance band around the predicted resolution; the contrast residual below."""
     with matplotlib.rc_context(rc_for(8.5)):
         fig, (ax,), (r,) = _figure(8.5, 6.4)
-        lw, meas, pred = w["line_width_m"], w["contrast_measured"], w["ctf_coltman_predicted"]
+        lw, meas, pred = w["line_width_m"], w["contrast_measured"], w["contrast_predicted"]
         thr, res, rp = w["threshold"], w.get("resolution_m"), w.get("resolution_predicted_m")
         ax.plot(lw, meas, color=MEAS, lw=1.4, label="measured contrast across the stripes")
-        ax.plot(lw, pred, color=PRED, ls="--", lw=1.4, label="predicted (Coltman CTF across the stripes)")
+        ax.plot(lw, pred, color=PRED, ls="--", lw=1.4, label="predicted (the same scan, noise-free predicted image)")
+        ax.plot(lw, w["ctf_coltman_predicted"], color="gray", ls=":", lw=1, label="Coltman CTF (infinite square wave)")
         ax.axhline(thr, color="tab:orange", lw=1.2, label=f"threshold {thr:.0%}")
         for a in (ax, r):
             if rp is not None and np.isfinite(rp) and tol_rel:

@@ -154,6 +154,9 @@ def _wedge_curves(ctx, res: dict) -> list[dict]:
                 "line_width_m": lw,
                 "position_m": np.asarray(w.get("position_m") or m.get("position_m_along_wedge") or lw * np.nan),
                 "contrast_measured": np.asarray(w["contrast"], float),
+                "contrast_predicted": np.asarray(
+                    [np.nan if v is None else v for v in (w.get("contrast_predicted") or [None] * lw.size)], float
+                ),
                 "ctf_coltman_predicted": pred,
                 "threshold": float(w.get("threshold") or 0.15),
                 "resolution_m": w.get("resolution_m"),
@@ -231,13 +234,15 @@ def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
     cols["star_mtf.csv"] = _star_columns(curves["stars"])
     cols["bars_ctf.csv"] = _bars_columns(curves["bars"])
     cols["wedge_contrast.csv"] = (
-        ["wedge_id", "axis", "position_m", "line_width_m", "contrast_measured", "ctf_coltman_predicted"],
+        ["wedge_id", "axis", "position_m", "line_width_m", "contrast_measured", "contrast_predicted",
+         "ctf_coltman_predicted"],
         _stack(
             curves["wedges"],
             ["id", "axis"],
-            ["position_m", "line_width_m", "contrast_measured", "ctf_coltman_predicted"],
+            ["position_m", "line_width_m", "contrast_measured", "contrast_predicted", "ctf_coltman_predicted"],
         ),
-        "hyperbolic wedges: contrast across the stripes along the wedge, and the predicted Coltman CTF",
+        "hyperbolic wedges: contrast across the stripes along the wedge, measured and predicted (the same scan on "
+        "the wedge's noise-free predicted image), and Coltman's CTF of an infinite square wave for reference",
     )
     cols["system_mtf_ctf.csv"] = _system_columns(curves["system"])
     written = []

@@ -243,6 +243,7 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
         skipped=tables.skipped_groups(res.get("skipped", [])),
         n_skipped=len(res.get("skipped", [])),
         results=res,
+        as_built=res.get("as_built_differences") or [],
         tol=res.get("tolerances") or {},
         thumbs=_thumbs_with_overlays(ctx, target_thumbnails(ctx), _bar_limit(res)),
         flags=_all_flags(ctx, res),

@@ -226,6 +226,10 @@ def load_layout(source: str | Path) -> Scene:
             raise ConfigError(f"layout = {str(path)!r}: file must end in .toml or .json")
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
         raise ConfigError(f"layout = {str(path)!r}: cannot parse: {exc}") from None
+    except UnicodeDecodeError as exc:
+        from satchain._safety import not_utf8
+
+        raise not_utf8(path, exc, "layout") from None
     except OSError as exc:
         raise SatchainIOError(f"layout = {str(path)!r}: cannot read: {exc}") from None
     return layout_from_dict(data)

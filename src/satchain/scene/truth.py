@@ -304,6 +304,10 @@ def read_truth(source: str | Path | Mapping[str, Any] | Truth) -> Truth:
             raise SatchainIOError(f"truth file {str(p)!r}: not found") from None
         except json.JSONDecodeError as exc:
             raise InputError(f"truth file {str(p)!r}: not valid JSON ({exc})") from None
+        except UnicodeDecodeError as exc:
+            from satchain._safety import not_utf8
+
+            raise not_utf8(p, exc, "truth file") from None
     d = dict(source)
     fmt = str(d.get("format", ""))
     if not fmt.startswith(_FORMAT_PREFIX):

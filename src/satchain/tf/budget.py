@@ -74,6 +74,9 @@ class SystemOTF:
     """
 
     def __init__(self, system: ImagingSystem, *, params: Any = None):
+        from satchain._argcheck import check_argument
+
+        check_argument("SystemOTF", "system", system)  # None or a file name: one line naming it
         self.system = system
         self._diffraction = (
             _opt.make_diffraction_otf(system.optics)

@@ -1,0 +1,220 @@
+"""The typed results that the stages of a run hand each other, and results.json's layout.
+
+:func:`satchain.run` (:mod:`satchain.api`) and the stages (:mod:`satchain.pipeline`) both use these types;
+they live here so that imports flow one way (``api -> pipeline -> results``), never in a circle. Every field
+is typed; the types of other modules are imported only for type checkers, so importing this module stays
+cheap (numpy only).
+
+The truth record travels typed (:class:`satchain.scene.truth.Truth`); its JSON dict
+(:attr:`SceneResult.truth_dict`) is made only at the edges that read or write the file form.
+
+Examples
+--------
+>>> strict_json({"pass": True, "mtf": np.float64("nan")})
+{'pass': True, 'mtf': None}
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from satchain.comparison import Comparison
+    from satchain.engine.sensor import SensorModel
+    from satchain.engine.simulate import Simulator
+    from satchain.measure.auto import AutoResult
+    from satchain.measure.snr import SnrResult
+    from satchain.prediction import Predictions
+    from satchain.runconfig import RunConfig
+    from satchain.scene import ImageScene, Scene
+    from satchain.scene.truth import Truth
+    from satchain.system import ImagingSystem
+    from satchain.tf.budget import SystemOTF
+
+__all__ = [
+    "NULL_MEANING",
+    "RESULTS_FORMAT_VERSION",
+    "BudgetResult",
+    "Measurements",
+    "RunResult",
+    "SceneResult",
+    "SimulationResult",
+    "strict_json",
+]
+
+#: Version of the results.json layout (2: strict JSON, ``format_version``, overall ``pass``, n/a rows).
+RESULTS_FORMAT_VERSION = 2
+#: What a null in results.json means.
+NULL_MEANING = (
+    "null = not available: the quantity could not be measured or computed (target not measurable at this pixel "
+    "size, clipped, nothing in the compared range, or a prediction that does not exist); a check with a null "
+    "measurement is n/a (pass = null) and its 'reason' says why"
+)
+
+
+@dataclass(frozen=True)
+class BudgetResult:
+    """The predicted budget: ``system``, ``otf`` (its SystemOTF) and ``budget`` (the dict of
+    :func:`satchain.report.budget.budget_results`: derived quantities, MTF/CTF tables, MTF at Nyquist, MTFA,
+    radiometry, GIQE)."""
+
+    system: ImagingSystem
+    otf: SystemOTF = field(repr=False)
+    budget: Mapping[str, Any] = field(repr=False)
+
+
+@dataclass(frozen=True)
+class SceneResult:
+    """The ground truth: ``scene`` (a :class:`satchain.scene.Scene`), ``truth`` (its typed truth record,
+    :class:`satchain.scene.truth.Truth`, positions in scene metres) and ``pixel_m`` (ground-truth pixel
+    size, m). A truth record given as a dict (the JSON form) is read into a :class:`Truth`."""
+
+    scene: Scene | ImageScene = field(repr=False)
+    truth: Truth = field(repr=False)
+    pixel_m: float
+
+    def __post_init__(self) -> None:
+        from satchain.scene.truth import Truth, read_truth
+
+        if not isinstance(self.truth, Truth):
+            object.__setattr__(self, "truth", read_truth(self.truth))
+
+    @property
+    def truth_dict(self) -> dict[str, Any]:
+        """The truth record in its JSON form (``*.truth.json``; what ``Scene.truth()`` returns)."""
+        return self.truth.to_dict()
+
+    @property
+    def typed_truth(self) -> Truth:
+        """Deprecated in satchain 0.1 (to be removed in 0.2): ``truth`` is the typed record now."""
+        warnings.warn(
+            "SceneResult.typed_truth is deprecated in satchain 0.1 and will be removed in 0.2: "
+            "SceneResult.truth is the typed Truth now (SceneResult.truth_dict is the JSON form)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.truth
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """The simulated images.
+
+    ``image``: the satellite image (``units``: dn, electrons, radiance or reflectance), one pixel per GSD;
+    ``focal_plane``: scene reflectance filtered by optics and motion, sampled every ``focal_plane_pixel_m``
+    ground metres; ``sensor``: the SensorModel; ``simulator``: the Simulator (its ``D`` is the decimation);
+    ``system``: the camera simulated (the config's ``as_built`` when it has one, else the design).
+    """
+
+    image: np.ndarray = field(repr=False)
+    focal_plane: np.ndarray = field(repr=False)
+    focal_plane_pixel_m: float
+    units: str
+    sensor: SensorModel = field(repr=False)
+    simulator: Simulator = field(repr=False)
+    system: ImagingSystem | None = field(default=None, repr=False)
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """``auto``: every target measured (:class:`satchain.measure.auto.AutoResult`); ``snr``: the GIQE contrast
+    SNR measured on the image (:class:`satchain.measure.snr.SnrResult`)."""
+
+    auto: AutoResult
+    snr: SnrResult
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self.auto.to_dict(), "snr": self.snr.to_dict()}
+
+
+def strict_json(value: Any) -> Any:
+    """``value`` with numpy types made plain and every NaN/inf replaced by None (so ``json.dumps(...,
+    allow_nan=False)`` succeeds).
+
+    Examples
+    --------
+    >>> strict_json({"a": np.float64("nan"), "b": [np.int64(2), float("inf")], "c": (1.5,)})
+    {'a': None, 'b': [2, None], 'c': [1.5]}
+    """
+    if isinstance(value, Mapping):
+        return {str(k): strict_json(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return strict_json(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """Everything one run produced, in memory. ``passed``: False if any check failed, None if none could be
+    evaluated, True otherwise. ``to_json_dict()`` is the content of results.json."""
+
+    config: RunConfig
+    budget: BudgetResult
+    scene: SceneResult
+    simulation: SimulationResult
+    measurements: Measurements
+    predictions: Predictions
+    comparison: Comparison
+    timings_s: Mapping[str, float] = field(default_factory=dict)
+
+    def __repr__(self) -> str:  # short: the full objects are a click away in a notebook
+        c, img = self.comparison, self.simulation.image
+        return (
+            f"RunResult(system={self.system.name!r}, passed={self.passed}, checks={c.n_checked - c.n_failed}/"
+            f"{c.n_checked} pass ({len(c.rows) - c.n_checked} n/a), image={img.shape[0]}x{img.shape[1]} px "
+            f"{self.simulation.units})"
+        )
+
+    @property
+    def system(self) -> ImagingSystem:
+        return self.budget.system
+
+    @property
+    def passed(self) -> bool | None:
+        return self.comparison.passed
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        return tuple(self.predictions.warnings) + tuple(self.measurements.auto.warnings)
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """results.json: strict JSON (nulls, never NaN), with ``format_version`` and the overall ``pass``."""
+        s, b, c = self.system, self.budget.budget, self.comparison
+        out: dict[str, Any] = {
+            "format_version": RESULTS_FORMAT_VERSION,
+            "pass": c.passed,
+            "n_checks": len(c.rows),
+            "n_checked": c.n_checked,
+            "n_failed": c.n_failed,
+            "null_means": NULL_MEANING,
+            "warnings": list(self.warnings),
+            "system": s.name,
+            "gsd_m": s.gsd_m,
+            "gsd_act_m": s.gsd_act_m,
+            "gsd_alt_m": s.gsd_alt_m,
+            "mtf_at_nyquist": b["mtf_at_nyquist"],
+            "mtfa": b["mtfa"],
+            "radiometry": {
+                k: b["radiometry"][k] for k in ("signal_e", "snr", "contrast_snr", "well_fill", "saturated")
+            },
+            "quality_predicted": b["quality"],
+        }
+        from satchain.runconfig import system_differences
+
+        out["as_built_differences"] = system_differences(s, self.simulation.system) if self.config.as_built else []
+        out.update(c.to_dict())
+        out["skipped"] = list(self.measurements.auto.skipped)
+        out["tolerances"] = self.config.tolerances.model_dump()
+        return strict_json(out)
