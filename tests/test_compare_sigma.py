@@ -148,14 +148,16 @@ def test_niirs_sigma_propagates_rer_and_snr_sigmas_through_giqe5():
 
 
 def test_every_row_has_a_sigma_or_says_why():
-    """A skipped target, an n/a check and a kind without an uncertainty model all say why sigma is null."""
-    p = predict_from_mtf(gauss, {"items": [{"kind": "hyperbolic_wedge", "id": "w", "orientation": "horizontal"}]},
-                         gsd_m=0.5)  # fmt: skip
+    """A skipped target, an n/a check and a measurement without its uncertainty all say why sigma is null."""
+    p = predict_from_mtf(gauss, {"items": []}, gsd_m=0.5)
     m = {
-        "slanted_edges": [{"id": "e", "direction": "ALT", "mtf_at_nyquist": None, "f_cy_per_px": [], "mtf": []}],
-        "hyperbolic_wedge": [{"id": "w", "orientation": "horizontal", "resolution_m": 0.6}],
+        "slanted_edges": [
+            {"id": "e", "direction": "ALT", "mtf_at_nyquist": None, "f_cy_per_px": [], "mtf": []},
+            {"id": "g", "direction": "ACT", "mtf_at_nyquist": 0.3, "f_cy_per_px": [0.5], "mtf": [0.3]},
+        ],
         "skipped": [{"id": "x", "kind": "bar_target", "reason": "too small"}],
     }
     c = compare(m, p, TOL)
     for r in c.rows:
         assert (r.sigma is not None) != bool(r.sigma_null_means), r
+    assert "no MTF sigma" in c.rows[2].sigma_null_means  # edge g, measured without its sigma
