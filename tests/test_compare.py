@@ -107,7 +107,8 @@ def test_comparison_prints_as_a_table_with_every_verdict():
     p = predict_from_mtf(gauss, {"items": [edge_truth("e", 8.0)]}, gsd_m=1.0)
     m = {"slanted_edges": [edge_meas("e", "ACT", 0.9, angle_deg=8.0, angle_deg_truth=8.0)]}
     lines = str(compare(m, p, TOL)).splitlines()
-    assert lines[0].split() == ["figure", "of", "merit", "measured", "predicted", "tolerance", "result"]
+    head = ["figure", "of", "merit", "measured", "predicted", "error", "sigma", "z", "tolerance", "result"]
+    assert lines[0].split() == head
     assert lines[1].endswith("FAIL") and "0.9" in lines[1] and lines[2].endswith("pass") and lines[3].endswith("n/a")
 
 

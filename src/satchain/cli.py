@@ -326,13 +326,21 @@ def _say(message: str) -> None:
 
 
 def _print_run(result) -> None:
+    from satchain.comparison import row_texts
+
     c = result.comparison
     t = Table(title=f"{result.system.name}: measured vs predicted ({c.n_checked - c.n_failed}/{c.n_checked} pass)")
-    for col in ("figure of merit", "measured", "predicted", "tolerance", "result"):
-        t.add_column(col, justify="left" if col == "figure of merit" else "right")
+    cols = ("measured", "predicted", "error", "sigma", "z", "tolerance")
+    t.add_column("figure of merit", justify="left")
+    for col in (*cols, "result"):
+        t.add_column(col, justify="right")
     for r in c.rows:
-        verdict = "n/a" if r.passed is None else ("[green]pass[/]" if r.passed else "[red]FAIL[/]")
-        t.add_row(Text(r.figure), _fmt(r.measured), _fmt(r.predicted), r.tolerance_text, verdict)
+        cells = row_texts(r)
+        style = {None: "", True: "green", False: "red"}[r.passed]
+        verdict = Text(cells["result"], style=style)
+        if r.tolerance_inside_noise:
+            verdict.stylize("yellow", len(cells["result"].split(" (")[0]))
+        t.add_row(Text(r.figure), *(cells[k] for k in cols), verdict)
     console.print(t)
     for r in c.rows:
         if r.passed is None and r.reason:

@@ -18,22 +18,34 @@ the report plots. No I/O, no system object. The checks:
 Every limit is inclusive. A check whose measurement is missing (the target could not be measured -- it is
 in the measurement's ``skipped`` list -- or nothing lies in the compared range) is **n/a** (``passed =
 None``, with ``reason``), never a failure.
+
+Every row carries ``sigma``, the 1-sigma of its ``error``, or ``sigma_null_means`` saying why not. The
+prediction is exact for the simulated system model, so sigma is the measurement's: the edge's
+``mtf_at_nyquist_sigma`` and the angle's from its per-line position noise; the star's MTF 1-sigma at the
+direction and frequency of the largest error; the bars' ``ctf_std`` at the group of the largest error; the
+NIIRS's RER (bounded from each edge's MTF 1-sigma) and SNR (:data:`SNR_REL_SIGMA`) sigmas through GIQE 5
+(the formulas in :mod:`satchain.check_sigma`). ``z = error / sigma``; a row whose tolerance is below
+:data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise`` (it can fail on noise alone). For star and bars
+the error is a maximum over many points, so its z is biased high (a maximum of noise).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 
 from satchain import ctf as _ctf
+from satchain.check_sigma import SNR_REL_SIGMA, edge_angle_sigma, edge_angle_sigma_deg, niirs_sigma, rer_sigma_bound
 from satchain.prediction import NYQUIST_CY_PER_PX, WEDGE_AXES, Predictions
 
 __all__ = [
     "BAR_COMPARE_MAX_CY_PER_PX",
+    "NOISE_SIGMAS",
+    "SNR_REL_SIGMA",
     "STAR_F_MIN_CY_PER_PX",
     "BarCheck",
     "CheckRow",
@@ -43,6 +55,9 @@ __all__ = [
     "StarCheck",
     "WedgeCheck",
     "compare",
+    "edge_angle_sigma_deg",
+    "row_texts",
+    "signed_text",
 ]
 
 #: Bar groups finer than this (fewer than 2.5 px per period) are listed but not compared with Coltman's CTF.
@@ -53,6 +68,10 @@ __all__ = [
 BAR_COMPARE_MAX_CY_PER_PX = 0.4
 #: The star's MTF is compared from this frequency (cy/px) up to Nyquist.
 STAR_F_MIN_CY_PER_PX = 0.05
+#: A tolerance narrower than this many sigma of its error is "inside the noise": the check can fail on noise.
+NOISE_SIGMAS = 2.0
+#: Why a prediction carries no sigma: it is computed from the very system model the image was simulated with.
+PREDICTION_SIGMA_NOTE = "the prediction is exact for the simulated system model (its sigma is 0)"
 
 
 @dataclass(frozen=True)
@@ -79,6 +98,20 @@ class CheckRow:
     sigma: float | None = None
     sigma_null_means: str | None = None
 
+    @property
+    def z(self) -> float | None:
+        """``error / sigma`` (None without both, or with a zero sigma)."""
+        if self.error is None or self.sigma is None or not self.sigma > 0:
+            return None
+        return self.error / self.sigma
+
+    @property
+    def tolerance_inside_noise(self) -> bool | None:
+        """True when the tolerance is narrower than 2 sigma: the check can fail on noise alone (None: no sigma)."""
+        if self.sigma is None:
+            return None
+        return bool(self.tolerance < NOISE_SIGMAS * self.sigma)
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "figure": self.figure,
@@ -93,6 +126,8 @@ class CheckRow:
             "reason": self.reason,
             "sigma": self.sigma,
             "sigma_null_means": self.sigma_null_means,
+            "z": self.z,
+            "tolerance_inside_noise": self.tolerance_inside_noise,
         }
 
 
@@ -136,7 +171,10 @@ class EdgeCheck(_Detail):
 @dataclass(frozen=True)
 class StarCheck(_Detail):
     """A Siemens star: per direction (ACT, ALT, D45, D135) the predicted MTF at ``f_cy_per_px`` and the largest
-    absolute error over 0.05..0.5 cy/px (``directions``); the worst of them; the measured curves."""
+    absolute error over 0.05..0.5 cy/px (``directions``, each with the frequency where it occurs and the
+    measurement's 1-sigma there); the worst of them (``max_abs_error_sigma``: the measured MTF's 1-sigma at
+    that direction and frequency, from measure_star's per-annulus fit residuals and input modulation); the
+    measured curves and their 1-sigma; the measurement's quality flags."""
 
     id: str
     directions: dict
@@ -144,13 +182,22 @@ class StarCheck(_Detail):
     passed: bool | None
     f_cy_per_px: list
     mtf_measured: dict
+    max_abs_error_sigma: float | None = None
+    worst_direction: str | None = None
+    worst_f_cy_per_px: float | None = None
+    mtf_std_measured: dict = field(default_factory=dict)
+    flags: list = field(default_factory=list)
 
 
 @dataclass(frozen=True)
 class BarCheck(_Detail):
     """A bar target: measured CTF vs Coltman's (and the paper's Fourier-synthesis CTF) at the groups'
     frequencies (cy/px), compared up to ``compared_up_to_cy_per_px``; the MTF from the measured CTF vs the
-    predicted MTF."""
+    predicted MTF. ``ctf_measured`` is the square-wave CTF the measurement reports: the group's fitted
+    modulation (``ctf_raw_measured``) plus ``ctf_correction``, the difference between the model's Coltman CTF
+    and the same estimator on the group rendered through the target's joint MTF model (finite 3-bar group,
+    aliased harmonics, grid phase; see measure/_barjoint.py). ``max_abs_error_sigma`` is ``ctf_std_measured``
+    at the group with the largest error (``worst_f_cy_per_px``)."""
 
     id: str
     compared_up_to_cy_per_px: float
@@ -166,6 +213,9 @@ class BarCheck(_Detail):
     ctf_std_measured: list = field(default_factory=list)
     ctf_correction: list = field(default_factory=list)
     flags: list = field(default_factory=list)
+    ctf_raw_measured: list = field(default_factory=list)
+    max_abs_error_sigma: float | None = None
+    worst_f_cy_per_px: float | None = None
 
 
 @dataclass(frozen=True)
@@ -204,7 +254,8 @@ class WedgeCheck(_Detail):
 
 @dataclass(frozen=True)
 class NiirsCheck(_Detail):
-    """GIQE 5 NIIRS predicted and measured, with the RER and contrast SNR each comes from."""
+    """GIQE 5 NIIRS predicted and measured, with the RER and contrast SNR each comes from;
+    ``giqe5_measured_sigma``: the measured NIIRS's 1-sigma (RER and SNR sigmas through GIQE 5)."""
 
     giqe5_predicted: float | None = None
     giqe5_measured: float | None = None
@@ -214,6 +265,7 @@ class NiirsCheck(_Detail):
     snr_measured: float | None = None
     passed: bool | None = None
     reason: str | None = None
+    giqe5_measured_sigma: float | None = None
 
 
 @dataclass(frozen=True)
@@ -244,17 +296,14 @@ class Comparison:
         return True if self.n_checked else None
 
     def __str__(self) -> str:
-        """The checks as a plain-text table (figure, measured, predicted, tolerance, result)."""
-
-        def num(v) -> str:
-            return "-" if v is None else f"{v:.4g}"
-
+        """The checks as a plain-text table (figure, measured, predicted, error, sigma, z, tolerance, result)."""
         width = max([len(r.figure) for r in self.rows] + [15])
-        lines = [f"{'figure of merit':{width}}  {'measured':>10}  {'predicted':>10}  {'tolerance':>9}  result"]
+        head = ("measured", "predicted", "error", "sigma", "z", "tolerance")
+        lines = [f"{'figure of merit':{width}}  " + "  ".join(f"{h:>10}" for h in head) + "  result"]
         for r in self.rows:
-            verdict = "n/a" if r.passed is None else ("pass" if r.passed else "FAIL")
+            cells = row_texts(r)
             lines.append(
-                f"{r.figure:{width}}  {num(r.measured):>10}  {num(r.predicted):>10}  {r.tolerance_text:>9}  {verdict}"
+                f"{r.figure:{width}}  " + "  ".join(f"{cells[h]:>10}" for h in head) + f"  {cells['result']}"
             )
         return "\n".join(lines)
 
@@ -270,6 +319,32 @@ class Comparison:
         }
 
 
+def signed_text(v: float | None, digits: int = 3) -> str:
+    """``v`` with its sign and ``digits`` significant digits ("-0.00388", never "+0.00"); "-" when missing."""
+    return "-" if v is None else f"{v:+.{digits}g}"
+
+
+def row_texts(r: CheckRow) -> dict[str, str]:
+    """A row's cells as text for the terminal: numbers to 4 significant digits, the error and z signed, and
+    the result with "tolerance inside noise" when the tolerance is below :data:`NOISE_SIGMAS` sigma."""
+
+    def num(v) -> str:
+        return "-" if v is None else f"{v:.4g}"
+
+    verdict = "n/a" if r.passed is None else ("pass" if r.passed else "FAIL")
+    if r.tolerance_inside_noise:
+        verdict += " (tolerance inside noise)"
+    return {
+        "measured": num(r.measured),
+        "predicted": num(r.predicted),
+        "error": signed_text(r.error),
+        "sigma": "-" if r.sigma is None else f"{r.sigma:.2g}",
+        "z": "-" if r.z is None else f"{r.z:+.2f}",
+        "tolerance": r.tolerance_text,
+        "result": verdict,
+    }
+
+
 def _finite(v) -> float | None:
     """A finite float, or None (missing, None, NaN or inf)."""
     if v is None:
@@ -282,15 +357,39 @@ def _within(error: float | None, tolerance: float) -> bool | None:
     return None if error is None else bool(abs(error) <= tolerance)
 
 
+def _sigma_or_why(sigma: float | None, error: float | None, why: str) -> tuple[float | None, str | None]:
+    """``(sigma, None)``, or ``(None, reason)`` when there is no error to qualify or no finite sigma. The
+    prediction adds nothing: it is exact for the simulated model (:data:`PREDICTION_SIGMA_NOTE`)."""
+    if error is None:
+        return None, "no error (the check is n/a)"
+    sigma = _finite(sigma)
+    if sigma is None or sigma < 0:
+        return None, why
+    return sigma, None
+
+
 def _measured_dict(measured: Any) -> dict[str, Any]:
     if isinstance(measured, Mapping):
         return dict(measured)
     if hasattr(measured, "auto"):  # satchain.api.Measurements
-        out = dict(measured.auto.to_dict())
+        out = _with_edge_cnr(measured.auto)
         if getattr(measured, "snr", None) is not None:
             out["snr"] = measured.snr.to_dict()
         return out
-    return dict(measured.to_dict())
+    return _with_edge_cnr(measured)
+
+
+def _with_edge_cnr(auto: Any) -> dict[str, Any]:
+    """``auto.to_dict()`` with each edge's contrast-to-noise ratio (from its EdgeResult) for the angle's sigma."""
+    out = dict(auto.to_dict())
+    cnr = {}
+    for it in getattr(auto, "items", ()):
+        r = getattr(it, "result", None)
+        c, n = getattr(r, "contrast", None), getattr(r, "noise_sigma", None)
+        if it.kind == "slanted_edge" and c is not None and n:
+            cnr[it.id] = abs(float(c)) / float(n)
+    out["slanted_edges"] = [dict(e, cnr=e.get("cnr", cnr.get(e.get("id")))) for e in out.get("slanted_edges", [])]
+    return out
 
 
 def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[EdgeCheck], list[CheckRow]]:
@@ -324,37 +423,54 @@ def _edge_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Edge
             }
         )
         why = None if meas is not None else "the edge gave no MTF at Nyquist"
+        sig = _sigma_or_why(details[-1]["mtf_at_nyquist_sigma"], err, "the edge measurement gave no MTF sigma")
         rows.append(
             CheckRow(
                 f"edge {e['id']} MTF@Nyquist ({e['direction']})", "edge_mtf_at_nyquist", e["id"], meas,
                 p.mtf_at_nyquist, err, tol.edge_mtf_at_nyquist, f"±{tol.edge_mtf_at_nyquist}",
-                _within(err, tol.edge_mtf_at_nyquist), why,
+                _within(err, tol.edge_mtf_at_nyquist), why, *sig,
             )
         )  # fmt: skip
         why = None if a_err is not None else "no measured or true angle"
+        sig = _sigma_or_why(edge_angle_sigma(e), a_err, "no contrast-to-noise, line count or region for the edge")
         rows.append(
             CheckRow(
                 f"edge {e['id']} angle (deg)", "edge_angle", e["id"], a, a_true, a_err, tol.edge_angle_deg,
-                f"±{tol.edge_angle_deg}", _within(a_err, tol.edge_angle_deg), why,
+                f"±{tol.edge_angle_deg}", _within(a_err, tol.edge_angle_deg), why, *sig,
             )
         )  # fmt: skip
     return [EdgeCheck.from_dict(d) for d in details], rows
+
+
+def _star_direction(f: np.ndarray, curve, std, mtf_pred: np.ndarray) -> dict[str, Any]:
+    """One direction of a star: the largest |error| over STAR_F_MIN..Nyquist, where, and its 1-sigma."""
+    meas = np.array([np.nan if v is None else v for v in curve], float)
+    sd = np.array(_floats(std, f.size), float)
+    ok = np.isfinite(meas) & (f >= STAR_F_MIN_CY_PER_PX) & (f <= NYQUIST_CY_PER_PX)
+    out: dict[str, Any] = {"mtf_predicted": mtf_pred.tolist(), "max_abs_error_to_nyquist": None}
+    if ok.any():
+        i = np.flatnonzero(ok)[np.argmax(np.abs(meas[ok] - mtf_pred[ok]))]
+        out.update(
+            max_abs_error_to_nyquist=float(abs(meas[i] - mtf_pred[i])),
+            worst_f_cy_per_px=float(f[i]),
+            max_abs_error_sigma=_finite(sd[i]),
+        )
+    return out
 
 
 def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[StarCheck], list[CheckRow]]:
     details, rows = [], []
     for st in measured.get("siemens_star", []):
         f = np.asarray(st["f_cy_per_px"], float)
-        per_dir, errors = {}, []
-        for d, curve in st.get("mtf", {}).items():
-            meas = np.array([np.nan if v is None else v for v in curve], float)
-            mtf_pred = np.asarray(pred.mtf_along[d.upper()](f), float)
-            ok = np.isfinite(meas) & (f >= STAR_F_MIN_CY_PER_PX) & (f <= NYQUIST_CY_PER_PX)
-            err = float(np.max(np.abs(meas[ok] - mtf_pred[ok]))) if ok.any() else None
-            if err is not None:
-                errors.append(err)
-            per_dir[d] = {"mtf_predicted": mtf_pred.tolist(), "max_abs_error_to_nyquist": err}
-        worst = max(errors) if errors else None
+        stds = st.get("mtf_std") or {}
+        per_dir = {
+            d: _star_direction(f, curve, stds.get(d), np.asarray(pred.mtf_along[d.upper()](f), float))
+            for d, curve in st.get("mtf", {}).items()
+        }
+        done = {d: v for d, v in per_dir.items() if v["max_abs_error_to_nyquist"] is not None}
+        wd = max(done, key=lambda d: done[d]["max_abs_error_to_nyquist"]) if done else None
+        worst = None if wd is None else done[wd]["max_abs_error_to_nyquist"]
+        w_sig = None if wd is None else done[wd]["max_abs_error_sigma"]
         details.append(
             {
                 "id": st["id"],
@@ -363,13 +479,19 @@ def _star_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[Star
                 "pass": _within(worst, tol.star_mtf),
                 "f_cy_per_px": f.tolist(),
                 "mtf_measured": st.get("mtf", {}),
+                "max_abs_error_sigma": w_sig,
+                "worst_direction": wd,
+                "worst_f_cy_per_px": None if wd is None else done[wd]["worst_f_cy_per_px"],
+                "mtf_std_measured": {d: _floats(v, f.size) for d, v in stds.items()},
+                "flags": [str(x) for x in st.get("flags", [])],
             }
         )
         why = None if worst is not None else f"no finite star MTF between {STAR_F_MIN_CY_PER_PX} and 0.5 cy/px"
+        sig = _sigma_or_why(w_sig, worst, "the star measurement gave no MTF sigma at the worst frequency")
         rows.append(
             CheckRow(
                 f"star {st['id']} max |MTF error| to Nyquist", "star_mtf", st["id"], worst, 0.0, worst,
-                tol.star_mtf, f"≤{tol.star_mtf}", _within(worst, tol.star_mtf), why,
+                tol.star_mtf, f"≤{tol.star_mtf}", _within(worst, tol.star_mtf), why, *sig,
             )
         )  # fmt: skip
     return [StarCheck.from_dict(d) for d in details], rows
@@ -389,8 +511,13 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCh
         f = np.asarray(b["f_cy_per_px"], float)
         meas = np.array([np.nan if v is None else v for v in b["ctf"]], float)
         col = np.asarray(_ctf.coltman_ctf(f, m), float)
+        std = np.array(_floats(b.get("ctf_std"), f.size), float)
+        corr = np.array(_floats(b.get("ctf_correction"), f.size), float)
         ok = np.isfinite(meas) & (f <= BAR_COMPARE_MAX_CY_PER_PX)
-        err = float(np.max(np.abs(meas[ok] - col[ok]))) if ok.any() else None
+        err, i = None, None
+        if ok.any():
+            i = int(np.flatnonzero(ok)[np.argmax(np.abs(meas[ok] - col[ok]))])
+            err = float(abs(meas[i] - col[i]))
         details.append(
             {
                 "id": b["id"],
@@ -404,17 +531,21 @@ def _bar_checks(measured: dict, pred: Predictions, tol: Any) -> tuple[list[BarCh
                 "mtf_predicted": np.asarray(m(f)).tolist(),
                 "max_abs_error": err,
                 "pass": _within(err, tol.bar_ctf),
-                "ctf_std_measured": _floats(b.get("ctf_std"), f.size),
-                "ctf_correction": _floats(b.get("ctf_correction"), f.size),
+                "ctf_std_measured": std.tolist(),
+                "ctf_correction": corr.tolist(),
                 "flags": [str(x) for x in b.get("flags", [])],
+                "ctf_raw_measured": np.where(np.isfinite(corr), meas - corr, meas).tolist(),
+                "max_abs_error_sigma": None if i is None else _finite(std[i]),
+                "worst_f_cy_per_px": None if i is None else float(f[i]),
             }
         )
         lim = BAR_COMPARE_MAX_CY_PER_PX
         why = None if err is not None else f"no group with >= {1 / lim:g} px per period (<= {lim} cy/px)"
+        sig = _sigma_or_why(details[-1]["max_abs_error_sigma"], err, "the bar measurement gave no CTF sigma")
         rows.append(
             CheckRow(
                 f"bars {b['id']} max |CTF error| (Coltman)", "bar_ctf", b["id"], err, 0.0, err, tol.bar_ctf,
-                f"≤{tol.bar_ctf}", _within(err, tol.bar_ctf), why,
+                f"≤{tol.bar_ctf}", _within(err, tol.bar_ctf), why, *sig,
             )
         )  # fmt: skip
     return [BarCheck.from_dict(d) for d in details], rows
@@ -492,6 +623,24 @@ def _mean_rer(edges: list[EdgeCheck], direction: str) -> float | None:
     return float(np.mean(v)) if v else None
 
 
+def _mean_rer_sigma(edges: list[EdgeCheck], direction: str) -> float | None:
+    """1-sigma of the mean RER of the edges along ``direction`` (independent noise per edge)."""
+    sig = [rer_sigma_bound(e.f_cy_per_px, e.mtf_sigma) for e in edges if e.direction == direction and e.rer_measured]
+    if not sig or any(v is None for v in sig):
+        return None
+    return float(np.sqrt(np.sum(np.square(sig))) / len(sig))
+
+
+def _niirs_sigma(r_act: float, r_alt: float, snr_m: float, edges: list[EdgeCheck], gsd_in: float,
+                 elevation_deg: float) -> tuple[float | None, str | None]:  # fmt: skip
+    s_act, s_alt = _mean_rer_sigma(edges, "ACT"), _mean_rer_sigma(edges, "ALT")
+    if s_act is None or s_alt is None:
+        return None, "an edge gave no MTF sigma, so the RER has none"
+    sig = niirs_sigma(r_act, r_alt, snr_m, rer_act_sigma=s_act, rer_alt_sigma=s_alt, gsd_in=gsd_in,
+                      elevation_deg=elevation_deg)  # fmt: skip
+    return sig, None
+
+
 def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictions, tol: Any):
     from satchain import units
     from satchain.quality import giqe5, giqe5_rer
@@ -499,7 +648,7 @@ def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictio
     r_act, r_alt = _mean_rer(edges, "ACT"), _mean_rer(edges, "ALT")
     snr_m = _finite(snr.get("snr"))
     rer_m = giqe5_rer(r_act, r_alt) if r_act and r_alt else None
-    niirs_m, why = None, None
+    niirs_m, why, sig = None, None, (None, "no error (the check is n/a)")
     if rer_m is None:
         why = "needs a measured RER from both an ACT and an ALT edge"
     elif snr_m is None or snr_m <= 0:
@@ -507,6 +656,7 @@ def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictio
     else:
         gsd_in = float(units.m_to_inches(pred.gsd_los_m))
         niirs_m = giqe5(gsd_in=gsd_in, rer=rer_m, snr=snr_m, elevation_deg=pred.elevation_deg)
+        sig = _niirs_sigma(r_act, r_alt, snr_m, edges, gsd_in, pred.elevation_deg)
     pr = _finite(pred.giqe5)
     err = None if niirs_m is None or pr is None else niirs_m - pr
     detail = {
@@ -518,9 +668,12 @@ def _niirs_check(edges: list[EdgeCheck], snr: Mapping[str, Any], pred: Predictio
         "snr_measured": snr_m,
         "pass": _within(err, tol.niirs),
         "reason": why,
+        "giqe5_measured_sigma": sig[0] if err is not None else None,
     }
+    sig = sig if err is not None else (None, "no error (the check is n/a)")
     row = CheckRow(
-        "NIIRS (GIQE 5)", "niirs", None, niirs_m, pr, err, tol.niirs, f"±{tol.niirs}", _within(err, tol.niirs), why
+        "NIIRS (GIQE 5)", "niirs", None, niirs_m, pr, err, tol.niirs, f"±{tol.niirs}", _within(err, tol.niirs), why,
+        *sig,
     )
     return NiirsCheck.from_dict(detail), row
 
@@ -543,8 +696,19 @@ def _skipped_rows(measured: dict, tol: Any) -> list[CheckRow]:
         label, kind, attr, text = _SKIPPED_CHECKS[sk["kind"]]
         t = getattr(tol, attr)
         reason = f"not measured: {sk.get('reason', 'no reason given')}"
-        rows.append(CheckRow(label.format(sk["id"]), kind, sk["id"], None, None, None, t, text.format(t), None, reason))
+        rows.append(
+            CheckRow(label.format(sk["id"]), kind, sk["id"], None, None, None, t, text.format(t), None, reason, None,
+                     "no error (the target was not measured)")
+        )  # fmt: skip
     return rows
+
+
+def _with_sigma_reason(row: CheckRow) -> CheckRow:
+    """Every row carries a sigma or says why not: a row left without either gets a generic reason."""
+    if row.sigma is not None or row.sigma_null_means:
+        return row
+    why = "no error (the check is n/a)" if row.error is None else f"no uncertainty model for {row.kind} checks yet"
+    return replace(row, sigma_null_means=why)
 
 
 def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Comparison:
@@ -580,4 +744,5 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
     rows += _skipped_rows(m, tolerances)
     niirs, row = _niirs_check(edges, snr, predicted, tolerances)
     rows.append(row)
+    rows = [_with_sigma_reason(r) for r in rows]
     return Comparison(tuple(rows), tuple(edges), tuple(stars), tuple(bars), tuple(wedges), niirs, snr)

@@ -2,7 +2,8 @@
 
 Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth record) -> simulation
 (the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
-of each measured figure and comparison -> report (``report.html``, ``results.json``, images, ``manifest.json``).
+of each measured figure and comparison -> report (``report.html``, ``results.json``, ``summary.csv``, images,
+``manifest.json``).
 Each stage is a function of the typed results before it (:mod:`satchain.results`); only the report writes files.
 The truth record travels typed (:class:`satchain.scene.truth.Truth`); the JSON dict is made only where a
 function still reads that form (measure_auto, the report figures) and where it is written.
@@ -222,6 +223,7 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
     from satchain.report import curves, html, run_figures
     from satchain.report._save import write_text
+    from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
@@ -231,6 +233,7 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     view = ReportInputs(result, out, results)
     curves.write_curves(run_figures.write_run_figures(view), out / "curves")
     write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
+    write_summary_csv(results, out / "summary.csv")
     html.write_report(view, out / "report.html")
     report("report", 1, 1)
     write_text(out / "config.toml", config_to_toml(result.config))

@@ -274,3 +274,148 @@ def test_tables_tolerate_na_and_the_overall_flag():
     del res["passed"]
     assert tables.verdict(res)["passed"] is True  # no check failed and one passed
     assert tables.key_figures(res, {})[2]["measured"] == "–"  # the only ALT edge is n/a
+
+
+# ---------------------------------------------------------------------------------------------- issue 18: 5 and 6
+
+
+def _all_flags(res) -> list[str]:
+    return [
+        str(f)
+        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
+        for x in res.get(key, [])
+        for f in x.get("flags") or []
+    ] + [str(w) for w in res.get("warnings") or []]
+
+
+def test_every_flag_of_results_json_is_in_the_report_beside_its_measurement(run):
+    from markupsafe import escape
+
+    flags = _all_flags(run.res)
+    assert flags, "the reduced run with its bar target carries flags"
+    for key, section in (("slanted_edges", "edges"), ("siemens_star", "star"), ("bar_targets", "bars")):
+        lo = run.html.index(f'<h2 id="{section}">')
+        hi = run.html.index("<h2 ", lo + 1)
+        for x in run.res.get(key, []):
+            for f in x.get("flags") or []:
+                assert str(escape(f)) in run.html[lo:hi], (x["id"], f)  # in the target's own section
+    for f in flags:
+        assert str(escape(f)) in run.html
+
+
+def test_summary_rows_show_sigma_z_and_every_row_has_sigma_or_a_reason(run):
+    rows = run.res["summary"]
+    for r in rows:
+        assert (r["sigma"] is not None) != bool(r["sigma_null_means"]), r
+        if r["sigma"] is not None and r["error"] is not None:
+            assert r["z"] == pytest.approx(r["error"] / r["sigma"])
+            assert r["tolerance_inside_noise"] is (r["tolerance_value"] < 2 * r["sigma"])
+    assert sum(r["sigma"] is not None for r in rows if r["kind"] != "wedge_resolution") >= len(rows) - 2
+    text = run.html
+    assert text.count('data-label="σ"') == len(rows) and text.count('data-label="z"') == len(rows)
+
+
+def test_summary_csv_matches_results_json(run):
+    lines = (run.out / "summary.csv").read_text().splitlines()
+    assert lines[0].startswith("# ") and "unit" in lines[0]
+    rows = list(csv.DictReader(lines[1:]))
+    assert len(rows) == len(run.res["summary"])
+    for c, r in zip(rows, run.res["summary"], strict=True):
+        assert (c["figure"], c["kind"], c["id"] or None) == (r["figure"], r["kind"], r["id"])
+        assert c["unit"] and c["error_unit"]
+        for k in ("measured", "predicted", "error", "sigma", "z", "tolerance_value"):
+            if r[k] is None:
+                assert c[k] == ""
+            else:
+                assert float(c[k]) == pytest.approx(r[k], rel=1e-9, abs=1e-12)
+        assert c["pass"] == {True: "true", False: "false", None: ""}[r["pass"]]
+    assert not list(run.out.glob(".summary.csv*")), "written atomically: no temporary left"
+
+
+def test_results_before_the_gallery_and_overlays_on_every_thumbnail(run):
+    html = run.html
+    gallery = html.index('<details class="zoom">')
+    for sid in ("summary", "edges", "star", "bars", "wedges", "niirs"):
+        assert html.index(f'<h2 id="{sid}">') < gallery
+    for caption in ("Slanted edge edge_act:", "Siemens star star:", "Bar target bars:", "Wedge wedge_h:"):
+        assert html.index(caption) < gallery  # the measured-vs-predicted figures come first
+    # every target thumbnail carries its region overlay
+    thumbs = re.findall(r'<span class="ovwrap">(.*?)</span>', html, flags=re.S)
+    assert len(thumbs) == html.count('<details class="zoom">')
+    by_alt = {re.search(r'alt="([^"]+)"', t).group(1): t for t in thumbs}
+    assert "Nyquist (r = " in by_alt["star, detector"] and "measured annulus" in by_alt["star, detector"]
+    assert "edge fit" in by_alt["edge_act, detector"] and "scan, wide end first" in by_alt["wedge_h, detector"]
+    bars = by_alt["bars, detector"]
+    gsd = run.res["gsd_m"]
+    measured = [round(gsd / f, 6) for f in run.res["bar_targets"][0]["f_cy_per_px"]]
+    labels = re.findall(r">([\d.]+) m</text><text[^>]*>([a-z ]+)<", bars)
+    assert [float(p) for p, _ in labels] == [4.0, 3.0, 2.0, 1.5]  # the groups of BARS_TOML, each labelled
+    for p, word in labels:
+        p = float(p)
+        if round(p, 6) not in measured:
+            assert word == "not measured"
+        else:
+            assert word == ("compared" if gsd / p <= BAR_COMPARE_MAX_CY_PER_PX else "not compared")
+
+
+def test_page_weight_and_micrometres(run):
+    assert len(run.html.encode()) <= 2.5e6  # issue 18: at most 2.5 MB (the default run's is measured in the PR)
+    text = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", run.html)
+    assert not re.search(r"\d\s?um\b|\(um\)|\bum\^|\bum\$", text), "micrometres are µm"
+    assert "µm" in text
+
+
+def test_figures_are_palette_pngs(run):
+    """The report's figures are quantised to a palette (a third of the RGBA weight)."""
+    for png in _images(run.html)[:10]:
+        with Image.open(io.BytesIO(png)) as im:
+            assert im.mode in ("P", "L"), im.mode
+
+
+def test_bars_show_raw_and_corrected_ctf_with_the_correction_stated(run):
+    (b,) = run.res["bar_targets"]
+    raw, ctf, corr = (np.array(b[k], float) for k in ("ctf_raw_measured", "ctf_measured", "ctf_correction"))
+    ok = np.isfinite(corr)
+    np.testing.assert_allclose(raw[ok] + corr[ok], ctf[ok], atol=1e-12)
+    lo = run.html.index('<h2 id="bars">')
+    section = run.html[lo : run.html.index("<h2 ", lo + 1)]
+    assert "square-wave correction" in section and "CTF raw" in section and "CTF corrected" in section
+    if ok.any() and np.any(corr[ok] != 0):
+        assert "correction ranges from" in section
+    rows = _read_csv(run.out / "curves" / "bars_ctf.csv")
+    assert {"ctf_raw_measured", "ctf_measured", "ctf_correction_square_wave", "ctf_std_measured"} <= set(rows[0])
+
+
+def test_printed_differences_keep_the_sign_of_the_error(run):
+    """Every signed difference in the summary table has the sign of results.json's error (NIIRS -0.0039 was
+    printed "+0.00")."""
+    checked = 0
+    for r in run.res["summary"]:
+        if r["kind"] == "niirs":
+            pattern = r'data-label="">NIIRS \(GIQE 5\)</td>.*?data-label="difference">([^<]*)<'
+        elif r["kind"] == "edge_mtf_at_nyquist":
+            pattern = rf'slanted edge {r["id"]}(?: · <a [^>]*>[^<]*</a>)?</td>.*?data-label="difference">([^<]*)<'
+        else:
+            continue
+        text = re.search(pattern, run.html, flags=re.S).group(1)
+        if r["error"]:
+            assert text[0] == ("-" if r["error"] < 0 else "+") and float(text.split()[0]) != 0, (r, text)
+            checked += 1
+    assert checked >= 3
+
+
+def test_summary_table_marks_a_tolerance_inside_the_noise():
+    from satchain.report import tables
+
+    res = {
+        "tolerances": {"edge_mtf_at_nyquist": 0.004},
+        "slanted_edges": [{"id": "e", "direction": "ACT", "mtf_at_nyquist_measured": 0.2069,
+                           "mtf_at_nyquist_predicted": 0.1983, "pass": False, "flags": ["low_cnr"]}],
+        "summary": [{"kind": "edge_mtf_at_nyquist", "id": "e", "error": 0.0086, "sigma": 0.0038, "z": 2.26,
+                     "tolerance_value": 0.004, "tolerance_inside_noise": True, "pass": False}],
+    }  # fmt: skip
+    (row,) = tables.summary_rows(res)
+    assert row["noise"] is True and row["sigma"] == "0.0038" and row["z"] == "+2.3" and row["n_flags"] == 1
+    res["summary"][0].update(sigma=None, z=None, tolerance_inside_noise=None, sigma_null_means="no MTF sigma")
+    (row,) = tables.summary_rows(res)
+    assert row["noise"] is False and row["sigma"] == "–" and row["sigma_note"] == "no MTF sigma"

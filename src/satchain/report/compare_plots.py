@@ -226,9 +226,18 @@ def plot_star_comparison(st: dict, path: Path, *, tol: float | None) -> None:
         _save(fig, path)
 
 
+def _per_group(values, n: int) -> np.ndarray:
+    """A per-group list (None = NaN) as floats; all-NaN when absent or of the wrong length."""
+    if not values or len(values) != n:
+        return np.full(n, np.nan)
+    return np.array([np.nan if v is None else v for v in values], float)
+
+
 def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
-    """Bar-target CTF: compared groups (filled), groups beyond the cut-off (hollow, not compared), the cut-off,
-    Coltman's prediction and the paper's method; residuals of the compared groups with the band."""
+    """Bar-target CTF: compared groups (filled), groups beyond the cut-off (hollow, not compared), each with
+    its 1-sigma (``ctf_std_measured``) as an error bar, the raw modulation before the square-wave correction
+    (crosses), the cut-off, Coltman's prediction and the paper's method; residuals of the compared groups with
+    their error bars and the band."""
     with matplotlib.rc_context(rc_for(8.5)):
         fig, (ax,), (r,) = _figure(8.5, 6.4)
         f = np.asarray(b["f_cy_per_px"], float)
@@ -241,9 +250,15 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         cmp_ = f <= lim
         ax.plot(f, col, "-", color=PRED, lw=1.4, label="predicted CTF (Coltman)")
         ax.plot(f, pap, ":", color="tab:blue", lw=1.4, label="predicted, the paper's method")
-        ax.plot(f[cmp_], meas[cmp_], "o", color=MEAS, ms=7, label="measured, compared")
+        std = _per_group(b.get("ctf_std_measured"), f.size)[order]
+        raw = _per_group(b.get("ctf_raw_measured"), f.size)[order]
+        if np.isfinite(raw).any() and not np.allclose(raw, meas, equal_nan=True):
+            ax.plot(f, raw, "x", color="0.35", ms=7, mew=1.5, label="measured raw (before the model correction)")
+        ax.errorbar(f[cmp_], meas[cmp_], yerr=np.nan_to_num(std[cmp_]), fmt="o", color=MEAS, ms=7, capsize=3,
+                    label="measured, corrected, compared (±1σ)")  # fmt: skip
         if (~cmp_).any():
-            ax.plot(f[~cmp_], meas[~cmp_], "o", color="gray", mfc="none", ms=7, label="measured, not compared")
+            ax.errorbar(f[~cmp_], meas[~cmp_], yerr=np.nan_to_num(std[~cmp_]), fmt="o", color="gray", mfc="none",
+                        ms=7, capsize=3, label="measured, not compared")  # fmt: skip
         for a in (ax, r):
             a.axvline(lim, color="tab:orange", ls="--", lw=1.2)
             a.axvspan(lim, max(0.55, float(f.max()) * 1.05), color="0.9", zorder=0)
@@ -262,9 +277,10 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         ax.set_ylabel("CTF (bar modulation)")
         ax.set_title(f"Bar target {b['id']} ({b.get('direction', '')}): CTF per bar group")
         ax.legend(loc="upper right")
-        r.plot(f[cmp_], (meas - col)[cmp_], "o", color=MEAS, ms=6)
+        r.errorbar(f[cmp_], (meas - col)[cmp_], yerr=np.nan_to_num(std[cmp_]), fmt="o", color=MEAS, ms=6, capsize=3)
         if (~cmp_).any():
-            r.plot(f[~cmp_], (meas - col)[~cmp_], "o", color="gray", mfc="none", ms=6)
+            r.errorbar(f[~cmp_], (meas - col)[~cmp_], yerr=np.nan_to_num(std[~cmp_]), fmt="o", color="gray",
+                       mfc="none", ms=6, capsize=3)  # fmt: skip
         r.fill_between([0, lim], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g}")
         r.axhline(0, color="gray", lw=0.8)
         r.set_xlabel("bar frequency = 1 / period (cy/px)")

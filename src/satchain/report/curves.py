@@ -271,7 +271,7 @@ def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
 
 
 def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
-    rows = [[] for _ in range(10)]
+    rows = [[] for _ in range(11)]
     for br in bars:
         f = list(br.get("f_cy_per_px", []))
         lim = br.get("compared_up_to_cy_per_px", 0.2)
@@ -280,6 +280,7 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             _rep(br["id"], n),
             _rep(br.get("direction"), n),
             f,
+            br.get("ctf_raw_measured") or _rep(None, n),
             br.get("ctf_measured", _rep(None, n)),
             br.get("ctf_std_measured") or _rep(None, n),
             br.get("ctf_correction") or _rep(None, n),
@@ -295,6 +296,7 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             "bars_id",
             "direction",
             "f_cy_per_px",
+            "ctf_raw_measured",
             "ctf_measured",
             "ctf_std_measured",
             "ctf_correction_square_wave",
@@ -304,7 +306,9 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             "compared",
         ],
         rows,
-        "bar targets: CTF per bar group; compared = whether the group enters the pass/fail check",
+        "bar targets: CTF per bar group; ctf_raw_measured = the group's fitted modulation, ctf_measured = raw + "
+        "ctf_correction_square_wave (the model-corrected square-wave CTF that is compared); compared = whether "
+        "the group enters the pass/fail check",
     )
 
 

@@ -9,6 +9,7 @@ so the page needs nothing outside itself. The report reads its inputs only throu
 from __future__ import annotations
 
 import base64
+import re
 from pathlib import Path
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -25,13 +26,13 @@ __all__ = ["SECTIONS", "table1_rows", "write_report"]
 #: The report's sections (anchor id, title), in order; the table of contents lists them.
 SECTIONS = (
     ("summary", "Measured vs predicted: summary"),
-    ("paper", "The reference paper and where the prediction comes from"),
-    ("image", "The simulated image and every target"),
     ("edges", "Slanted edges: ESF, LSF and MTF"),
     ("star", "Siemens star: MTF per direction"),
     ("bars", "Bar targets: CTF"),
     ("wedges", "Hyperbolic wedges: resolution (Figure 4)"),
     ("niirs", "SNR and NIIRS"),
+    ("image", "The simulated image and every target"),
+    ("paper", "The reference paper and where the prediction comes from"),
     ("camera", "Camera, geometry and radiometry (Figure 2)"),
     ("budget", "MTF budget and Table 1 (Figure 3)"),
     ("scene", "Synthetic ground truth (Figure 1)"),
@@ -67,6 +68,14 @@ def table1_rows(ctx) -> tuple[list[dict], bool]:
     return rows, is_paper
 
 
+def micro_sign(text) -> str:
+    """Write micrometres as "µm" (system descriptions are free text and may say "5.88 um")."""
+    return _UM.sub(r"\1µm", str(text or ""))
+
+
+_UM = re.compile(r"(\d\s?)um\b")
+
+
 def _data_uri(png: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
@@ -86,12 +95,13 @@ def _figure_html(path: Path, caption: str, *, cls: str = "") -> Markup:
 
 def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
     """A thumbnail ``display_w`` CSS px wide (at most) that opens, on click, as an overlay at native
-    resolution (integer-upscaled when small, pixels kept square)."""
+    resolution (integer-upscaled when small, pixels kept square); the target's region overlay on top."""
     k = max(1, min(16, 900 // max(panel["width"], 1)))
     return Markup(
-        '<details class="zoom"><summary title="click to zoom; click again to close">'
-        '<img class="thumb" src="{}" alt="{}" width="{}" height="{}" style="--tw: {:.0f}px; --zw: {}px">'
-        '</summary><p class="zoomnote">{} — {} × {} px of {} cm, shown ×{}; click the image to close</p></details>'
+        '<details class="zoom"><summary title="click to zoom; click again to close"><span class="ovwrap">'
+        '<img class="thumb" src="{}" alt="{}" width="{}" height="{}" style="--tw: {:.0f}px; --zw: {}px">{}'
+        '</span></summary><p class="zoomnote">{} — {} × {} px of {} cm, shown ×{}; click the image to close</p>'
+        "</details>"
     ).format(
         Markup(_data_uri(panel["png"])),
         alt,
@@ -99,12 +109,85 @@ def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
         panel["height"],
         display_w,
         panel["width"] * k,
+        Markup(panel.get("overlay", "")),
         alt,
         panel["width"],
         panel["height"],
         f"{panel['pixel_m'] * 100:.3g}",
         k,
     )
+
+
+def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
+    """The gallery's targets with their display width (CSS px) and each panel's region overlay."""
+    from satchain.report.overlays import overlay_svg
+
+    items = {it["id"]: it for it in ctx.truth["items"]}
+    meas = ctx.measured or {}
+    by_id = {
+        m["id"]: m
+        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
+        for m in meas.get(key, [])
+    }
+    origin = tuple(meas.get("origin_m") or (0.0, 0.0))
+    for t in thumbs:
+        w, h = t["box_m"][2] - t["box_m"][0], t["box_m"][3] - t["box_m"][1]
+        t["wide"] = w > 2.5 * h
+        t["tw"] = min(1100 if t["wide"] else 360, 420 * w / h)
+        svg = overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.system.gsd_act_m),
+                          origin_m=origin, compared_up_to_cy_per_px=lim, display_px=t["tw"])  # fmt: skip
+        for p in t["panels"]:
+            p["overlay"] = svg
+    return thumbs
+
+
+def _bar_rows(b: dict) -> list[dict]:
+    """A bar target's groups: raw and corrected CTF, correction, 1-sigma, Coltman, difference, z, flags."""
+    f = b.get("f_cy_per_px") or []
+    lim = b.get("compared_up_to_cy_per_px") or 0.4
+    n = len(f)
+
+    def col(key):
+        v = b.get(key) or []
+        return v if len(v) == n else [None] * n
+
+    raw, meas, corr, std, pred = (col(k) for k in ("ctf_raw_measured", "ctf_measured", "ctf_correction",
+                                                     "ctf_std_measured", "ctf_coltman_predicted"))  # fmt: skip
+    rows = []
+    for j in range(n):
+        d = tables._diff(meas[j], pred[j])
+        s = tables._num(std[j])
+        rows.append({
+            "f": tables.fmt(f[j], 3), "period": tables.fmt(1 / f[j] if f[j] else None, 2),
+            "raw": tables.fmt(raw[j]), "corr": tables.fmt(corr[j], 3, signed=True), "ctf": tables.fmt(meas[j]),
+            "std": tables.fmt(s, 3), "pred": tables.fmt(pred[j]), "diff": tables.fmt(d, 3, signed=True),
+            "z": tables.fmt(d / s, 1, signed=True) if d is not None and s else "–",
+            "compared": f[j] <= lim + 1e-12,
+            "flags": [x for x in b.get("flags") or [] if x.startswith(f"group {j}:")],
+        })  # fmt: skip
+    return rows
+
+
+def _correction_range(b: dict) -> tuple[float, float] | None:
+    c = [v for v in (tables._num(x) for x in b.get("ctf_correction") or []) if v is not None and v != 0]
+    return (min(c), max(c)) if c else None
+
+
+def _all_flags(ctx, res: dict) -> dict:
+    """The flags results.json holds per target, plus the measurement's own flags of targets whose
+    results.json entry carries none (the wedges')."""
+    out = tables.measurement_flags(res)
+    for m in (ctx.measured or {}).get("hyperbolic_wedge", []):
+        if not out.get(m.get("id")):
+            out[m.get("id")] = [str(f) for f in m.get("flags") or []]
+    return out
+
+
+def _bar_limit(res: dict) -> float:
+    from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX
+
+    bars = res.get("bar_targets") or []
+    return float(bars[0].get("compared_up_to_cy_per_px") or BAR_COMPARE_MAX_CY_PER_PX) if bars else 0.4
 
 
 def _fit_rows(system) -> list[dict]:
@@ -135,6 +218,8 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
     env = Environment(
         loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"])
     )
+    env.tests["group_flag"] = lambda f: str(f).startswith("group ")
+    env.filters["micro"] = micro_sign
     t1, is_paper = table1_rows(ctx)
     if curve_files is None:
         curve_files = sorted(p.name for p in (out / "curves").glob("*.csv"))
@@ -160,7 +245,11 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
         results=res,
         as_built=res.get("as_built_differences") or [],
         tol=res.get("tolerances") or {},
-        thumbs=target_thumbnails(ctx),
+        thumbs=_thumbs_with_overlays(ctx, target_thumbnails(ctx), _bar_limit(res)),
+        flags=_all_flags(ctx, res),
+        bar_rows=_bar_rows,
+        correction_range=_correction_range,
+        sigma_text=tables.sigma_text,
         table1=t1,
         table1_paper=is_paper,
         curve_files=curve_files,

@@ -18,7 +18,7 @@ __all__ = ["plot_spectral_radiance"]
 def plot_spectral_radiance(
     result: RadiometryResult, path: str | Path, *, wavelength_range_m: tuple[float, float] = (2.8e-7, 2.5e-6)
 ) -> None:
-    """Spectral radiance (W m^-2 sr^-1 um^-1) vs wavelength (um): the surface-leaving radiance and the
+    """Spectral radiance (W m^-2 sr^-1 µm^-1) vs wavelength (µm): the surface-leaving radiance and the
     radiance at the top of the atmosphere, with the sensor band shaded -- the equivalent of the reference
     paper's Figure 2 (albedo 0.2, 23 % atmospheric absorption). Written atomically (PNG, SVG or PDF by
     the suffix of ``path``).
@@ -43,11 +43,11 @@ def plot_spectral_radiance(
         label=f"top of atmosphere (T_up {result.transmission_up:.2f})",
     )
     lo, hi = (b * 1e6 for b in result.band_m)
-    ax.axvspan(lo, hi, color="0.85", zorder=0, label=f"band {lo:.2f}-{hi:.2f} um")
+    ax.axvspan(lo, hi, color="0.85", zorder=0, label=f"band {lo:.2f}-{hi:.2f} µm")
     ax.set_xlim(float(np.min(x_um)), float(np.max(x_um)))
     ax.set_ylim(bottom=0)
-    ax.set_xlabel("wavelength (um)")
-    ax.set_ylabel("spectral radiance (W m$^{-2}$ sr$^{-1}$ um$^{-1}$)")
+    ax.set_xlabel("wavelength (µm)")
+    ax.set_ylabel("spectral radiance (W m$^{-2}$ sr$^{-1}$ µm$^{-1}$)")
     ax.set_title(
         f"Spectral radiance, sun zenith {result.sun_zenith_deg:g} deg, {result.solar_spectrum}\n"
         f"in band: surface {result.radiance_surface_band_w_per_m2_sr:.1f}, "

@@ -19,8 +19,10 @@ __all__ = [
     "derived_rows",
     "fmt",
     "key_figures",
+    "measurement_flags",
     "paper_rows",
     "radiometry_rows",
+    "sigma_text",
     "skipped_groups",
     "summary_rows",
     "verdict",
@@ -36,7 +38,9 @@ _DIR_WORDS = {"ACT": "across-track", "ALT": "along-track", "D45": "diagonal 45°
 
 
 def fmt(v, digits: int = 3, *, unit: str = "", signed: bool = False) -> str:
-    """A number with fixed decimals (no exponent for ordinary magnitudes), or an en dash when missing."""
+    """A number with fixed decimals (no exponent for ordinary magnitudes), or an en dash when missing. A
+    nonzero value that would round to zero gets the decimals of its first significant digit, so a signed
+    error keeps its sign ("-0.004", never "+0.000" or "-0.000")."""
     if v is None or isinstance(v, str):
         return "–" if v is None else v
     try:
@@ -45,8 +49,10 @@ def fmt(v, digits: int = 3, *, unit: str = "", signed: bool = False) -> str:
         return str(v)
     if not math.isfinite(x):
         return "–"
-    if round(x, digits) == 0:
-        x = 0.0  # no "-0.00"
+    if x == 0:
+        x, signed = 0.0, False  # no "-0.00", no "+0.00"
+    elif round(x, digits) == 0:  # keep the sign and one significant digit: -0.0039 -> "-0.004", not "+0.00"
+        digits = max(digits, -math.floor(math.log10(abs(x))))
     s = f"{x:+.{digits}f}" if signed else f"{x:.{digits}f}"
     return f"{s} {unit}".rstrip()
 
@@ -132,7 +138,53 @@ def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=T
         "difference": fmt(diff, digits, unit=unit, signed=signed),
         "tolerance": tol,
         "status": _status(p),
+        "sigma": "–",
+        "z": "–",
+        "noise": False,
+        "sigma_note": "",
+        "anchor": "",
+        "n_flags": 0,
     }
+
+
+#: The report section that shows each summary-row kind (the flags sit there, beside the measurement).
+_ANCHORS = {
+    "edge_mtf_at_nyquist": "edges",
+    "edge_angle": "edges",
+    "star_mtf": "star",
+    "bar_ctf": "bars",
+    "wedge_resolution": "wedges",
+    "niirs": "niirs",
+}
+
+
+def sigma_text(s: dict) -> str:
+    """A summary row's 1-sigma in the unit of its error (the wedge's error is relative: in %)."""
+    sig = _num(s.get("sigma"))
+    if sig is None:
+        return "–"
+    if s.get("kind") == "wedge_resolution":
+        return fmt(100 * sig, 1, unit="%")
+    if s.get("kind") == "edge_angle":
+        return fmt(sig, 4, unit="°")
+    return fmt(sig, 2 if s.get("kind") == "niirs" else 4)
+
+
+def _with_sigma(row: dict, s: dict | None, flags: dict) -> dict:
+    """``row`` with the sigma, z and "tolerance inside noise" of its results.json summary row ``s``, the
+    section that shows it and how many flags its measurement carries."""
+    if not s:
+        return row
+    z = _num(s.get("z"))
+    row.update(
+        sigma=sigma_text(s),
+        z=fmt(z, 1, signed=True) if z is not None else "–",
+        noise=s.get("tolerance_inside_noise") is True,
+        sigma_note="" if _num(s.get("sigma")) is not None else str(s.get("sigma_null_means") or ""),
+        anchor=_ANCHORS.get(str(s.get("kind")), ""),
+        n_flags=len(flags.get(s.get("id"), ())) if s.get("kind") != "edge_angle" else 0,
+    )
+    return row
 
 
 def _mtf_rows(res: dict, tol: dict) -> list[dict]:
@@ -151,6 +203,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
                 f"± {fmt(tol.get('edge_mtf_at_nyquist'), 3)}",
                 e.get("pass"),
             )
+            | {"_key": ("edge_mtf_at_nyquist", e.get("id"))}
         )
     for st in res.get("siemens_star", []):
         rows.append(
@@ -164,6 +217,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
                 st.get("pass"),
                 signed=False,
             )
+            | {"_key": ("star_mtf", st.get("id"))}
         )
     for b in res.get("bar_targets", []):
         lim = b.get("compared_up_to_cy_per_px")
@@ -179,6 +233,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
                 b.get("pass"),
                 signed=False,
             )
+            | {"_key": ("bar_ctf", b.get("id"))}
         )
     return rows
 
@@ -204,6 +259,7 @@ def _resolution_rows(res: dict, tol: dict) -> list[dict]:
                 1,
                 "cm",
             )
+            | {"_key": ("wedge_resolution", w.get("id"))}
         )
     n = res.get("niirs") or {}
     if n:
@@ -220,14 +276,30 @@ def _resolution_rows(res: dict, tol: dict) -> list[dict]:
                 n.get("pass"),
                 2,
             )
+            | {"_key": ("niirs", None)}
         )
     return rows
 
 
 def summary_rows(res: dict) -> list[dict]:
-    """Measured vs predicted in words: one row per check, a signed difference, fixed precision."""
+    """Measured vs predicted in words: one row per check, a signed difference, fixed precision, the error's
+    1-sigma and z = error / sigma, "tolerance inside noise" and the number of flags of the measurement."""
     tol = res.get("tolerances") or {}
-    return _mtf_rows(res, tol) + _angle_rows(res) + _resolution_rows(res, tol) + _not_measured_rows(res)
+    rows = _mtf_rows(res, tol) + _angle_rows(res) + _resolution_rows(res, tol)
+    summary = {(s.get("kind"), s.get("id")): s for s in res.get("summary", [])}
+    flags = measurement_flags(res)
+    return [_with_sigma(r, summary.get(r.pop("_key")), flags) for r in rows] + _not_measured_rows(res)
+
+
+def measurement_flags(res: dict) -> dict[str | None, list[str]]:
+    """Every flag results.json holds, by target id: the edges', star's, bars' and wedges' ``flags`` (None: the
+    run's ``warnings``)."""
+    out: dict[str | None, list[str]] = {}
+    for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge"):
+        for x in res.get(key, []):
+            out.setdefault(x.get("id"), []).extend(str(f) for f in x.get("flags") or [])
+    out[None] = [str(w) for w in res.get("warnings") or []]
+    return out
 
 
 #: Summary-row kinds in words: (quantity, target).
@@ -247,7 +319,8 @@ def _angle_rows(res: dict) -> list[dict]:
             continue
         m, p = _num(r.get("measured")), _num(r.get("predicted"))
         tol = f"± {fmt(r.get('tolerance_value'), 1)} °"
-        rows.append(_row("edge angle", f"slanted edge {r.get('id')}", m, p, _diff(m, p), tol, r.get("pass"), 3, "°"))
+        row = _row("edge angle", f"slanted edge {r.get('id')}", m, p, _diff(m, p), tol, r.get("pass"), 3, "°")
+        rows.append(row | {"_key": ("edge_angle", r.get("id"))})
     return rows
 
 

@@ -1,0 +1,174 @@
+"""Region overlays drawn over the report's target thumbnails, as SVG in scene metres.
+
+A thumbnail shows the box ``(x0, y0, x1, y1)`` (m) of its target; the overlay is an ``<svg>`` with that box as
+its ``viewBox``, laid exactly over the image, so one overlay serves the ground-truth, focal-plane and detector
+panels and scales with the click-to-zoom. What is drawn, per kind:
+
+* slanted edge: the measured region and the fitted edge line (measured angle, through the truth's edge point);
+* Siemens star: the measured annulus (inner and outer radius) and the Nyquist radius ``r = cycles GSD / pi``
+  (the local period ``2 pi r / cycles`` is 2 GSD there);
+* bar target: each group's box labelled with its period and whether it is compared (``f <= cut-off``),
+  measured but not compared, or not measured;
+* hyperbolic wedge: the scan line (the middle of the stripes, from the wide end) and the line width where the
+  measured contrast crossed the threshold.
+"""
+
+from __future__ import annotations
+
+import math
+from html import escape
+
+__all__ = ["overlay_svg"]
+
+_LINE = 'vector-effect="non-scaling-stroke" fill="none"'
+_COMPARED, _NOT_COMPARED, _NOT_MEASURED = "#ff8c00", "#3fa0ff", "#c0c0c0"
+#: Width of an average character in ems (sans-serif), to fit a label into a box.
+_CHAR_EM = 0.6
+
+
+def _text(x: float, y: float, s: str, size: float, colour: str, anchor: str = "start", rotate: bool = False) -> str:
+    rot = f' transform="rotate(90 {x:.3f} {y:.3f})"' if rotate else ""
+    return (
+        f'<text x="{x:.3f}" y="{y:.3f}" font-size="{size:.3f}" fill="{colour}" text-anchor="{anchor}" '
+        f'stroke="#000" stroke-width="{size / 8:.3f}" stroke-opacity="0.6" paint-order="stroke"{rot}>{escape(s)}</text>'
+    )
+
+
+def _rect(b, colour: str, dash: str = "") -> str:
+    x0, y0, x1, y1 = b
+    d = f' stroke-dasharray="{dash}"' if dash else ""
+    return (
+        f'<rect x="{x0:.3f}" y="{y0:.3f}" width="{x1 - x0:.3f}" height="{y1 - y0:.3f}" stroke="{colour}" '
+        f'stroke-width="1.5" {_LINE}{d}/>'
+    )
+
+
+def _roi_m(m: dict, gsd: float, origin) -> tuple[float, float, float, float] | None:
+    r = m.get("roi_px")
+    if not r:
+        return None
+    ox, oy = origin
+    return ox + r[0] * gsd, oy + r[1] * gsd, ox + r[2] * gsd, oy + r[3] * gsd
+
+
+def _edge(it: dict, m: dict, gsd: float, origin, size: float) -> list[str]:
+    out = []
+    roi = _roi_m(m, gsd, origin)
+    if roi:
+        out.append(_rect(roi, "#ff4040"))
+    a = m.get("angle_deg")
+    if a is None or "edge_point_m" not in it:
+        return out
+    t = math.radians(float(a))
+    d = (math.sin(t), math.cos(t)) if str(it.get("measures")).lower() == "act" else (math.cos(t), math.sin(t))
+    cx, cy = it["edge_point_m"]
+    half = 0.5 * (roi[3] - roi[1] if roi else it.get("size_m", 10.0))
+    out.append(
+        f'<line x1="{cx - half * d[0]:.3f}" y1="{cy - half * d[1]:.3f}" x2="{cx + half * d[0]:.3f}" '
+        f'y2="{cy + half * d[1]:.3f}" stroke="#ffe000" stroke-width="1.5" {_LINE}/>'
+    )
+    x0 = roi[0] if roi else it["bbox_m"][0]
+    out.append(_text(x0 + 0.5 * size, (roi[1] if roi else it["bbox_m"][1]) + 1.3 * size,
+                     f"edge fit {float(a):.3f}°", size, "#ffe000"))  # fmt: skip
+    return out
+
+
+def _circle(cx: float, cy: float, r: float, colour: str, dash: str = "") -> str:
+    d = f' stroke-dasharray="{dash}"' if dash else ""
+    return f'<circle cx="{cx:.3f}" cy="{cy:.3f}" r="{r:.3f}" stroke="{colour}" stroke-width="1.5" {_LINE}{d}/>'
+
+
+def _star(it: dict, m: dict, gsd: float, size: float) -> list[str]:
+    cx, cy = it["center_m"]
+    out = []
+    radii = m.get("radius_px")
+    if radii:
+        for r in radii:
+            out.append(_circle(cx, cy, float(r) * gsd, "#40c0ff"))
+        out.append(_text(cx, cy - float(radii[1]) * gsd + 1.3 * size, "measured annulus", size, "#40c0ff", "middle"))
+    r_nyq = float(it["cycles"]) * gsd / math.pi
+    out.append(_circle(cx, cy, r_nyq, "#ff4040", "4 3"))
+    out.append(_text(cx + r_nyq + 0.3 * size, cy, f"Nyquist (r = {r_nyq:.1f} m)", size, "#ff4040"))
+    return out
+
+
+def _bars(it: dict, m: dict, gsd: float, lim: float, size: float) -> list[str]:
+    measured = {round(float(g.get("period_m", 0)), 9) for g in (m.get("groups") or [])}
+    out = []
+    for g in it.get("groups", []):
+        period = float(g["period_m"])
+        f = gsd / period
+        if round(period, 9) not in measured:
+            colour, word = _NOT_MEASURED, "not measured"
+        elif f <= lim + 1e-12:
+            colour, word = _COMPARED, "compared"
+        else:
+            colour, word = _NOT_COMPARED, "not compared"
+        x0, y0, x1, y1 = g["bbox_m"]
+        out.append(_rect(g["bbox_m"], colour, "" if word == "compared" else "3 2"))
+        p_text = f"{period * 100:.0f} cm" if period < 1 else f"{period:g} m"
+        p_size = min(size, (x1 - x0) / (_CHAR_EM * len(p_text)))  # shrunk to fit the group's width
+        out.append(_text(0.5 * (x0 + x1), y0 + 1.1 * p_size, p_text, p_size, colour, "middle"))
+        w_size = min(0.8 * size, (x1 - x0) / (_CHAR_EM * len(word)))
+        out.append(_text(0.5 * (x0 + x1), y1 - 0.4 * w_size, word, w_size, colour, "middle"))
+    return out
+
+
+def _wedge(it: dict, m: dict, size: float) -> list[str]:
+    """The scan along s at the middle of the stripes, and the measured resolution as a cross line."""
+    ox, oy = it["local_origin_m"]
+    w0, x0, n, length = (float(it[k]) for k in ("line_width_start_m", "x0_m", "n_stripes", "length_m"))
+    orient = str(it.get("orientation")).lower()
+    if orient not in ("horizontal", "vertical"):
+        return []
+
+    def xy(s: float, t: float) -> tuple[float, float]:
+        return (ox + s, oy + t) if orient == "horizontal" else (ox + t, oy + s)
+
+    pts = []
+    for k in range(41):
+        s = length * k / 40
+        w = w0 * x0 / (x0 + s)
+        pts.append(xy(s, (n - 0.5) * w))
+    out = [
+        '<polyline points="{}" stroke="#40ff40" stroke-width="1.5" {}/>'.format(
+            " ".join(f"{x:.3f},{y:.3f}" for x, y in pts), _LINE
+        )
+    ]
+    rot = orient == "vertical"
+    out.append(_text(*xy(0.6 * length, 0.55 * (2 * n) * w0), "scan, wide end first", size, "#40ff40", rotate=rot))
+    res = m.get("resolution_m")
+    if res:
+        s = w0 * x0 / float(res) - x0
+        w = float(res)
+        (ax, ay), (bx, by) = xy(s, 0.0), xy(s, (2 * n) * w + 0.5 * size)
+        out.append(f'<line x1="{ax:.3f}" y1="{ay:.3f}" x2="{bx:.3f}" y2="{by:.3f}" stroke="#ff4040" '
+                   f'stroke-width="2" {_LINE}/>')  # fmt: skip
+        label = f"{100 * float(m.get('threshold') or 0.15):.0f} % at {res * 100:.1f} cm"
+        out.append(_text(*xy(s, (2 * n) * w + 1.6 * size), label, size, "#ff4040", rotate=rot))
+    return out
+
+
+def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_m=(0.0, 0.0),
+                compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0) -> str:  # fmt: skip
+    """The overlay of truth item ``it`` (with its measurement ``measured``, or None) over a thumbnail of
+    ``box_m``, as an ``<svg>`` element string ('' for kinds without one). Text is about 12 CSS px when the
+    thumbnail is shown ``display_px`` wide."""
+    x0, y0, x1, y1 = (float(v) for v in box_m)
+    size = 12.0 * (x1 - x0) / max(display_px, 1.0)
+    m = measured or {}
+    kind = it.get("kind")
+    if kind == "slanted_edge":
+        body = _edge(it, m, gsd_m, origin_m, size)
+    elif kind == "siemens_star":
+        body = _star(it, m, gsd_m, size)
+    elif kind == "bar_target":
+        body = _bars(it, m, gsd_m, compared_up_to_cy_per_px, size)
+    elif kind == "hyperbolic_wedge":
+        body = _wedge(it, m, size)
+    else:
+        return ""
+    return (
+        f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
+        f'xmlns="http://www.w3.org/2000/svg" aria-hidden="true">{"".join(body)}</svg>'
+    )
