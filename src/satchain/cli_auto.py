@@ -109,8 +109,9 @@ def auto(
 
     check_dir_outputs(out, ["auto.json", "*.png"], {"IMAGE": image, "--truth": truth})
     data, p, meta = load_image(image, pixel_m)
+    truth_dict = read_truth(truth)  # read before --origin-m is parsed (the order of the checks is kept)
     origin = parse_origin(origin_m, meta)
-    res = measure_auto(data, read_truth(truth), pixel_m=p, origin_m=origin, wedge_threshold=threshold)
+    res = measure_auto(data, truth_dict, pixel_m=p, origin_m=origin, wedge_threshold=threshold)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
     emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))
     if not res.items:  # a run that measured nothing is not a success (exit status 2, the reasons on stderr)

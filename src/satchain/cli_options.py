@@ -62,9 +62,7 @@ TruthOpt = Annotated[Path | None, typer.Option("--truth", help=_TRUTH_HELP)]
 OriginOpt = Annotated[
     str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image's top-left corner; default: metadata")
 ]
-ThresholdOpt = Annotated[
-    float, typer.Option("--threshold", help="wedge contrast where the lines stop resolving")
-]
+ThresholdOpt = Annotated[float, typer.Option("--threshold", help="wedge contrast where the lines stop resolving")]
 FitDegreeOpt = Annotated[
     str,
     typer.Option(
