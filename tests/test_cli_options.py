@@ -147,3 +147,14 @@ def test_a_bad_origin_gets_the_same_error_from_wedge_and_auto(inputs):
     wedge = _error(["wedge", "{img}", "--truth", "{truth}", "--origin-m", "5"], inputs)
     auto = _error(["auto", "{img}", "--truth", "{truth}", "--origin-m", "5"], inputs)
     assert wedge == auto == "error: --origin-m = '5': must be 2 comma-separated numbers"
+
+
+def test_the_old_module_still_offers_its_names():
+    # code written before the split (issue 18) imports these from satchain.cli_measure
+    import satchain.cli_measure as old
+    from satchain import cli_options, cli_output
+
+    assert old.ImageArg is cli_options.ImageArg and old.RoiOpt is cli_options.RoiOpt
+    assert old.PixelOpt is cli_options.PixelOpt and old.JsonOpt is cli_options.JsonOpt
+    assert old.OutOpt is cli_options.OutOpt and old._load is cli_options.load_image
+    assert old._roi is cli_options.parse_roi and old._emit is cli_output.emit and old._fmt is cli_output.fmt

@@ -111,8 +111,7 @@ def _star_tables(r, name: str, region, p: float | None) -> None:
         (f"input modulation ({r.input_modulation_from})", pm(r.input_modulation, r.input_modulation_std)),
     ]
     rows += [
-        (f"MTF at Nyquist, {k}", pm(r.mtf_at_nyquist[k], (r.mtf_at_nyquist_std or {}).get(k)))
-        for k in STAR_DIRECTIONS
+        (f"MTF at Nyquist, {k}", pm(r.mtf_at_nyquist[k], (r.mtf_at_nyquist_std or {}).get(k))) for k in STAR_DIRECTIONS
     ]
     con.print(kv_table(f"Siemens star: {name}", rows))
     cols = {**r.mtf, "± (all)": r.mtf_all_std}
