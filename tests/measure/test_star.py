@@ -10,7 +10,7 @@ from _render import annular_mtf
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from satchain.errors import InputError
+from satchain.errors import InputError, SatchainError
 from satchain.measure.star import measure_star
 
 N = 48
@@ -200,3 +200,44 @@ def test_refusals_and_flags():
     assert any("contrast-to-noise" in f for f in measure_star(low, cycles=n, input_modulation=0.4).flags)
     with pytest.raises(InputError, match="cannot be extrapolated"):  # too noisy to extrapolate to f = 0
         measure_star(low, cycles=n)
+
+
+# -------------------------------------------------------- issue 18: a given centre a few px off; input_modulation
+
+
+@settings(max_examples=6, deadline=None)
+@given(dist=st.floats(0.5, 5.0), angle=st.floats(0.0, 360.0, exclude_max=True))
+@example(dist=3.0, angle=0.0)  # the audit's case: refused with a message about --cycles
+@example(dist=5.0, angle=225.0)
+def test_given_centre_a_few_px_off_is_found(dist, angle):
+    """A given centre up to 5 px off in any direction: the coarse search finds the star's centre and the MTF is
+    the true one (as with the exact centre) within 0.01 up to Nyquist in every direction."""
+    n, mtf, centre = 32, MTFS["gaussian"], (60.3, 59.6)
+    img = _render_star(n, centre, mtf)
+    t = np.deg2rad(angle)
+    given_xy = (centre[0] + dist * np.cos(t), centre[1] + dist * np.sin(t))
+    r = measure_star(img, cycles=n, center=given_xy, input_modulation=0.4)
+    assert r.center_from == "refined"
+    assert abs(r.center_xy_px[0] - centre[0]) < 0.01 and abs(r.center_xy_px[1] - centre[1]) < 0.01
+    ok = r.f_cy_per_px <= 0.5
+    ref = measure_star(img, cycles=n, center=centre, input_modulation=0.4)  # the true centre given
+    for k, a in DIRS.items():
+        assert np.max(np.abs(r.mtf[k] - _truth(r.f_cy_per_px, mtf, a))[ok]) < 0.01, k
+        assert np.all(np.abs(r.mtf[k] - ref.mtf[k]) <= np.maximum(2 * ref.mtf_std[k], 1e-4)), k  # same as given
+
+
+def test_centre_too_far_off_is_refused_about_the_centre():
+    n, mtf = 32, MTFS["gaussian"]
+    img = _render_star(n, (60.3, 59.6), mtf)
+    with pytest.raises(InputError, match=r"center = \(72.3, 59.6\).*within 6 px") as exc:
+        measure_star(img, cycles=n, center=(72.3, 59.6), input_modulation=0.4)
+    assert "cycles" not in str(exc.value).replace("-cycle star", "")
+    with pytest.raises(InputError, match="32 cycles"):  # a wrong --cycles with a good centre still names the count
+        measure_star(img, cycles=24, center=(61.0, 60.0))
+
+
+@pytest.mark.parametrize("bad", [5.0, 0.0, -0.4, 1.0001, float("nan"), float("inf"), True, "0.4x"])
+def test_input_modulation_outside_0_1_is_refused(bad):
+    """The audit's `measure star --input-modulation 5` silently divided the MTF by 5."""
+    with pytest.raises(SatchainError, match=r"input_modulation = .*\(0, 1\]"):
+        measure_star(_star(0.5, 0.5), cycles=N, input_modulation=bad)

@@ -176,11 +176,18 @@ def period_gain(profile: np.ndarray, period: float) -> tuple[float, float, float
     return gain(g_claim), best[0], float(best[1])
 
 
-def plateau(prof: np.ndarray, fit: GroupFit, period: float, force: bool = False):
+def plateau(prof: np.ndarray, fit: GroupFit, period: float, force: bool = False, noise: float | None = None):
     """Modulation and 1-sigma from the samples within P/8 of the bar and gap centres, when those are flat
     (a plateau: bars wide enough for the blur; the samples then are the peak and trough themselves), else
     None; and the relative spread found.  Needs P >= 8 px and samples within +-P/8 of each centre at
-    distinct distances from it (flatness is seen within one bar, not across bars or mirror samples)."""
+    distinct distances from it (flatness is seen within one bar, not across bars or mirror samples).
+
+    The spread is the top's drop at P/8 from its centre (the samples' parabola, whatever the grid phase) less
+    3 sigma of ``noise``, the profile's measurement noise (from the rows; the fit's residual, which holds the
+    periodic model's misfit, only when not given: that misfit hid a curved top at most phases, issue 18).  A
+    long-tailed PSF (diffraction: the line spread falls as 1 / x^2) curves the top and holds it below the
+    large-area level by about 5.5 times that drop in contrast (obscured pupil, Q = 1, 16 px: drop 1.5 %,
+    contrast 8.5 % low); the threshold (0.5 %) keeps the large-area contrast within ~3 %."""
     if period < 8.0:
         return None, np.inf
     x = np.arange(prof.size, dtype=float)
@@ -198,7 +205,8 @@ def plateau(prof: np.ndarray, fit: GroupFit, period: float, force: bool = False)
     # 8 px at sigma 0.8 px read 0.919 for 0.963), scaled to the drop at the farthest one; when all sit at one
     # distance (e.g. +-0.5 px at 8 px) the check reaches out to 3P/16 (still on the bar top for a flat one)
     wide = min(period / 8 + 1.0, 3 * period / 16)
-    drop = max(_drop(prof, dist, period / 8, wide, fit.noise) for dist in (d_bright, d_dark))
+    s = noise if noise is not None and np.isfinite(noise) else fit.noise
+    drop = max(_drop(prof, dist, period / 8, wide, s) for dist in (d_bright, d_dark))
     spread = drop / (b - d)
     if spread > 0.005 and not force:
         return None, spread
@@ -208,12 +216,12 @@ def plateau(prof: np.ndarray, fit: GroupFit, period: float, force: bool = False)
 
 def _drop(prof: np.ndarray, dist: np.ndarray, near: float, wide: float, noise: float) -> float:
     """Spread of the samples within ``near`` of a centre (within ``wide`` if they all sit at one distance)
-    less 3 noise sigma, scaled by ``dmax^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to
-    the farthest sample; inf when all sit at one distance (nothing seen)."""
+    less 3 noise sigma, scaled by ``near^2 / (dmax^2 - dmin^2)``: a parabolic top's drop from the centre to
+    ``near``, the same at every grid phase; inf when all sit at one distance (nothing seen)."""
     for lim in (near, wide):
         sel = dist <= lim
         d2 = dist[sel] ** 2
         span = float(d2.max() - d2.min()) if d2.size else 0.0
         if span >= 0.05:
-            return max(float(np.ptp(prof[sel])) - 3 * noise, 0.0) * float(d2.max()) / span
+            return max(float(np.ptp(prof[sel])) - 3 * noise, 0.0) * near * near / span
     return np.inf

@@ -526,13 +526,18 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
                 pixel_m=p,
                 bars_per_group=int(it["n_bars"]),
             )
-            break
         except InputError as exc:
             bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))
             if bad is None or len(keep) < 2:
                 raise
             j = int(bad.group(1))
             skipped.append(_skip(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {exc}"))
+            del keep[j], rois[j]
+            continue
+        if not r.refused:
+            break
+        for j, why in sorted(r.refused, reverse=True):  # refused alone by measure_bars: listed, the rest remeasured
+            skipped.append(_skip(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {why}"))
             del keep[j], rois[j]
     rows = [
         {

@@ -13,12 +13,15 @@ centre, ``|sum_k A_k| / a`` (Coltman's definition), divided by the large-area co
 
 Validation.  A group must cover 1.5 periods, its profile's dominant period must be the claimed one, the
 periodic model must explain the profile, and the fitted modulation must stand above the noise; otherwise
-the call is refused.  Without ``levels`` the large-area levels are the plateaus of the widest group (its
-samples near bar and gap centres), only if they are flat (else refused: the CTF would be inflated, the old
-default's 7.8 %); a single group cannot be its own reference.  The fitted CTF is kept within [the samples'
-own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged when clipped.  Where a
-group's samples within P/8 of its bar and gap centres are flat (wide bars), their means are the peak and
-trough themselves and give the CTF directly (no truncated series).
+the group is refused: alone in a target of two or more groups (``BarsResult.refused`` and a flag give the
+reason, its CTF and MTF are NaN, the other groups are measured), the call for a lone group.  Without
+``levels`` the large-area levels are the plateaus of the widest group (its samples near bar and gap
+centres), only if they are flat at every grid phase (else refused: the CTF would be inflated, the old
+default's 7.8 %; a long-tailed PSF holds even flat-looking tops below the levels, see
+:func:`satchain.measure._barfit.plateau`); a single group cannot be its own reference.  The fitted CTF is
+kept within [the samples' own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged
+when clipped.  Where a group's samples within P/8 of its bar and gap centres are flat (wide bars), their
+means are the peak and trough themselves and give the CTF directly (no truncated series).
 
 Targets of three or more groups (``_barjoint``, ``_barfinite``).  One group's samples cannot tell every
 harmonic apart (at 4 px harmonic 3 folds onto the fundamental; at some phases its samples are exactly those
@@ -33,6 +36,13 @@ within 0.022 of Coltman's at every phase and period from 2.5 to 12 px for Gaussi
 (``benchmarks/bench_targets.py``).  A lone group keeps its flags.  ``bars_per_group`` (3 by default) gives
 the group's length; ``None`` (a long grating) applies no finite-group correction.
 
+Levels.  The CTF is relative to the large-area contrast, so an error of the image's offset (in the units the
+levels are given in) moves every CTF: an offset ``e`` too large lowers a group's mean level ``a`` and raises its
+CTF by ``e / a``.  The positive residuals of the default ``satchain run`` (+0.005 to +0.013 without noise) are
+of this kind: ``measure auto`` calibrates the image on the medians of finite uniform areas, which the long
+diffraction tail pulls toward their surroundings (``benchmarks/bench_bar_residuals.py``); with the sensor's
+true response the residuals are +0.001 to +0.003, the bar targets' 2-D geometry (bars five widths long).
+
 The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
 discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
 should reach the frequency where the CTF vanishes). ``satchain.ctf`` has the same series for continuous CTF
@@ -41,17 +51,18 @@ functions; this module keeps its own so measurement stays independent of predict
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
-from satchain.measure._barfinite import finite_group_correction, group_centres
-from satchain.measure._barfit import GroupFit, fit_group
+from satchain.measure._barfinite import finite_group_correction
+from satchain.measure._barfit import GroupFit
 from satchain.measure._barfit import plateau as _plateau
+from satchain.measure._bargroups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
 from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
-from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
+from satchain.measure._common import ResultMixin
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_from_ctf_samples"]
@@ -65,7 +76,8 @@ class BarsResult(ResultMixin):
     group's region (px along the profile); ``noise_std`` the profile noise per group; ``flags`` warnings.
     MTF values outside [0, 1.2] (noise in the inverse series) are reported as NaN and flagged.
     ``ctf_correction`` is what the target's joint MTF added to each group's measured modulation to give the
-    square-wave CTF (None: fewer than three groups, or ``bars_per_group=None``).
+    square-wave CTF (None: fewer than three groups, or ``bars_per_group=None``).  ``refused`` lists
+    ``(index, reason)`` of the groups refused alone (their CTF and MTF are NaN; the others are measured).
     """
 
     f_cy_per_px: np.ndarray
@@ -83,6 +95,7 @@ class BarsResult(ResultMixin):
     noise_std: np.ndarray | None = None
     flags: tuple = ()
     ctf_correction: np.ndarray | None = None
+    refused: tuple = ()
 
 
 def coltman_inverse_coefficients(n_terms: int = 40) -> list[tuple[int, float]]:
@@ -140,133 +153,6 @@ def mtf_from_ctf_samples(f_cy_per_px, ctf, *, n_terms: int = 40) -> np.ndarray:
 CTF_MAX = 1.2
 
 
-def _profile(image, roi, direction: str, period: float, index: int):
-    """Profile across the bars (mean along them), its noise (from the rows' scatter about it) and flags."""
-    data = crop_roi(image, roi, min_size=2)
-    work = data if direction == "ACT" else data.T  # rows run along the bars' profile
-    prof = work.mean(axis=0)
-    if prof.size < 1.5 * period or prof.size < 4:
-        raise InputError(
-            f"group_rois[{index}] = {tuple(roi)!r}: {prof.size} px across the bars covers "
-            f"{prof.size / period:.2f} periods of {period:g} px; need at least 1.5 (two bars) and 4 px"
-        )
-    rows = work.shape[0]
-    noise = None
-    if rows >= 2:
-        noise = float(np.std(work - prof[None, :], ddof=0) * np.sqrt(rows / (rows - 1)) / np.sqrt(rows))
-    clip = clipping_flag(work, noise_std=None if noise is None else noise * np.sqrt(rows))
-    return prof, noise, ([f"group {index}: {clip}"] if clip else [])
-
-
-def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, deferred: dict | None = None) -> list[str]:
-    """Refuse profiles that are not bars at ``period``; return flags.  With ``deferred`` (a target of three or
-    more groups), a profile the periodic model misfits is not refused here: its refusal is recorded under
-    ``index`` and decided against the target's MTF model (``_validate_deferred``)."""
-    from satchain.measure._barfit import period_gain
-
-    g_claim, g_other, f_other = period_gain(prof, period)
-    if prof.size >= 2.5 * period and not g_claim > g_other:  # shorter: too few bins (misfit check below)
-        raise InputError(
-            f"periods_px[{index}] = {period:g}: the profile's dominant period is {1 / f_other:.3g} px "
-            f"(frequency {f_other:.3f} cy/px), not {period:g} px: no bars at that period in the region"
-        )
-    amp = abs(float(np.sum(fit.amps)))
-    if not (np.isfinite(fit.modulation_std) and fit.modulation > 5 * fit.modulation_std) or amp <= 0:
-        raise InputError(
-            f"group_rois[{index}]: no significant bar modulation at period {period:g} px "
-            f"({fit.modulation:.3g} +- {fit.modulation_std:.2g})"
-        )
-    flags = []
-    if fit.misfit > 0.25 * amp:
-        on_hump = _misfit_on_hump(prof, period, fit)
-        if not on_hump <= 0.25 * amp:
-            msg = (
-                f"group_rois[{index}]: the profile is not a bar pattern of period {period:g} px (rms misfit "
-                f"{fit.misfit:.3g} = {fit.misfit / amp:.0%} of the bar amplitude, also with a smooth envelope: a "
-                "single bar or edge, or bars too blurred for the few samples in the region)"
-            )
-            if deferred is None:
-                raise InputError(msg)
-            deferred[index] = msg
-            return []
-        flags.append(
-            f"group {index}: the bars sit on a hump ({fit.misfit / amp:.0%} of the bar amplitude, "
-            f"{on_hump / amp:.0%} once a smooth envelope is allowed): a short group under a wide blur; the CTF of "
-            "a lone group is then biased (a target's joint correction removes it)"
-        )
-    last = abs(float(fit.amps[-1])) / abs(float(np.sum(fit.amps)))
-    if len(fit.harmonics) == 1:
-        flags.append(
-            f"group {index}: only the fundamental is separable at {period:g} px; harmonics 3+ alias onto it: a "
-            "sharp system's CTF may be off by a few %"
-        )
-    elif last > 0.02:
-        flags.append(
-            f"group {index}: harmonics {fit.harmonics[-1] + 2}+ of the {period:g} px period alias onto fitted ones "
-            f"and are not fitted (last fitted harmonic {fit.harmonics[-1]}: {last:.0%} of the modulation): the "
-            "CTF may be off by a few % for a sharp system"
-        )
-    if fit.unobserved:
-        flags.append(
-            f"group {index}: harmonic(s) {list(fit.unobserved)} of the {period:g} px period alias to 0.5 cy/px and "
-            "are sampled at their zero crossings at this phase (unobserved, not in the CTF): a sharp system's CTF "
-            "may be off by a few %"
-        )
-    if period < 2.5:
-        flags.append(
-            f"group {index}: period {period:g} px < 2.5 px: the CTF depends on the sampling phase "
-            "(near 2 px: the sampled modulation, a lower bound)"
-        )
-    return flags
-
-
-def _misfit_on_hump(prof: np.ndarray, period: float, fit: GroupFit) -> float:
-    """Rms misfit (less the noise) of the group's harmonics at its phase plus a smooth quadratic envelope: a
-    finite group under a blur wider than its bars sits on a hump the periodic model alone cannot follow."""
-    y = np.asarray(prof, dtype=float)
-    x = np.arange(y.size, dtype=float)
-    u = (x - x.mean()) / max(y.size, 1)
-    ph = 2 * np.pi * np.outer(x - fit.x0, np.asarray(fit.harmonics, dtype=float)) / period
-    d = np.column_stack([np.ones_like(x), u, u * u, np.cos(ph)])
-    dof = y.size - d.shape[1]
-    if dof < 1:
-        return np.inf
-    resid = y - d @ np.linalg.lstsq(d, y, rcond=None)[0]
-    s2 = float(np.sum(resid**2)) / dof - (fit.noise if np.isfinite(fit.noise) else 0.0) ** 2
-    return float(np.sqrt(max(s2, 0.0)))
-
-
-def _validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars, flags):
-    """A group the periodic model misfit (a short group on the hump of a wide blur) is kept only when the
-    target's MTF model, rendering the whole group as it lies in its region, reproduces its profile (rms
-    misfit, after a gain and an offset, within 25 % of the bar amplitude); otherwise the original refusal."""
-    for i, msg in deferred.items():
-        p, prof = float(periods[i]), np.asarray(profiles[i], dtype=float)
-        centres = None
-        if model is not None and n_bars is not None:
-            centres, _ = group_centres(fits[i].x0, p, prof.size, int(n_bars))
-        if centres is None:
-            raise InputError(msg)
-        synth = model.render_group(p, centres, prof.size, c_large)
-        d = np.column_stack([synth, np.ones_like(synth)])
-        coef = np.linalg.lstsq(d, prof, rcond=None)[0]
-        resid = prof - d @ coef
-        s2 = (
-            float(np.sum(resid**2)) / max(prof.size - 2, 1)
-            - (fits[i].noise if np.isfinite(fits[i].noise) else 0.0) ** 2
-        )
-        amp = abs(float(np.sum(fits[i].amps)))
-        misfit = float(np.sqrt(max(s2, 0.0)))
-        if not (coef[0] > 0 and misfit <= 0.25 * amp):
-            raise InputError(msg)
-        flags.append(
-            f"group {i}: the bars sit on the hump of a short group under a wide blur ({fits[i].misfit / amp:.0%} "
-            f"misfit for a periodic profile); the target's MTF model renders the group within {misfit / amp:.0%}: "
-            "measured, with the square-wave correction"
-        )
-    return flags
-
-
 def _sampled_floor(prof: np.ndarray, noise: float) -> float:
     """Modulation of the samples themselves, less twice the expected noise excess of a max - min: a lower
     bound of the continuous profile's modulation (the samples are values of it)."""
@@ -297,7 +183,7 @@ def _bounded_ctf(ctf, mod_std, c_large, c_std, floor, periods, flags, extra_std=
     return ctf, std
 
 
-def _levels(fits, periods, levels, profiles):
+def _levels(fits, periods, levels, profiles, noises=None):
     """Large-area contrast, its 1-sigma and where it came from."""
     if levels is not None:
         dark, bright = (float(v) for v in levels)
@@ -310,18 +196,20 @@ def _levels(fits, periods, levels, profiles):
             "(dark, bright) levels"
         )
     i = int(np.argmax(periods))
-    return _plateau_contrast(profiles[i], fits[i], float(periods[i]))
+    return _plateau_contrast(profiles[i], fits[i], float(periods[i]), None if noises is None else noises[i])
 
 
-def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float):
+def _plateau_contrast(prof: np.ndarray, fit: GroupFit, period: float, noise: float | None = None):
     """Large-area contrast from the widest group's plateaus; refused when it has none (the CTF would be
     inflated)."""
-    found, spread = _plateau(prof, fit, period)
+    found, spread = _plateau(prof, fit, period, noise=_rows_noise(noise))
     if found is None:
         raise InputError(
             f"levels: not given, and the widest group (period {period:g} px) has no flat bar tops (period under "
-            f"8 px, or samples within P/8 of a bar or gap centre spread by {spread:.0%} of the amplitude): its "
-            "modulation is below the large-area contrast and would inflate every CTF; give the (dark, bright) levels"
+            f"8 px, or tops dropping by {spread:.1%} of the amplitude within P/8 of a bar or gap centre, over 0.5 %: "
+            "a blur too wide for the bars, or a long-tailed PSF such as diffraction, which also holds the tops "
+            "below the large-area levels): its modulation is below the large-area contrast and would inflate every "
+            "CTF; give the (dark, bright) levels"
         )
     return found[0], found[1], f"plateaus of the widest group (period {period:g} px)"
 
@@ -389,24 +277,73 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    fits, floors, profiles, flags, noises, deferred = [], [], [], [], [], {}
-    for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
-        prof, noise, fl = _profile(image, roi, direction, p, i)
-        noises.append(noise)
-        fit = fit_group(prof, p, noise)
-        flags += fl + _check_group(fit, prof, p, i, deferred if periods.size >= 3 else None)
-        if i in deferred:  # kept out of the joint model until the model has explained it
-            fit = replace(fit, cov=None)
-        fits.append(fit)
-        floors.append(_sampled_floor(prof, fit.noise))
-        profiles.append(prof)
-    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles)
+    groups = measure_groups(image, periods, group_rois, direction)
+    kept = [i for i in range(periods.size) if i not in groups.refused]
+    t = _target_ctf(groups, kept, periods, levels, bars_per_group)
+    for j, msg in t.deferred_refused.items():  # refused against the target's MTF model
+        groups.refused[kept[j]] = msg
+    keep = np.array([i not in groups.refused for i in range(periods.size)])
+    ctf, ctf_std = scatter(t.ctf, kept, periods.size), scatter(t.ctf_std, kept, periods.size)
+    ctf[~keep], ctf_std[~keep] = np.nan, np.nan
+    f = 1.0 / periods
+    mtf, mtf_std = np.full(f.size, np.nan), np.full(f.size, np.nan)
+    mtf[keep], mtf_std[keep] = _mtf_with_std(f[keep], ctf[keep], ctf_std[keep])
+    flags = renumber(t.flags, kept) + refusal_flags(groups.refused)
+    bad = keep & ~((mtf >= 0) & (mtf <= CTF_MAX))
+    if np.any(bad):
+        flags.append(f"MTF outside [0, {CTF_MAX}] at {np.round(f[bad], 4).tolist()} cy/px (noise): set to NaN")
+        mtf = np.where(bad, np.nan, mtf)
+    return BarsResult(
+        f_cy_per_px=f,
+        periods_px=periods,
+        ctf=ctf,
+        mtf=mtf,
+        large_area_contrast=float(t.c_large),
+        direction=direction,
+        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
+        ctf_std=ctf_std,
+        mtf_std=mtf_std,
+        phase_px=np.where(keep, scatter(t.phase, kept, periods.size), np.nan),
+        large_area_contrast_std=float(t.c_std),
+        levels_from=t.levels_from,
+        noise_std=np.where(keep, scatter(t.noise, kept, periods.size), np.nan),
+        flags=tuple(flags),
+        ctf_correction=None if t.corr is None else np.where(keep, scatter(t.corr, kept, periods.size), np.nan),
+        refused=tuple(sorted(groups.refused.items())),
+    )
+
+
+@dataclass
+class _TargetCtf:
+    ctf: np.ndarray
+    ctf_std: np.ndarray
+    phase: np.ndarray
+    noise: np.ndarray
+    corr: np.ndarray | None
+    c_large: float
+    c_std: float
+    levels_from: str
+    flags: list
+    deferred_refused: dict
+
+
+def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _TargetCtf:
+    """CTF of the kept groups (indices 0..k-1 here, in ``kept`` order): levels, joint MTF model, plateaus,
+    finite-group correction, bounds."""
+    periods = periods_all[np.asarray(kept, dtype=int)]
+    fits = [groups.fits[i] for i in kept]
+    profiles = [groups.profiles[i] for i in kept]
+    noises = [groups.noises[i] for i in kept]
+    flags = [_local(f, i, j) for j, i in enumerate(kept) for f in groups.flags[i]]
+    deferred = {j: groups.deferred[i] for j, i in enumerate(kept) if i in groups.deferred}  # caller's numbering
+    floors = [_sampled_floor(prof, fit.noise) for prof, fit in zip(profiles, fits, strict=True)]
+    c_large, c_std, levels_from = _levels(fits, periods, levels, profiles, noises)
     fits, flags, model, joint = _fill_unobserved(fits, profiles, noises, periods, c_large, flags)
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
     plateau = np.zeros(len(fits), dtype=bool)
     for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
-        found, _ = _plateau(prof, fit, float(p))
+        found, _ = _plateau(prof, fit, float(p), noise=_rows_noise(noises[i]))
         if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
             mod[i], mod_std[i] = found
             plateau[i] = True
@@ -422,8 +359,9 @@ def measure_bars(
             "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
             "or a sharp system they can differ by a few %"
         )
+    refused = {}
     if deferred:
-        flags = _validate_deferred(deferred, model, fits, profiles, periods, c_large, bars_per_group, flags)
+        flags, refused = validate_deferred(deferred, model, fits, profiles, periods, c_large, bars_per_group, flags)
     floor = np.array(floors) / c_large
     if np.nanmax(floor) > CTF_MAX:
         k = int(np.nanargmax(floor))
@@ -432,29 +370,28 @@ def measure_bars(
             f"{CTF_MAX}; the large-area contrast is too small (wrong levels?)"
         )
     ctf, ctf_std = _bounded_ctf(mod / c_large + corr, mod_std, c_large, c_std, floor, periods, flags, corr_std)
-    f = 1.0 / periods
-    mtf, mtf_std = _mtf_with_std(f, ctf, ctf_std)
-    bad = ~((mtf >= 0) & (mtf <= CTF_MAX))
-    if np.any(bad):
-        flags.append(f"MTF outside [0, {CTF_MAX}] at {np.round(f[bad], 4).tolist()} cy/px (noise): set to NaN")
-        mtf = np.where(bad, np.nan, mtf)
-    return BarsResult(
-        f_cy_per_px=f,
-        periods_px=periods,
-        ctf=ctf,
-        mtf=mtf,
-        large_area_contrast=float(c_large),
-        direction=direction,
-        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
-        ctf_std=ctf_std,
-        mtf_std=mtf_std,
-        phase_px=np.array([ft.x0 for ft in fits]),
-        large_area_contrast_std=float(c_std),
-        levels_from=levels_from,
-        noise_std=np.array([ft.noise for ft in fits]),
-        flags=tuple(flags),
-        ctf_correction=corr if model is not None and bars_per_group is not None else None,
+    return _TargetCtf(
+        ctf,
+        ctf_std,
+        np.array([ft.x0 for ft in fits]),
+        np.array([ft.noise for ft in fits]),
+        corr if model is not None and bars_per_group is not None else None,
+        float(c_large),
+        float(c_std),
+        levels_from,
+        flags,
+        refused,
     )
+
+
+def _rows_noise(noise) -> float | None:
+    """The rows' noise of a profile (None: a single row, no noise estimate: the fit residual is used)."""
+    return None if noise is None else float(noise)
+
+
+def _local(msg: str, i: int, j: int) -> str:
+    """A group's message numbered ``i`` (the caller's index) renumbered ``j`` (its place among the kept)."""
+    return msg.replace(f"group {i}: ", f"group {j}: ", 1).replace(f"group_rois[{i}]", f"group_rois[{j}]")
 
 
 def _fill_unobserved(fits, profiles, noises, periods, c_large, flags):

@@ -15,7 +15,10 @@ Angles are measured in image axes (x = column to the right, y = row downwards).
 
 Validation and estimation (issue 10).  The centre is estimated to sub-pixel from the data (or a given
 approximate centre refined): the per-annulus fits' residual is minimised over the centre (see
-:mod:`satchain.measure._starfit`), with its covariance.  The claimed ``cycles`` must be the dominant angular
+:mod:`satchain.measure._starfit`), with its covariance.  That minimisation needs a start within ~1 px, so a
+given centre is first searched, within 6 px, for the point about which the ``cycles``-th angular harmonic adds
+up coherently (issue 18: a centre 3 px off was refused with a message about ``--cycles``); a centre farther
+off is refused naming the centre.  The claimed ``cycles`` must be the dominant angular
 harmonic of the outer radii and stand well above the other harmonics (the noise), otherwise the call is
 refused naming the count found.  The input (zero-frequency) modulation is, unless given, extrapolated from
 the outer radii by a weighted fit of ``log m(f) = c0 + c1 f + c2 f^2`` (exact for a Gaussian MTF, and
@@ -32,9 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from satchain._validate import check_positive, check_range
-from satchain.errors import InputError
+from satchain.errors import ConfigError, InputError
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
-from satchain.measure._starfit import annulus_fit, fit_center, harmonic_spectrum, symmetry_center
+from satchain.measure._starfit import annulus_fit, coarse_center, fit_center, harmonic_spectrum, symmetry_center
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["StarResult", "measure_star", "STAR_DIRECTIONS"]
@@ -114,30 +117,65 @@ def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray, sig: np.ndarray | N
     return m0, float(np.hypot(s0, 2.0 * model))
 
 
+#: How far (px) a given centre may be from the star's: a coarse search of the centre covers it.
+CENTER_SEARCH_PX = 6.0
+
+
 def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
     """Centre (x, y), its 1-sigma (sx, sy) or None, and how it was obtained.  Without a given centre the
-    start is the centre of point symmetry; the claimed cycles are checked there before the refinement."""
+    start is the centre of point symmetry; a given one is first searched within :data:`CENTER_SEARCH_PX` for
+    the coherent ``n``-th harmonic (``coarse_center``); the claimed cycles are checked there, then refined."""
     if not refine:
         _check_cycles(data, n, start[0], start[1], r_in, r_out)
         return start, None, "given"
+    given_xy = start
     if not given:
         start = symmetry_center(data)
         ny, nx = data.shape
         r_out = min(r_out, start[0], start[1], nx - 1 - start[0], ny - 1 - start[1])
         _check_extent(n, r_in, r_out, 1.0, n / (2 * np.pi * r_in))
-    _check_cycles(data, n, start[0], start[1], r_in, r_out)
+    search = CENTER_SEARCH_PX if given else 1.5
     r_lo = max(r_in, n / (2 * np.pi * 0.35))
     if r_out - r_lo < 6:
         r_lo = r_in
-    x, y, cov = fit_center(data, n, start, r_lo, r_out, search_px=1.0)
+    cx, cy, at_limit = coarse_center(data, n, start, r_lo, r_out, search_px=search)
+    try:
+        _check_cycles(data, n, cx, cy, r_in, r_out)
+    except InputError:
+        if given and at_limit:  # the harmonic peaks on the search border: the centre or the cycles?
+            _far_centre(data, n, given_xy, r_in)  # always raises
+        raise
+    x, y, cov = fit_center(data, n, (cx, cy), r_lo, r_out, search_px=1.0)
     if cov is None:
         raise InputError(f"image: the star centre cannot be determined (no star with {n} cycles near {start})")
-    if np.hypot(x - start[0], y - start[1]) > 3.0:
+    moved = float(np.hypot(x - given_xy[0], y - given_xy[1])) if given else float(np.hypot(x - cx, y - cy))
+    if moved > (CENTER_SEARCH_PX * np.sqrt(2) + 1.0 if given else 3.0):
         raise InputError(
-            f"center: the fitted star centre ({x:.2f}, {y:.2f}) is {np.hypot(x - start[0], y - start[1]):.1f} px "
-            f"from the start ({start[0]:.2f}, {start[1]:.2f}); give a centre within 1 px"
+            f"center = ({given_xy[0]:g}, {given_xy[1]:g}): the fitted star centre ({x:.2f}, {y:.2f}) is "
+            f"{moved:.1f} px from it; give a centre within {CENTER_SEARCH_PX:g} px"
         )
     return (x, y), (float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))), "refined" if given else "estimated"
+
+
+def _far_centre(data, n, given_xy, r_in) -> None:
+    """A given centre from which no ``n``-cycle star is found: refused about the centre when the region's
+    centre of point symmetry holds an ``n``-cycle star (or none at all), about the cycles (naming the count
+    found there) when another count dominates there."""
+    sx, sy = symmetry_center(data)
+    ny, nx = data.shape
+    r_out = min(sx, sy, nx - 1 - sx, ny - 1 - sy)
+    where = ""
+    try:
+        _check_cycles(data, n, sx, sy, r_in, r_out)
+        where = f" (a {n}-cycle star is centred near ({sx:.1f}, {sy:.1f}))"
+    except InputError as exc:
+        if "dominant angular harmonic" in str(exc):  # another count dominates at the star's centre
+            raise
+    raise InputError(
+        f"center = ({given_xy[0]:g}, {given_xy[1]:g}): no centre of a {n}-cycle star found within "
+        f"{CENTER_SEARCH_PX:g} px of it{where}; give the centre within {CENTER_SEARCH_PX:g} px, or omit it to "
+        "estimate it from the data"
+    )
 
 
 def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
@@ -150,7 +188,8 @@ def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
     if top != n:
         raise InputError(
             f"cycles = {n}: the dominant angular harmonic at radii {r_lo:.0f}-{r_out:.0f} px about "
-            f"({xc:.1f}, {yc:.1f}) is {top} cycles per revolution, not {n} (wrong --cycles or no star there)"
+            f"({xc:.1f}, {yc:.1f}) is {top} cycles per revolution, not {n} (wrong --cycles, no star there, or a "
+            "centre far off)"
         )
     if not amp[n - 1] > 6 * noise:
         raise InputError(
@@ -196,15 +235,17 @@ def measure_star(
     cycles : int
         Periods per revolution of the star (>= 4); checked against the data.
     center : (x, y), optional
-        Approximate star centre in pixels of the (cropped) image (refined from the data unless
-        ``refine_center=False``); by default estimated from the data, starting at the region's centre.
+        Approximate star centre in pixels of the (cropped) image, within 6 px of the star's (searched for the
+        coherent ``cycles``-th angular harmonic, then refined from the data, unless ``refine_center=False``);
+        by default estimated from the data, starting at the region's centre of point symmetry.
     radius_px : float, optional
         Outer radius used; the largest circle inside the region by default.
     roi : (x0, y0, x1, y1), optional
     input_modulation : float, optional
-        Modulation (max - min) / (max + min) of the star itself. When not given it is extrapolated to zero
-        frequency from the outer radii by a weighted fit of ``log m = c0 + c1 f + c2 f^2`` (see the module
-        docstring); a flag is raised when the outer MTF is below 0.8 (far extrapolation).
+        Modulation (max - min) / (max + min) of the star itself, in (0, 1] (``ConfigError`` otherwise).  When
+        not given it is extrapolated to zero frequency from the outer radii by a weighted fit of
+        ``log m = c0 + c1 f + c2 f^2`` (see the module docstring); a flag is raised when the outer MTF is below
+        0.8 (far extrapolation).
     annulus_px : float
         Spacing of the radii reported (px); each is fitted on the pixels within ``1.5 annulus_px`` of it.
     f_max_cy_per_px : float
@@ -232,6 +273,10 @@ def measure_star(
     n = int(check_range("cycles", cycles, 4, 10000))
     check_positive("annulus_px", annulus_px)
     f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.0, 2.0, lo_open=True)
+    if input_modulation is not None:  # (max - min) / (max + min) of a non-negative star: in (0, 1]
+        if isinstance(input_modulation, bool):
+            raise ConfigError(f"input_modulation = {input_modulation!r}: must be a number in (0, 1], not a bool")
+        input_modulation = check_range("input_modulation", input_modulation, 0.0, 1.0, lo_open=True)
     data = crop_roi(image, roi, min_size=16)
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
@@ -239,7 +284,8 @@ def measure_star(
     _check_extent(n, r_in, r_out, annulus_px, f_max)
     (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
     ny, nx = data.shape
-    r_out = min(r_out, xc, yc, nx - 1 - xc, ny - 1 - yc)
+    r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
+    r_out = r_fit if radius_px is None else min(r_out, r_fit)
     _check_extent(n, r_in, r_out, annulus_px, f_max)
     radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
     f = n / (2 * np.pi * radii)
@@ -252,7 +298,7 @@ def measure_star(
                 "MTF there is far below 1): give the star's own modulation"
             )
     else:
-        m0 = check_range("input_modulation", input_modulation, 0.0, None, lo_open=True)
+        m0 = input_modulation
         m0_std, m0_from = 0.0, "given"
     if not m0 > 1e-4:
         raise InputError("image: no star modulation found at the outer radii (flat region or wrong cycles?)")
