@@ -13,9 +13,6 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "satchain"
 
-# Known cycle, to be removed by the work on issue 18 point 9 (the lead deletes this entry when it is fixed).
-KNOWN_CYCLES: set[frozenset[str]] = {frozenset({"satchain.cli_find", "satchain.cli_measure"})}
-
 
 def _modules() -> dict[str, tuple[Path, bool]]:
     out = {}
@@ -129,8 +126,8 @@ def test_the_graph_sees_relative_absolute_and_conditional_imports():
 
 
 def test_top_level_imports_form_no_cycle():
-    found = set(cycles(import_graph()))
-    assert found - KNOWN_CYCLES == set(), sorted(map(sorted, found - KNOWN_CYCLES))
+    found = cycles(import_graph())
+    assert found == [], sorted(map(sorted, found))
 
 
 def test_run_types_flow_one_way_even_through_deferred_imports():
@@ -183,3 +180,13 @@ def test_split_modules_re_export_every_public_name_of_their_parts():
             for name in p.__all__:
                 assert getattr(m, name) is getattr(p, name), f"{module}.{name} is not {p.__name__}.{name}"
                 assert name in m.__all__, f"{name} of {p.__name__} is missing from {module}.__all__"
+
+
+def test_cli_layer_flows_one_way_even_through_deferred_imports():
+    # cli -> cli_measure (registers every command) -> command modules -> cli_options, cli_output; never back
+    g = import_graph(deferred=True)
+    assert not [sorted(c) for c in cycles(g) if any(m.startswith("satchain.cli") for m in c)]
+    commands = ("satchain.cli_targets", "satchain.cli_auto", "satchain.cli_find")
+    assert set(commands) <= g["satchain.cli_measure"]
+    for m in (*commands, "satchain.cli_options", "satchain.cli_output"):
+        assert not {"satchain.cli", "satchain.cli_measure"} & g[m], m

@@ -1,6 +1,6 @@
 """``satchain measure find IMAGE``: ACT and ALT MTF from the slanted edges found in an image (no truth file).
 
-Registered on the ``measure`` sub-app (imported at the end of :mod:`satchain.cli_measure`).  Prints a table of
+Registered on the ``measure`` sub-app in :mod:`satchain.cli_measure`.  Prints a table of
 the edges used, the combined MTF at Nyquist with its 1-sigma, the CEOS-style table (MTF at f / f_s = 0, 0.02,
 ..., 0.5), flags and the rejected segments counted by reason; ``--json`` prints JSON, ``--csv`` the CEOS table
 as CSV; ``-o DIR`` writes ``find.json``, ``find_ceos.csv`` and ``find.png`` there (atomically).
@@ -14,18 +14,9 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from satchain.cli_measure import (
-    ImageArg,
-    JsonOpt,
-    OutOpt,
-    PixelOpt,
-    _console,
-    _emit,
-    _fmt,
-    _handle_errors,
-    _load,
-    measure_app,
-)
+from satchain._cli_common import handle_errors
+from satchain.cli_options import ImageArg, JsonOpt, OutOpt, PixelOpt, load_image
+from satchain.cli_output import emit, fmt, wide_console
 
 __all__ = ["find"]
 
@@ -46,7 +37,7 @@ def _edges_table(res, name: str) -> Table:
             f"{c.cnr:.0f}",
             f"{e.mtf_at_nyquist:.4f}",
             f"{e.mtf_at_nyquist_sigma:.4f}",
-            _fmt(e.mtf50_cy_per_px),
+            fmt(e.mtf50_cy_per_px),
         )
     return t
 
@@ -71,10 +62,10 @@ def _combined_table(res, pixel_m) -> Table:
             str(c.n_edges),
             f"{c.mtf_at_nyquist:.4f}",
             f"{c.mtf_at_nyquist_sigma:.4f}",
-            _fmt(c.scatter_at_nyquist),
-            _fmt(c.chi2_reduced_at_nyquist),
-            _fmt(m50),
-            *([_fmt(None if m50 is None else m50 / pixel_m)] if pixel_m else []),
+            fmt(c.scatter_at_nyquist),
+            fmt(c.chi2_reduced_at_nyquist),
+            fmt(m50),
+            *([fmt(None if m50 is None else m50 / pixel_m)] if pixel_m else []),
         )
     return t
 
@@ -89,8 +80,7 @@ def _ceos_rich(tab: dict) -> Table:
     return t
 
 
-@measure_app.command()
-@_handle_errors
+@handle_errors
 def find(
     image: ImageArg,
     pixel_m: PixelOpt = None,
@@ -115,7 +105,7 @@ def find(
     check_range("--min-length", min_length, 12, None)
     check_range("--max-edges", max_edges, 1, None)
     check_positive("--min-cnr", min_cnr)
-    data, p, _ = _load(image, pixel_m)
+    data, p, _ = load_image(image, pixel_m)
     res = measure_found_edges(data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr)
     csv_text = ceos_csv(res, f_max=f_max, pixel_m=p)
     payload = {"image": str(image), "pixel_m": p, **res.to_dict(), "ceos_csv": csv_text}
@@ -128,7 +118,7 @@ def find(
         return [d / "find_ceos.csv", d / "find.png"]
 
     def table():
-        c = _console()
+        c = wide_console()
         if as_csv:
             print(csv_text, end="")
             return
@@ -144,4 +134,4 @@ def find(
         if counts:
             c.print("rejected segments: " + ", ".join(f"{k} {v}" for k, v in counts.items()), highlight=False)
 
-    _emit(payload, as_json, out, "find", plot, table)
+    emit(payload, as_json, out, "find", plot, table)

@@ -1,0 +1,148 @@
+"""The options the ``satchain measure`` commands share, defined once (as rasterio's ``rio/options.py``).
+
+Each shared option is an ``Annotated`` type carrying its one :class:`typer.models.OptionInfo` (name, flags,
+help text); a command declares ``roi: RoiOpt = None`` and gets the same option as every other command.  The
+values are parsed by the functions below, called inside the command (within
+:func:`satchain._cli_common.handle_errors`), so that a bad value is one line on stderr and exit status 2::
+
+    region = parse_roi("--roi", roi)             # "X0,Y0,X1,Y1" -> (x0, y0, x1, y1) or None
+    data, pixel_m, meta = load_image(image, pixel_m)
+
+``tests/test_cli_options.py`` checks that every command uses these objects (not a local copy) and that an
+option name means one thing (one help text) across the commands.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from satchain._cli_common import parse_numbers
+from satchain.errors import ConfigError, SatchainIOError
+
+__all__ = [
+    "SHARED_OPTIONS",
+    "FitDegreeOpt",
+    "ImageArg",
+    "JsonOpt",
+    "OriginOpt",
+    "OutOpt",
+    "PixelOpt",
+    "RoiOpt",
+    "ThresholdOpt",
+    "TruthOpt",
+    "TruthRequiredOpt",
+    "load_image",
+    "parse_fit_degree",
+    "parse_origin",
+    "parse_roi",
+    "read_truth",
+]
+
+# ----------------------------------------------------------------------------------------------- the options
+
+ImageArg = Annotated[Path, typer.Argument(help="image: .tif/.tiff (float or integer), .png (8/16-bit) or .npy")]
+RoiOpt = Annotated[
+    str | None, typer.Option("--roi", help="region X0,Y0,X1,Y1 in pixels (x = column, y = row; half-open)")
+]
+PixelOpt = Annotated[
+    float | None, typer.Option("--pixel-m", help="ground pixel size (m); default: the file's metadata")
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="print JSON instead of tables")]
+OutOpt = Annotated[Path | None, typer.Option("-o", "--out", help="write the results JSON and a figure here")]
+
+_TRUTH_HELP = "the scene's truth JSON (written with the render): the targets' geometry comes from there"
+#: ``--truth`` where the command needs it (``measure auto``) ...
+TruthRequiredOpt = Annotated[Path, typer.Option("--truth", help=_TRUTH_HELP)]
+#: ... and where it is one way to give the geometry (``measure wedge``): the same option, optional.
+TruthOpt = Annotated[Path | None, typer.Option("--truth", help=_TRUTH_HELP)]
+OriginOpt = Annotated[
+    str | None, typer.Option("--origin-m", help="scene X,Y (m) of the image's top-left corner; default: metadata")
+]
+ThresholdOpt = Annotated[float, typer.Option("--threshold", help="wedge contrast where the lines stop resolving")]
+FitDegreeOpt = Annotated[
+    str,
+    typer.Option(
+        "--fit-degree",
+        help="degree of the edge-position fit: auto (chosen from the data; follows curved edges), 1, 2 or 3",
+    ),
+]
+
+#: Every shared option, by its long name (``--truth`` has two forms: required and optional).
+SHARED_OPTIONS: dict[str, tuple] = {
+    "--roi": (RoiOpt,),
+    "--pixel-m": (PixelOpt,),
+    "--json": (JsonOpt,),
+    "--out": (OutOpt,),
+    "--truth": (TruthRequiredOpt, TruthOpt),
+    "--origin-m": (OriginOpt,),
+    "--threshold": (ThresholdOpt,),
+    "--fit-degree": (FitDegreeOpt,),
+}
+
+# ------------------------------------------------------------------------------------------- their parsing
+
+
+def parse_roi(name: str, text: str | None) -> tuple[int, int, int, int] | None:
+    """``X0,Y0,X1,Y1`` -> a tuple of 4 ints (or None).
+
+    Examples
+    --------
+    >>> parse_roi("--roi", "10, 20,110,120")
+    (10, 20, 110, 120)
+    >>> parse_roi("--roi", None) is None
+    True
+    """
+    if text is None:
+        return None
+    vals = parse_numbers(name, text, 4)
+    if any(v != int(v) for v in vals):
+        raise ConfigError(f"{name} = {text!r}: must be four integers X0,Y0,X1,Y1 (pixels)")
+    return tuple(int(v) for v in vals)  # type: ignore[return-value]
+
+
+def parse_fit_degree(text: str) -> str:
+    """``--fit-degree``: ``auto``, ``1``, ``2`` or ``3`` (case and spaces ignored)."""
+    value = text.strip().lower()
+    if value not in ("auto", "1", "2", "3"):
+        raise ConfigError(f"--fit-degree = {text!r}: must be auto, 1, 2 or 3")
+    return value
+
+
+def parse_origin(text: str | None, meta: dict) -> tuple[float, float] | None:
+    """``--origin-m X,Y`` (m), else the image metadata's ``origin_m``, else None."""
+    if text is not None:
+        return tuple(parse_numbers("--origin-m", text, 2))  # type: ignore[return-value]
+    o = meta.get("origin_m")
+    return None if o is None else tuple(float(v) for v in o)  # type: ignore[return-value]
+
+
+def read_truth(path: Path) -> dict:
+    """The scene truth JSON named by ``--truth``."""
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SatchainIOError(f"--truth = {str(path)!r}: no such file") from None
+    except OSError as exc:
+        raise SatchainIOError(f"--truth = {str(path)!r}: cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"--truth = {str(path)!r}: not JSON: {exc}") from None
+
+
+def load_image(path: Path, pixel_m: float | None):
+    """Read IMAGE; returns (array, pixel_m or None, metadata): ``--pixel-m`` wins over the file's metadata."""
+    from satchain._validate import check_positive
+    from satchain.io import read_image
+
+    image, meta = read_image(path)
+    if pixel_m is not None:
+        pixel_m = check_positive("--pixel-m", pixel_m)
+    elif meta.get("pixel_m") is not None:
+        pixel_m = float(meta["pixel_m"])
+    elif "invalid_pixel_m" in meta:  # a bad pixel size in the file is refused, never silently dropped
+        raise ConfigError(f"IMAGE {str(path)!r}: its pixel size {meta['invalid_pixel_m']!r} is not a ground pixel "
+                          "size in (0, 1e6] m; give --pixel-m")  # fmt: skip
+    return image, pixel_m, meta

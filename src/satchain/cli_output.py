@@ -1,0 +1,113 @@
+"""How the ``satchain measure`` commands print and write: tables, numbers, flags, ``--json`` and ``-o DIR``."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+from satchain.errors import SatchainIOError
+
+__all__ = ["curve_table", "emit", "fmt", "kv_table", "one_plot", "pm", "print_flags", "wide_console"]
+
+
+def wide_console() -> Console:
+    """A console at least 110 columns wide (the measurement tables need it)."""
+    return Console(width=max(shutil.get_terminal_size((120, 40)).columns, 110))
+
+
+def emit(payload: dict, as_json: bool, out: Path | None, name: str, plot, table) -> None:
+    """Print (JSON or tables) and write ``out/name.json`` + the figures ``plot(out)`` returns (atomically)."""
+    text = json.dumps(payload, indent=2, allow_nan=False)
+    written = []
+    if out is not None:
+        from satchain.report._save import write_text
+
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            write_text(out / f"{name}.json", text + "\n")
+            written = [out / f"{name}.json", *plot(out)]
+        except OSError as exc:
+            raise SatchainIOError(f"--out = {str(out)!r}: cannot write: {exc}") from None
+    if as_json:
+        print(text)
+        return
+    table()
+    if written:
+        wide_console().print("wrote " + ", ".join(str(p) for p in written), highlight=False)
+
+
+def one_plot(plot_fn, result, path: Path, **kwargs) -> list[Path]:
+    """``plot_fn(result, path, **kwargs)``; returns ``[path]`` (the ``plot`` argument of :func:`emit`)."""
+    plot_fn(result, path, **kwargs)
+    return [path]
+
+
+def fmt(v: Any) -> str:
+    """A table cell: ``-`` for None, 4 significant digits for floats.
+
+    Examples
+    --------
+    >>> fmt(None), fmt(0.123456), fmt(3)
+    ('-', '0.1235', '3')
+    """
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def pm(value, std) -> str:
+    """``value ± std`` (4 significant digits), ``-`` for None.
+
+    Examples
+    --------
+    >>> pm(0.51234, 0.0123), pm(None, 0.1), pm(0.5, None)
+    ('0.5123 ± 0.012', '-', '0.5')
+    """
+    if value is None:
+        return "-"
+    if std is None or not isinstance(std, float) or std != std:
+        return fmt(float(value))
+    return f"{value:.4g} ± {std:.2g}"
+
+
+def kv_table(title: str, rows: list[tuple[str, Any]]) -> Table:
+    """A two-column (quantity, value) table."""
+    t = Table(title=title)
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    for k, v in rows:
+        t.add_row(k, fmt(v))
+    return t
+
+
+def curve_table(title: str, f, columns: dict, pixel_m: float | None, step: float = 0.1) -> Table:
+    """A few rows of curves sampled at multiples of ``step`` cy/px."""
+    import numpy as np
+
+    f = np.asarray(f, dtype=float)
+    t = Table(title=title)
+    t.add_column("f cy/px", justify="right")
+    if pixel_m:
+        t.add_column("f cy/m ground", justify="right")
+    for k in columns:
+        t.add_column(k, justify="right")
+    for fk in np.arange(step, f.max() + 1e-9, step):
+        if fk < f.min() - 1e-9:
+            continue
+        vals = [float(np.interp(fk, f, np.asarray(c, dtype=float))) for c in columns.values()]
+        cells = [f"{fk:.2f}", *([f"{fk / pixel_m:.3f}"] if pixel_m else []), *[f"{v:.4f}" for v in vals]]
+        t.add_row(*cells)
+    return t
+
+
+def print_flags(flags) -> None:
+    """Quality flags of a star/bars/wedge measurement, one yellow line each."""
+    for f in flags:
+        wide_console().print(f"[yellow]flag: {f}[/]", highlight=False)
