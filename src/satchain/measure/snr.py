@@ -20,12 +20,15 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from satchain._validate import as_float_array, check_positive
 from satchain.measure._common import ResultMixin, robust_sigma
+
+if TYPE_CHECKING:
+    from satchain.scene.truth import Truth
 
 __all__ = ["GIQE_CONTRAST", "GIQE_REFLECTANCE", "SnrResult", "measure_snr"]
 
@@ -109,7 +112,7 @@ def _noise_at(level: float, background: tuple[float, float], plateaus: list[tupl
     return float(math.sqrt(var)) if slope >= 0 and var > 0 else background[1]
 
 
-def measure_snr(image, truth: Mapping[str, Any], *, pixel_m: float) -> SnrResult:
+def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> SnrResult:
     """GIQE contrast SNR of ``image`` (see the module docstring).
 
     Parameters
