@@ -230,6 +230,26 @@ def test_bars_target_corrected_to_the_square_wave_ctf(tmp_path):
     _err([*args, "--bars-per-group", "1"], "--bars-per-group")
 
 
+
+def test_bars_table_names_a_refused_group_instead_of_nan(tmp_path):
+    """One group of a 4-group target flattened to a uniform grey: the table says "refused" in its row and
+    gives the reason; no "nan" is printed; the other groups keep their numbers."""
+    periods = (12.0, 6.0, 4.0, 3.0)
+    img, rois = _bar_target(periods)
+    x0, _, x1, _ = (int(v) for v in rois[1].split(","))
+    img[:, x0 - 3 : x1 + 3] = 100.0
+    path = _write(tmp_path, "target", img, "npy")
+    args = ["bars", str(path), "--periods-px", ",".join(f"{p:g}" for p in periods), "--levels", "40,160"]
+    for r in rois:
+        args += ["--group-roi", r]
+    res = runner.invoke(measure_app, args, terminal_width=200)
+    assert res.exit_code == 0, res.output
+    assert "nan" not in res.output.lower()
+    assert "refused" in res.output and "group 1 (period 6 px) refused:" in " ".join(res.output.split())
+    d = _json(args)
+    assert d["ctf"][1] is None or d["ctf"][1] != d["ctf"][1]
+    assert all(isinstance(c, float) and 0 < c < 1 for i, c in enumerate(d["ctf"]) if i != 1)
+
 def _wedge_image():
     """Stripes 6 -> 1.05 px wide (linear) whose contrast is set to 0.8 (50 - x) / 40: 15 % at x = 42.5."""
     y, x = np.mgrid[0:40, 0:100]

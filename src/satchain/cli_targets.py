@@ -170,8 +170,12 @@ def _bars_tables(r, name: str, p: float | None) -> None:
     for col in ("period px", "f cy/px", *ground_col, "CTF ± 1σ", "of which correction",
                 "MTF (Coltman inverse) ± 1σ", "bar phase px"):  # fmt: skip
         t.add_column(col, justify="right")
+    refused = dict(r.refused)
     for k in range(r.f_cy_per_px.size):
         ground = [f"{r.f_cy_per_px[k] / p:.3f}"] if p else []
+        if k in refused:  # no number for a refused group: say so in the row
+            t.add_row(f"{r.periods_px[k]:.3g}", f"{r.f_cy_per_px[k]:.4f}", *ground, "refused", "-", "refused", "-")
+            continue
         mtf = None if r.mtf[k] != r.mtf[k] else float(r.mtf[k])
         t.add_row(
             f"{r.periods_px[k]:.3g}",
@@ -187,6 +191,8 @@ def _bars_tables(r, name: str, p: float | None) -> None:
         f"large-area contrast {pm(r.large_area_contrast, r.large_area_contrast_std)} ({r.levels_from})",
         highlight=False,
     )
+    for k, reason in r.refused:
+        wide_console().print(f"group {k} (period {r.periods_px[k]:.3g} px) refused: {reason}", highlight=False)
     print_flags(r.flags)
 
 
