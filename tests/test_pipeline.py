@@ -263,3 +263,22 @@ def test_cli_exit_status_gates_on_failing_checks(tmp_path, tight):
     else:
         assert r.exit_code == 0, r.output
         assert edge["pass"] is True and res["pass"] is not False
+
+
+def test_cli_run_that_checks_nothing_does_not_pass(tmp_path):
+    """A camera that saturates on every target: each edge is skipped (clipped) and every row is n/a. The run
+    gate exits 1 and says no check could be made (a CI gate that checked nothing must not pass); --exit-zero
+    still exits 0."""
+    (tmp_path / "scene.toml").write_text(ONE_EDGE_SCENE)
+    (tmp_path / "run.toml").write_text(
+        "[system.inline]\norbit = { altitude_m = 500e3 }\n"
+        "optics = { aperture_diameter_m = 0.3, f_number = 10.0, wavelengths_m = [6.5e-7] }\n"
+        "detector = { pitch_m = 6e-6, tdi_stages = 64, qe = 0.6, full_well_e = 80000.0, bit_depth = 12 }\n"
+        '[scene]\nlayout = "scene.toml"\npixel_m = 0.1\n'
+    )
+    args = ["run", "--config", str(tmp_path / "run.toml"), "-o", str(tmp_path / "o")]
+    r = CliRunner().invoke(app, args)
+    res = strict_loads((tmp_path / "o" / "results.json").read_text())
+    assert res["n_checked"] == 0 and all(row["pass"] is None for row in res["summary"]), res["summary"]
+    assert r.exit_code == 1 and "no check could be made" in r.stderr
+    assert CliRunner().invoke(app, [*args, "--exit-zero"]).exit_code == 0

@@ -366,7 +366,8 @@ def run(
 ) -> None:
     """The main job: predict, simulate, measure, compare and report (report.html, results.json).
 
-    Exit status: 0 when every check passes or is n/a, 1 when a check fails (unless --exit-zero), 2 on an error.
+    Exit status: 0 when every check made passes (n/a rows aside), 1 when a check fails or none could be made
+    (unless --exit-zero), 2 on an error.
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -408,6 +409,12 @@ def run(
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")
+        raise typer.Exit(1)
+    if result.comparison.n_checked == 0 and not exit_zero:  # a gate that checked nothing must not pass
+        err_console.print(
+            "[bold red]no check could be made[/]: every row is n/a (see the reasons above; "
+            "exit status 1; --exit-zero to ignore)"
+        )
         raise typer.Exit(1)
 
 
