@@ -12,6 +12,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
+from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
     "check_model",
@@ -19,6 +20,10 @@ __all__ = [
     "fit_plateaus",
     "check_single_edge",
     "critical_angle_flags",
+    "curvature_flags",
+    "unfitted_curvature",
+    "quantisation_step",
+    "quantisation_flags",
     "CRITICAL_TILTS_DEG",
 ]
 
@@ -27,6 +32,11 @@ CRITICAL_TILTS_DEG = (0.0, 45.0, 26.565, 18.435, 14.036)
 _SAT_REFUSE_FRACTION = 0.01  # pixels at the saturation level above this fraction: refuse
 _MODEL_MISS_FRACTION = 0.03  # pixels the edge model misses by > 1/4 step above this fraction: refuse
 _FLAT_PLATEAU_TOL = 0.15  # a plateau departing from a straight line by this much of the step: a second edge
+_QUANT_BIAS = 0.65  # worst MTF error (up to Nyquist) of an undithered quantised edge x its step count
+_QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the quantisation (bias / 50)
+_CURVE_MTF_SHIFT = 0.01  # an unfitted curvature moving the MTF (up to Nyquist) by more than this is flagged
+_CURVE_SCREEN = 0.3  # ... computed exactly where the first estimate exceeds this fraction of it
+_CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
 def _pixel_noise(data: np.ndarray) -> float:
@@ -187,3 +197,146 @@ def check_model(work, d_all, x, esf, model, sigma) -> None:
             "of the step: the region holds more than one straight edge (a corner, a stripe, another target); "
             "give an ROI around one straight edge"
         )
+
+
+def unfitted_curvature(lines, pos, coef, f, mtf):
+    """Screen for an edge curvature that the fitted polynomial leaves in the edge positions.
+
+    ``pos`` are the per-line edge positions (px along the line) at ``lines``, ``coef`` the polynomial used.
+    Fits of each higher degree (up to 3) give the departure ``r`` of the edge from the fit used, along the
+    normal.  Projecting along a wrong edge spreads the ESF by the distribution of ``r``, which multiplies the
+    MTF by ``F(f) = |mean exp(2 pi i f r)|``: the measured ``mtf`` is about ``mtf / F - mtf`` below the edge's.
+    Only extra terms resolved above the positions' noise (F statistic > 9) count.
+
+    Returns ``(shift, f_at, spread_px, degree)`` for the largest estimated MTF shift up to Nyquist (``degree``
+    the lowest higher degree that shows it, ``spread_px`` the range of ``r``), or None.
+    """
+    lines = np.asarray(lines, dtype=float)
+    pos = np.asarray(pos, dtype=float)
+    deg = len(coef) - 1
+    n = lines.size
+    tc = (lines - lines.mean()) / max(float(np.ptp(lines)), 1.0)
+    used = np.polyval(coef, lines)
+    rss_used = float(np.sum((pos - used) ** 2))
+    band = (f > 0) & (f <= 0.5 + 1e-9)
+    worst = None
+    for k in range(deg + 1, 4):
+        dof = n - k - 1
+        if dof < 4 or not np.any(band):
+            break
+        fit = np.polyval(np.polyfit(tc, pos, k), tc)
+        rss = float(np.sum((pos - fit) ** 2))
+        if not (rss_used - rss) / (k - deg) > _CURVE_F_STAT * max(rss / dof, 1e-30):
+            continue
+        r = (fit - used) / np.sqrt(1.0 + np.gradient(fit, lines) ** 2)  # along the local normal
+        factor = np.abs(np.exp(2j * np.pi * np.outer(f[band], r - r.mean())).mean(axis=1))
+        shift = mtf[band] * (1.0 / np.maximum(factor, 1e-3) - 1.0)
+        i = int(np.argmax(shift))
+        if worst is None or shift[i] > 1.25 * worst[0]:  # a higher degree must show clearly more
+            worst = (float(shift[i]), float(f[band][i]), float(np.ptp(r)), k)
+    return worst
+
+
+def curvature_flags(d, rows, coef, ridge, esf_fit, f, mtf, *, forced: bool) -> list[tuple[str, str]]:
+    """Flag ``curvature_bias`` when an edge curvature left by the fit used moves the MTF by > 0.01.
+
+    :func:`unfitted_curvature` finds the departure of the edge positions from the fit (resolved above their
+    noise) and a first estimate from its spread alone; where that is not negligible, the shift is computed
+    exactly for this region: every sample's true distance is its projected one plus the departure of its
+    line, so each ESF bin averages the measured ESF over those offsets (this also catches residuals that
+    follow the rows' sub-pixel phases, which the spread alone misses by up to 1.6 x at 3 deg tilt).  The
+    ratio of the two MTFs (same window) is the factor by which the departure lowers the measured MTF; the
+    largest shift it implies up to Nyquist decides.
+
+    ``d`` are the projected distances of the pixels of the lines ``rows`` (row-major), ``ridge`` the
+    (lines, edge positions) the fit ``coef`` was made from, ``esf_fit = (x, normalised ESF, window half-width)``
+    and ``mtf`` the measured MTF at ``f``.
+    """
+    x, esf, half_w = esf_fit
+    found = unfitted_curvature(*ridge, coef, f, mtf)
+    if found is None or found[0] <= _CURVE_SCREEN * _CURVE_MTF_SHIFT:
+        return []
+    _, _, spread, k = found
+    lines, pos = ridge
+    tc = (lines - lines.mean()) / max(float(np.ptp(lines)), 1.0)
+    truth = np.polyfit(tc, pos, k)
+    rr = rows.astype(float)
+    slope = np.polyval(np.polyder(coef), rr) if len(coef) > 1 else np.zeros(rr.size)
+    # true distance = projected distance - (true edge - fitted edge) along the normal
+    r_line = -(np.polyval(truth, (rr - lines.mean()) / max(float(np.ptp(lines)), 1.0)) - np.polyval(coef, rr))
+    r_line /= np.sqrt(1.0 + slope**2)
+    r = np.repeat(r_line, d.size // rows.size)
+    w = float(x[1] - x[0])
+    kb = np.rint((d - x[0]) / w).astype(int)
+    ok = (kb >= 0) & (kb < x.size)
+    delta = np.interp(d[ok] + r[ok], x, esf) - np.interp(d[ok], x, esf)
+    n = np.bincount(kb[ok], minlength=x.size)
+    smeared = esf + np.bincount(kb[ok], weights=delta, minlength=x.size) / np.maximum(n, 1)
+    band = (f > 0) & (f <= 0.5 + 1e-9)
+    m_e, m_s = window_mtf(x, esf, half_w, f[band]), window_mtf(x, smeared, half_w, f[band])
+    # the measured ESF is itself smeared by the departure: the edge's own MTF is mtf / (m_s / m_e)
+    diff = np.abs(m_e * (m_e / np.maximum(m_s, 0.1 * m_e) - 1.0))
+    i = int(np.argmax(diff))
+    if diff[i] <= _CURVE_MTF_SHIFT:
+        return []
+    return [curvature_bias_flag(len(coef) - 1, float(diff[i]), float(f[band][i]), spread, k, forced=forced)]
+
+
+def curvature_bias_flag(deg: int, shift: float, f_at: float, spread_px: float, k: int, *, forced: bool):
+    """The ``curvature_bias`` flag: the MTF of a degree-``k`` fit differs by ``shift`` at ``f_at`` cy/px."""
+    how = (
+        "measure with fit_degree='auto' (or a higher degree)"
+        if forced
+        else f"the automatic choice kept degree {deg} (the curvature is below its evidence threshold); check with "
+        f"fit_degree={k}"
+    )
+    return (
+        "curvature_bias",
+        f"edge curvature left by the degree-{deg} fit: the edge departs from it by up to {spread_px:.2f} px, "
+        f"which spreads the ESF; a degree-{k} fit moves the MTF by {shift:.3f} (at {f_at:.2f} cy/px); {how}",
+    )
+
+
+def quantisation_step(data: np.ndarray) -> float | None:
+    """The step of the value lattice the region's pixels sit on (1 for most integer images), or None.
+
+    None for continuous data (more distinct values than half the pixels, or values off any lattice)."""
+    u = np.unique(data)
+    if u.size < 2 or u.size > 0.5 * data.size:
+        return None
+    q = float(np.min(np.diff(u)))
+    if not q > 1e-7 * float(u[-1] - u[0]):  # float data that merely repeat a few values
+        return None
+    k = (u - u[0]) / q
+    if not np.allclose(k, np.round(k), rtol=0.0, atol=1e-3):
+        return None
+    return q
+
+
+def quantisation_flags(q: float, x: np.ndarray, esf: np.ndarray, resid: np.ndarray) -> list[tuple[str, str]]:
+    """Flag (``quantisation``) an edge whose step spans few quantisation steps that the noise does not dither.
+
+    Without noise each pixel is rounded to the lattice of step ``q`` and the binned ESF becomes a staircase
+    that biases the MTF.  On exact Gaussian-PSF edges (benchmarks/bench_edge_audit.py) the largest error up
+    to Nyquist is 0.3-0.65 / L for a step of L levels (100 -> 120 DN: 0.02-0.03, 10 % at Nyquist), so it
+    exceeds 0.01 below about 65 levels.  Noise of >= 0.45 steps rms dithers the rounding and leaves it
+    unbiased (the staircase's first harmonic falls by exp(-2 pi^2 s^2) < 1/50); the residual rms about
+    the binned ESF (the robust sigma sees only the mode of rounded noise) measures it.
+    """
+    q4 = max(2, esf.size // 4)
+    step = abs(float(np.median(esf[-q4:]) - np.median(esf[:q4])))
+    levels = step / q
+    keep = np.abs(resid) < max(0.1 * step, 2 * q)
+    dither = float(np.sqrt(np.mean(resid[keep] ** 2))) / q if np.any(keep) else 0.0
+    bias = _QUANT_BIAS / max(levels, 1e-9)
+    if bias <= 0.01 or dither >= _QUANT_DITHER:
+        return []
+    return [
+        (
+            "quantisation",
+            f"quantised values: the edge step is {levels:.0f} quantisation steps of {q:g} (one step = "
+            f"{100 / max(levels, 1e-9):.1f} % of the contrast) and the noise ({dither:.2f} steps rms) is too small to "
+            f"dither them; the MTF may be off by up to about {bias:.2f} (worst case; a larger contrast or noise "
+            "of half a step avoids it)",
+        )
+    ]

@@ -55,7 +55,10 @@ from satchain.measure._edge_checks import (
     check_saturation,
     check_single_edge,
     critical_angle_flags,
+    curvature_flags,
     fit_plateaus,
+    quantisation_flags,
+    quantisation_step,
 )
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
@@ -196,7 +199,8 @@ def measure_edge(
     data = crop_roi(image, roi, min_size=12)
     flags = check_saturation(data, saturation_level)
     work, direction, transposed, sign = _orient(data)
-    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags = _binned_esf(work, deg, os_)
+    q_step = quantisation_step(data)
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step)
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
@@ -211,6 +215,8 @@ def measure_edge(
         mtf = np.sqrt(np.maximum(mtf**2 - mtf_sig**2, 0.0))
         mtf[0] = 1.0
     f, mtf, mtf_sig = _check_mtf(f, mtf, mtf_sig, flags)
+    d_rows = _project(work[rows], rows, coef)[0]
+    flags += curvature_flags(d_rows, rows, coef, ridge, (x, esf_n, half_w), f, mtf, forced=deg is not None)
     flags += critical_angle_flags(slope, len(rows), mode, w)
     if sigma > 0 and contrast / sigma < _LOW_CNR:
         flags.append(("low_cnr", f"low contrast-to-noise {contrast / sigma:.1f} (< {_LOW_CNR:g}): MTF noise is large"))
@@ -247,9 +253,10 @@ def measure_edge(
     )
 
 
-def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
-    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags)."""
-    coef, rows, flags = _locate_edge(work, deg)
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None):
+    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags,
+    (lines, edge positions) of the ridge)."""
+    coef, rows, flags, ridge = _locate_edge(work, deg)
     d, v, slope, phase = _project(work[rows], rows, coef)
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
@@ -262,8 +269,11 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
     if r_flags:
         flags += r_flags
         x, esf_raw, counts = bin_esf(d, v, w, origin)
-    sigma = robust_sigma(v - np.interp(d, x, esf_raw))
-    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags
+    resid = v - np.interp(d, x, esf_raw)
+    sigma = robust_sigma(resid)
+    if q_step is not None:
+        flags += quantisation_flags(q_step, x, esf_raw, resid)
+    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
 
 
 def _trim_ends(x, esf, counts, frac: float = 0.3):
@@ -463,7 +473,7 @@ def _locate_edge(work: np.ndarray, deg: int | None):
 
     ``deg`` None chooses the degree from the positions (:func:`_pick_degree`).  Refuses regions where the
     positions of many lines do not line up or their steps differ (a corner, a second edge); returns
-    (coef, rows used, flags).
+    (coef, rows used, flags, (rows used, their edge positions)).
     """
     ny, nx = work.shape
     g = np.zeros_like(work)
@@ -489,7 +499,8 @@ def _locate_edge(work: np.ndarray, deg: int | None):
             f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
             "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
         )
-    used = r_used[inl & ~odd].astype(int)
+    good = inl & ~odd
+    used = r_used[good].astype(int)
     flags = []
     if used.size < _SHORT_ROWS:
         flags.append(
@@ -504,7 +515,7 @@ def _locate_edge(work: np.ndarray, deg: int | None):
                 f"{len(coef) - 1} polynomial",
             )
         )
-    return coef, used, flags
+    return coef, used, flags, (r_used[good], cen[good])
 
 
 def _curvature(coef, rows) -> float:
