@@ -20,7 +20,8 @@ __all__ = [
     "fit_plateaus",
     "check_single_edge",
     "critical_angle_flags",
-    "curvature_flags",
+    "curvature_bias_flag",
+    "curvature_shift",
     "unfitted_curvature",
     "quantisation_step",
     "quantisation_flags",
@@ -34,8 +35,6 @@ _MODEL_MISS_FRACTION = 0.03  # pixels the edge model misses by > 1/4 step above 
 _FLAT_PLATEAU_TOL = 0.15  # a plateau departing from a straight line by this much of the step: a second edge
 _QUANT_BIAS = 0.65  # worst MTF error (up to Nyquist) of an undithered quantised edge x its step count
 _QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the quantisation (bias / 50)
-_CURVE_MTF_SHIFT = 0.01  # an unfitted curvature moving the MTF (up to Nyquist) by more than this is flagged
-_CURVE_SCREEN = 0.3  # ... computed exactly where the first estimate exceeds this fraction of it
 _CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
@@ -237,35 +236,17 @@ def unfitted_curvature(lines, pos, coef, f, mtf):
     return worst
 
 
-def curvature_flags(d, rows, coef, ridge, esf_fit, f, mtf, *, forced: bool) -> list[tuple[str, str]]:
-    """Flag ``curvature_bias`` when an edge curvature left by the fit used moves the MTF by > 0.01.
+def curvature_shift(d, r, x, esf, half_w: float, f):
+    """Largest MTF shift up to Nyquist that edge departures ``r`` (px along the normal) cause: ``(shift, f)``.
 
-    :func:`unfitted_curvature` finds the departure of the edge positions from the fit (resolved above their
-    noise) and a first estimate from its spread alone; where that is not negligible, the shift is computed
-    exactly for this region: every sample's true distance is its projected one plus the departure of its
-    line, so each ESF bin averages the measured ESF over those offsets (this also catches residuals that
-    follow the rows' sub-pixel phases, which the spread alone misses by up to 1.6 x at 3 deg tilt).  The
-    ratio of the two MTFs (same window) is the factor by which the departure lowers the measured MTF; the
-    largest shift it implies up to Nyquist decides.
-
-    ``d`` are the projected distances of the pixels of the lines ``rows`` (row-major), ``ridge`` the
-    (lines, edge positions) the fit ``coef`` was made from, ``esf_fit = (x, normalised ESF, window half-width)``
-    and ``mtf`` the measured MTF at ``f``.
+    ``d`` are the samples' distances as projected on the fitted edge, ``r`` the departure of each sample's
+    line from it (its true distance is ``d + r``), ``esf`` the ESF measured along the better edge (bins at
+    ``x``).  Each bin of the projected ESF averages the true ESF over its samples' offsets, so it is
+    ``esf + mean(esf(d + r) - esf(d))``; both go through the same LSF map (window ``half_w``) and their MTFs
+    differ by the shift.  This is exact for the region (residuals that follow the rows' sub-pixel phases
+    included, which a spread of the positions alone misses by up to 1.7 x at 2 deg tilt), and the noise of
+    ``esf`` is common to both.
     """
-    x, esf, half_w = esf_fit
-    found = unfitted_curvature(*ridge, coef, f, mtf)
-    if found is None or found[0] <= _CURVE_SCREEN * _CURVE_MTF_SHIFT:
-        return []
-    _, _, spread, k = found
-    lines, pos = ridge
-    tc = (lines - lines.mean()) / max(float(np.ptp(lines)), 1.0)
-    truth = np.polyfit(tc, pos, k)
-    rr = rows.astype(float)
-    slope = np.polyval(np.polyder(coef), rr) if len(coef) > 1 else np.zeros(rr.size)
-    # true distance = projected distance - (true edge - fitted edge) along the normal
-    r_line = -(np.polyval(truth, (rr - lines.mean()) / max(float(np.ptp(lines)), 1.0)) - np.polyval(coef, rr))
-    r_line /= np.sqrt(1.0 + slope**2)
-    r = np.repeat(r_line, d.size // rows.size)
     w = float(x[1] - x[0])
     kb = np.rint((d - x[0]) / w).astype(int)
     ok = (kb >= 0) & (kb < x.size)
@@ -273,13 +254,9 @@ def curvature_flags(d, rows, coef, ridge, esf_fit, f, mtf, *, forced: bool) -> l
     n = np.bincount(kb[ok], minlength=x.size)
     smeared = esf + np.bincount(kb[ok], weights=delta, minlength=x.size) / np.maximum(n, 1)
     band = (f > 0) & (f <= 0.5 + 1e-9)
-    m_e, m_s = window_mtf(x, esf, half_w, f[band]), window_mtf(x, smeared, half_w, f[band])
-    # the measured ESF is itself smeared by the departure: the edge's own MTF is mtf / (m_s / m_e)
-    diff = np.abs(m_e * (m_e / np.maximum(m_s, 0.1 * m_e) - 1.0))
+    diff = np.abs(window_mtf(x, esf, half_w, f[band]) - window_mtf(x, smeared, half_w, f[band]))
     i = int(np.argmax(diff))
-    if diff[i] <= _CURVE_MTF_SHIFT:
-        return []
-    return [curvature_bias_flag(len(coef) - 1, float(diff[i]), float(f[band][i]), spread, k, forced=forced)]
+    return float(diff[i]), float(f[band][i])
 
 
 def curvature_bias_flag(deg: int, shift: float, f_at: float, spread_px: float, k: int, *, forced: bool):
