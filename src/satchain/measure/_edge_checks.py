@@ -12,6 +12,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
+from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
     "check_model",
@@ -19,6 +20,11 @@ __all__ = [
     "fit_plateaus",
     "check_single_edge",
     "critical_angle_flags",
+    "curvature_bias_flag",
+    "curvature_shift",
+    "unfitted_curvature",
+    "quantisation_step",
+    "quantisation_flags",
     "CRITICAL_TILTS_DEG",
 ]
 
@@ -27,6 +33,9 @@ CRITICAL_TILTS_DEG = (0.0, 45.0, 26.565, 18.435, 14.036)
 _SAT_REFUSE_FRACTION = 0.01  # pixels at the saturation level above this fraction: refuse
 _MODEL_MISS_FRACTION = 0.03  # pixels the edge model misses by > 1/4 step above this fraction: refuse
 _FLAT_PLATEAU_TOL = 0.15  # a plateau departing from a straight line by this much of the step: a second edge
+_QUANT_BIAS = 0.65  # worst MTF error (up to Nyquist) of an undithered quantised edge x its step count
+_QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the quantisation (bias / 50)
+_CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
 def _pixel_noise(data: np.ndarray) -> float:
@@ -187,3 +196,124 @@ def check_model(work, d_all, x, esf, model, sigma) -> None:
             "of the step: the region holds more than one straight edge (a corner, a stripe, another target); "
             "give an ROI around one straight edge"
         )
+
+
+def unfitted_curvature(lines, pos, coef, f, mtf):
+    """Screen for an edge curvature that the fitted polynomial leaves in the edge positions.
+
+    ``pos`` are the per-line edge positions (px along the line) at ``lines``, ``coef`` the polynomial used.
+    Fits of each higher degree (up to 3) give the departure ``r`` of the edge from the fit used, along the
+    normal.  Projecting along a wrong edge spreads the ESF by the distribution of ``r``, which multiplies the
+    MTF by ``F(f) = |mean exp(2 pi i f r)|``: the measured ``mtf`` is about ``mtf / F - mtf`` below the edge's.
+    Only extra terms resolved above the positions' noise (F statistic > 9) count.
+
+    Returns ``(shift, f_at, spread_px, degree)`` for the largest estimated MTF shift up to Nyquist (``degree``
+    the lowest higher degree that shows it, ``spread_px`` the range of ``r``), or None.
+    """
+    lines = np.asarray(lines, dtype=float)
+    pos = np.asarray(pos, dtype=float)
+    deg = len(coef) - 1
+    n = lines.size
+    tc = (lines - lines.mean()) / max(float(np.ptp(lines)), 1.0)
+    used = np.polyval(coef, lines)
+    rss_used = float(np.sum((pos - used) ** 2))
+    band = (f > 0) & (f <= 0.5 + 1e-9)
+    worst = None
+    for k in range(deg + 1, 4):
+        dof = n - k - 1
+        if dof < 4 or not np.any(band):
+            break
+        fit = np.polyval(np.polyfit(tc, pos, k), tc)
+        rss = float(np.sum((pos - fit) ** 2))
+        if not (rss_used - rss) / (k - deg) > _CURVE_F_STAT * max(rss / dof, 1e-30):
+            continue
+        r = (fit - used) / np.sqrt(1.0 + np.gradient(fit, lines) ** 2)  # along the local normal
+        factor = np.abs(np.exp(2j * np.pi * np.outer(f[band], r - r.mean())).mean(axis=1))
+        shift = mtf[band] * (1.0 / np.maximum(factor, 1e-3) - 1.0)
+        i = int(np.argmax(shift))
+        if worst is None or shift[i] > 1.25 * worst[0]:  # a higher degree must show clearly more
+            worst = (float(shift[i]), float(f[band][i]), float(np.ptp(r)), k)
+    return worst
+
+
+def curvature_shift(d, r, x, esf, half_w: float, f):
+    """Largest MTF shift up to Nyquist that edge departures ``r`` (px along the normal) cause: ``(shift, f)``.
+
+    ``d`` are the samples' distances as projected on the fitted edge, ``r`` the departure of each sample's
+    line from it (its true distance is ``d + r``), ``esf`` the ESF measured along the better edge (bins at
+    ``x``).  Each bin of the projected ESF averages the true ESF over its samples' offsets, so it is
+    ``esf + mean(esf(d + r) - esf(d))``; both go through the same LSF map (window ``half_w``) and their MTFs
+    differ by the shift.  This is exact for the region (residuals that follow the rows' sub-pixel phases
+    included, which a spread of the positions alone misses by up to 1.7 x at 2 deg tilt), and the noise of
+    ``esf`` is common to both.
+    """
+    w = float(x[1] - x[0])
+    kb = np.rint((d - x[0]) / w).astype(int)
+    ok = (kb >= 0) & (kb < x.size)
+    delta = np.interp(d[ok] + r[ok], x, esf) - np.interp(d[ok], x, esf)
+    n = np.bincount(kb[ok], minlength=x.size)
+    smeared = esf + np.bincount(kb[ok], weights=delta, minlength=x.size) / np.maximum(n, 1)
+    band = (f > 0) & (f <= 0.5 + 1e-9)
+    diff = np.abs(window_mtf(x, esf, half_w, f[band]) - window_mtf(x, smeared, half_w, f[band]))
+    i = int(np.argmax(diff))
+    return float(diff[i]), float(f[band][i])
+
+
+def curvature_bias_flag(deg: int, shift: float, f_at: float, spread_px: float, k: int, *, forced: bool):
+    """The ``curvature_bias`` flag: the MTF of a degree-``k`` fit differs by ``shift`` at ``f_at`` cy/px."""
+    how = (
+        "measure with fit_degree='auto' (or a higher degree)"
+        if forced
+        else f"the automatic choice kept degree {deg} (the curvature is below its evidence threshold); check with "
+        f"fit_degree={k}"
+    )
+    return (
+        "curvature_bias",
+        f"edge curvature left by the degree-{deg} fit: the edge departs from it by up to {spread_px:.2f} px, "
+        f"which spreads the ESF; a degree-{k} fit moves the MTF by {shift:.3f} (at {f_at:.2f} cy/px); {how}",
+    )
+
+
+def quantisation_step(data: np.ndarray) -> float | None:
+    """The step of the value lattice the region's pixels sit on (1 for most integer images), or None.
+
+    None for continuous data (more distinct values than half the pixels, or values off any lattice)."""
+    u = np.unique(data)
+    if u.size < 2 or u.size > 0.5 * data.size:
+        return None
+    q = float(np.min(np.diff(u)))
+    if not q > 1e-7 * float(u[-1] - u[0]):  # float data that merely repeat a few values
+        return None
+    k = (u - u[0]) / q
+    if not np.allclose(k, np.round(k), rtol=0.0, atol=1e-3):
+        return None
+    return q
+
+
+def quantisation_flags(q: float, x: np.ndarray, esf: np.ndarray, resid: np.ndarray) -> list[tuple[str, str]]:
+    """Flag (``quantisation``) an edge whose step spans few quantisation steps that the noise does not dither.
+
+    Without noise each pixel is rounded to the lattice of step ``q`` and the binned ESF becomes a staircase
+    that biases the MTF.  On exact Gaussian-PSF edges (benchmarks/bench_edge_audit.py) the largest error up
+    to Nyquist is 0.3-0.65 / L for a step of L levels (100 -> 120 DN: 0.02-0.03, 10 % at Nyquist), so it
+    exceeds 0.01 below about 65 levels.  Noise of >= 0.45 steps rms dithers the rounding and leaves it
+    unbiased (the staircase's first harmonic falls by exp(-2 pi^2 s^2) < 1/50); the residual rms about
+    the binned ESF (the robust sigma sees only the mode of rounded noise) measures it.
+    """
+    q4 = max(2, esf.size // 4)
+    step = abs(float(np.median(esf[-q4:]) - np.median(esf[:q4])))
+    levels = step / q
+    keep = np.abs(resid) < max(0.1 * step, 2 * q)
+    dither = float(np.sqrt(np.mean(resid[keep] ** 2))) / q if np.any(keep) else 0.0
+    bias = _QUANT_BIAS / max(levels, 1e-9)
+    if bias <= 0.01 or dither >= _QUANT_DITHER:
+        return []
+    return [
+        (
+            "quantisation",
+            f"quantised values: the edge step is {levels:.0f} quantisation steps of {q:g} (one step = "
+            f"{100 / max(levels, 1e-9):.1f} % of the contrast) and the noise ({dither:.2f} steps rms) is too small to "
+            f"dither them; the MTF may be off by up to about {bias:.2f} (worst case; a larger contrast or noise "
+            "of half a step avoids it)",
+        )
+    ]

@@ -25,14 +25,19 @@ Algorithm (ISO 12233:2017 annex D, plus the improvements marked *)
    that line up), no clipped plateau; *a linear illumination gradient along the normal is removed*.
    First difference of the binned ESF, corrected for its transfer function ``sinc(f w)``.
 4. *Noise-adaptive regularisation*: the LSF is kept raw inside a Tukey window of half-width ``W`` around the
-   edge and taken from a Gaussian-smoothed ESF outside it.  The smoothed tails keep the low-frequency mass of
-   long (e.g. diffraction) tails, so the normalisation at f = 0 is not biased by the window, while the tails
-   add almost no high-frequency noise.  ``W`` is the largest half-width whose predicted noise on the MTF at
+   edge; the part outside it is Gaussian-smoothed (``win g + S((1 - win) g)``).  Only the tails are smoothed,
+   so no mass of the core moves (smoothing the whole ESF read a Gaussian-like PSF 0.02 low at 0.1-0.15 cy/px
+   once the window shrank to 5 px at SNR <= 100), the smoothed tails keep the low-frequency mass of long
+   (e.g. diffraction) tails, so the normalisation at f = 0 is not biased by the window, and they add almost
+   no high-frequency noise.  ``W`` is the largest half-width whose predicted noise on the MTF at
    Nyquist (propagated exactly from the per-bin noise) stays below ``noise_target``.
 5. MTF(f) = |DFT(LSF)(f)| / DFT(LSF)(0) / corrections, evaluated directly at the output frequencies, with
    its *standard deviation at every frequency propagated exactly (first order) from the measured noise*.
    An MTF leaving [0, 1.2] up to Nyquist is refused; quality flags (``flags``: codes, ``warnings``: text)
-   report near-critical angles, curvature, illumination gradient, low contrast-to-noise and clipping.
+   report near-critical angles, curvature, illumination gradient, low contrast-to-noise and clipping, an
+   *edge curvature the fit leaves that moves the MTF by > 0.01* (``curvature_bias``, e.g. a forced straight
+   fit on a curved edge) and *quantised values too coarse for the step and not dithered by noise*
+   (``quantisation``).
 
 Edge metrics follow the GIQE (Leachtenauer et al. 1997, GIQE-4) definitions on the normalised ESF:
 ``rer = ESF(+0.5) - ESF(-0.5)`` and the overshoot ``H`` = the maximum of the ESF between 1.0 and 3.0 px on the
@@ -55,7 +60,12 @@ from satchain.measure._edge_checks import (
     check_saturation,
     check_single_edge,
     critical_angle_flags,
+    curvature_bias_flag,
+    curvature_shift,
     fit_plateaus,
+    quantisation_flags,
+    quantisation_step,
+    unfitted_curvature,
 )
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
@@ -71,6 +81,8 @@ _MTF_MAX = 1.2  # an MTF above this up to Nyquist is not a measurement
 _LOW_CNR = 25.0  # contrast-to-noise below which the result is flagged
 _F_DEGREE = 30.0  # F statistic a higher fit degree must beat ...
 _SAGITTA_PX = 0.1  # ... while moving the edge by more than this (px)
+_CURVE_MTF_SHIFT = 0.01  # an edge curvature left by the fit moving the MTF (up to Nyquist) by more: flagged
+_CURVE_SCREEN = 0.3  # ... computed exactly where the estimate from the positions' spread exceeds this x it
 
 
 @dataclass(frozen=True)
@@ -162,7 +174,9 @@ def measure_edge(
         Predicted noise on the MTF at Nyquist that the adaptive window aims at.
     fit_degree : int or "auto"
         Degree of the robust polynomial fitted to the edge positions: 1 (straight), 2 or 3 (curved, ISO
-        12233:2017 allows them for lens distortion), or "auto" (default): chosen from the data.
+        12233:2017 allows them for lens distortion), or "auto" (default): chosen from the data.  A curvature
+        the degree used leaves in the edge positions is flagged (``curvature_bias``) when it moves the MTF by
+        more than 0.01.
     saturation_level : float, optional
         Values >= this are saturated; for integer images the dtype maximum is used by default.
     debias : bool
@@ -196,7 +210,8 @@ def measure_edge(
     data = crop_roi(image, roi, min_size=12)
     flags = check_saturation(data, saturation_level)
     work, direction, transposed, sign = _orient(data)
-    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags = _binned_esf(work, deg, os_)
+    q_step = quantisation_step(data)
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step)
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
@@ -211,6 +226,7 @@ def measure_edge(
         mtf = np.sqrt(np.maximum(mtf**2 - mtf_sig**2, 0.0))
         mtf[0] = 1.0
     f, mtf, mtf_sig = _check_mtf(f, mtf, mtf_sig, flags)
+    flags += _curvature_flags(work, (rows, coef, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None)
     flags += critical_angle_flags(slope, len(rows), mode, w)
     if sigma > 0 and contrast / sigma < _LOW_CNR:
         flags.append(("low_cnr", f"low contrast-to-noise {contrast / sigma:.1f} (< {_LOW_CNR:g}): MTF noise is large"))
@@ -247,9 +263,10 @@ def measure_edge(
     )
 
 
-def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
-    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags)."""
-    coef, rows, flags = _locate_edge(work, deg)
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None):
+    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags,
+    (lines, edge positions) of the ridge)."""
+    coef, rows, flags, ridge = _locate_edge(work, deg)
     d, v, slope, phase = _project(work[rows], rows, coef)
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
@@ -262,8 +279,42 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int):
     if r_flags:
         flags += r_flags
         x, esf_raw, counts = bin_esf(d, v, w, origin)
-    sigma = robust_sigma(v - np.interp(d, x, esf_raw))
-    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags
+    resid = v - np.interp(d, x, esf_raw)
+    sigma = robust_sigma(resid)
+    if q_step is not None:
+        flags += quantisation_flags(q_step, x, esf_raw, resid)
+    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
+
+
+def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool):
+    """Flag ``curvature_bias`` when an edge curvature the fit leaves moves the MTF by more than 0.01.
+
+    ``fit = (rows, coef, (lines, edge positions))``, ``opts = (oversampling, noise sigma, window half-width)``.
+    :func:`unfitted_curvature` finds a departure of the positions from the fit resolved above their noise,
+    with a first estimate from its spread; where that is not negligible the ESF is measured along the
+    higher-degree edge and :func:`curvature_shift` gives the exact shift for this region.
+    """
+    rows, coef, ridge = fit
+    os_, sigma, half_w = opts
+    found = unfitted_curvature(*ridge, coef, f, mtf)
+    if found is None or found[0] <= _CURVE_SCREEN * _CURVE_MTF_SHIFT:
+        return []
+    _, _, spread, k = found
+    try:
+        coef_k, _, _, _, _, (x, esf, counts, _), _, _ = _binned_esf(work, k, os_)
+        esf = _normalise(x, esf, counts, sigma, rows.size)[0]
+    except InputError:  # the better edge is refused: keep the estimate from the spread
+        shift, f_at = found[0], found[1]
+    else:
+        rr = rows.astype(float)
+        slope = np.polyval(np.polyder(coef), rr) if len(coef) > 1 else np.zeros(rr.size)
+        # a sample's true distance is its projected one minus the edge's departure along the normal
+        r = -(np.polyval(coef_k, rr) - np.polyval(coef, rr)) / np.sqrt(1.0 + slope**2)
+        d = _project(work[rows], rows, coef)[0]
+        shift, f_at = curvature_shift(d, np.repeat(r, work.shape[1]), x, esf, half_w, f)
+    if shift <= _CURVE_MTF_SHIFT:
+        return []
+    return [curvature_bias_flag(len(coef) - 1, shift, f_at, spread, k, forced=forced)]
 
 
 def _trim_ends(x, esf, counts, frac: float = 0.3):
@@ -463,7 +514,7 @@ def _locate_edge(work: np.ndarray, deg: int | None):
 
     ``deg`` None chooses the degree from the positions (:func:`_pick_degree`).  Refuses regions where the
     positions of many lines do not line up or their steps differ (a corner, a second edge); returns
-    (coef, rows used, flags).
+    (coef, rows used, flags, (rows used, their edge positions)).
     """
     ny, nx = work.shape
     g = np.zeros_like(work)
@@ -489,7 +540,8 @@ def _locate_edge(work: np.ndarray, deg: int | None):
             f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
             "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
         )
-    used = r_used[inl & ~odd].astype(int)
+    good = inl & ~odd
+    used = r_used[good].astype(int)
     flags = []
     if used.size < _SHORT_ROWS:
         flags.append(
@@ -504,7 +556,7 @@ def _locate_edge(work: np.ndarray, deg: int | None):
                 f"{len(coef) - 1} polynomial",
             )
         )
-    return coef, used, flags
+    return coef, used, flags, (r_used[good], cen[good])
 
 
 def _curvature(coef, rows) -> float:
