@@ -65,7 +65,8 @@ def test_every_tilt_1_to_45_deg_noise_free(tilt, size, alt, sign, invert):
     near = min(abs(tilt - c) for c in (45.0, 26.565, 18.435, 14.036))
     if near < 0.5:
         assert "angle_near_critical" in r.flags
-    if near > 1.0 and tilt > 1.0:
+    # the flag reads the *measured* tilt (within 1 deg of a critical one): leave a margin for the fit's error
+    if near > 1.05 and tilt > 1.05:
         assert "angle_near_critical" not in r.flags
 
 
