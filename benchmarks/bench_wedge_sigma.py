@@ -84,9 +84,11 @@ def _case(name, fn, img, lw, avg, sigmas, seeds) -> None:
             continue
         val, sd = np.array(val), np.array(sd)
         err, scatter = val - ref.resolved_line_width_px, float(np.std(val, ddof=1))
-        print(f"  {name:6s} sigma {s:<6g} noise est/true {np.mean(est):5.2f}  error {np.mean(err):+.4f} px  "
-              f"scatter {scatter:.4f}  mean sigma {np.mean(sd):.4f}  scatter/sigma {scatter / np.mean(sd):5.2f}  "
-              f"coverage(2 sigma) {np.mean(np.abs(err) < 2 * sd):4.0%}" + (f"  ({refused} refused)" if refused else ""))
+        print(
+            f"  {name:6s} sigma {s:<6g} noise est/true {np.mean(est):5.2f}  error {np.mean(err):+.4f} px  "
+            f"scatter {scatter:.4f}  mean sigma {np.mean(sd):.4f}  scatter/sigma {scatter / np.mean(sd):5.2f}  "
+            f"coverage(2 sigma) {np.mean(np.abs(err) < 2 * sd):4.0%}" + (f"  ({refused} refused)" if refused else "")
+        )
 
 
 def main() -> None:
