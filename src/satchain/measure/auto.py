@@ -646,6 +646,7 @@ def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> Au
         direction="ACT" if direction == "ACT" else "ALT",
         threshold=threshold,
         pixel_m=p,
+        valid=inside if direction != "ACT" else inside.T,
     )
     summary = {
         "id": it["id"],
