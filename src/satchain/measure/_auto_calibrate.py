@@ -40,6 +40,7 @@ _MIN_REGION_PX = 25
 _MAX_SAMPLES = 1_000_000
 _BINS = 8
 _MAX_TAIL_FRACTION = 0.5
+_PASSES = 3
 
 _Region = tuple[float, np.ndarray, np.ndarray]  # (reflectance, rows, cols) of a uniform area's pixels
 
@@ -94,33 +95,43 @@ def _tail_kernel() -> np.ndarray:
     return np.where((r >= TAIL_RMIN_PX) & (r <= r_max), 1.0 / np.maximum(r, 1.0) ** 3, 0.0)
 
 
-def _tail_sum(data: np.ndarray, window, kernel: np.ndarray, far_level: float) -> np.ndarray:
-    """``S`` over ``window = (x0, y0, x1, y1)``: the r^-3 weighted sum of the image from ``TAIL_RMIN_PX`` to
-    ``TAIL_RMAX_PX``, the image mirrored at its borders, plus ``2 pi / R`` times ``far_level`` for beyond."""
-    from scipy.signal import oaconvolve
+class _Tail:
+    """The r^-3 tail sum over the part of the image within ``TAIL_RMAX_PX`` of ``window`` (the image mirrored
+    at its borders), plus ``2 pi / R`` times the mean for what lies beyond ``R``."""
 
-    r_max = TAIL_RMAX_PX
-    x0, y0, x1, y1 = window
-    ny, nx = data.shape
-    cx0, cy0, cx1, cy1 = max(0, x0 - r_max), max(0, y0 - r_max), min(nx, x1 + r_max), min(ny, y1 + r_max)
-    crop = np.asarray(data[cy0:cy1, cx0:cx1], dtype=float)
-    finite = np.isfinite(crop)
-    crop = np.where(finite, crop, np.median(crop[finite]))
-    pads = ((r_max - (y0 - cy0), r_max - (cy1 - y1)), (r_max - (x0 - cx0), r_max - (cx1 - x1)))
-    crop = np.pad(crop, pads, mode="symmetric")
-    return oaconvolve(crop, kernel, mode="valid") + (2 * math.pi / r_max) * far_level
+    def __init__(self, data: np.ndarray, window) -> None:
+        r_max = TAIL_RMAX_PX
+        x0, y0, x1, y1 = window
+        ny, nx = data.shape
+        self.x0, self.y0 = max(0, x0 - r_max), max(0, y0 - r_max)
+        crop = np.asarray(data[self.y0 : min(ny, y1 + r_max), self.x0 : min(nx, x1 + r_max)], dtype=float)
+        finite = np.isfinite(crop)
+        self.crop = np.where(finite, crop, np.median(crop[finite]))
+        self.kernel = _tail_kernel()
+        #: sum of the weights, the far part included: the tail fraction is K times this
+        self.weight = float(self.kernel.sum() + 2 * math.pi / r_max)
+
+    def sum(self, u: np.ndarray) -> np.ndarray:
+        from scipy.signal import oaconvolve
+
+        r_max = TAIL_RMAX_PX
+        padded = np.pad(u, r_max, mode="symmetric")
+        return oaconvolve(padded, self.kernel, mode="valid") + (2 * math.pi / r_max) * float(np.mean(u))
+
+    def at(self, s: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        return s[rows - self.y0, cols - self.x0]
 
 
-def _points(regions: list[_Region], data: np.ndarray, tail=None):
+def _points(regions: list[_Region], data: np.ndarray, tail: _Tail | None = None, s=None) -> np.ndarray:
     """Per region, up to ``_BINS`` points (rho, median value, median S, count) of its pixels binned by S."""
     out = []
     for refl, rows, cols in regions:
         v = data[rows, cols].astype(float)
-        s = np.zeros_like(v) if tail is None else tail[0][rows - tail[1][1], cols - tail[1][0]]
-        order = np.argsort(s, kind="stable")
+        sv = np.zeros_like(v) if tail is None else tail.at(s, rows, cols)
+        order = np.argsort(sv, kind="stable")
         nb = max(1, min(_BINS, v.size // _MIN_REGION_PX))
         for chunk in np.array_split(order, nb):
-            out.append((refl, float(np.median(v[chunk])), float(np.median(s[chunk])), chunk.size))
+            out.append((refl, float(np.median(v[chunk])), float(np.median(sv[chunk])), chunk.size))
     return np.array(out, dtype=float).reshape(-1, 4)
 
 
@@ -134,21 +145,45 @@ def _lsq(pts: np.ndarray, with_tail: bool):
     return coef, a @ coef
 
 
-def _fit(pts: np.ndarray, tail_weight: float | None):
+def _residual(pts: np.ndarray, model: np.ndarray, gain: float) -> float:
+    return float(np.max(np.abs(pts[:, 1] - model)) / gain) if gain > 0 else math.inf
+
+
+def _fit_tail(regions: list[_Region], data: np.ndarray, window, offset0: float):
+    """(offset, gain, tail fraction M, max residual) of the tail model, or None when it does not apply.
+
+    ``u`` estimates the scene above the offset, ``gain * rho``; each pass fits ``value = offset +
+    (1 - M) gain rho + K S(u)`` and deconvolves the tail from the image for the next ``u``
+    (``u = (value - offset - K S(u)) / (1 - M)``): the error shrinks by ~M per pass."""
+    tail = _Tail(data, window)
+    u = tail.crop - offset0
+    fit = None
+    for _ in range(_PASSES):
+        s = tail.sum(u)
+        pts = _points(regions, data, tail, s)
+        got = _lsq(pts, True) if len(pts) >= 4 else None
+        if got is None:
+            return None
+        (offset, g1, k), model = got
+        m = k * tail.weight
+        if not (0.0 <= m < _MAX_TAIL_FRACTION and g1 > 0):
+            return None
+        fit = (float(offset), float(g1 / (1 - m)), float(m), _residual(pts, model, g1))
+        u = (tail.crop - offset - k * s) / (1 - m)
+    return fit
+
+
+def _fit(regions: list[_Region], data: np.ndarray, window):
     """(offset, gain, tail fraction M or None, max residual in reflectance), or None when no line fits."""
-    if tail_weight is not None and len(pts) >= 4:
-        got = _lsq(pts, True)
-        if got is not None:
-            (a1, b1, k), model = got
-            m = k * tail_weight
-            if 0.0 <= m < _MAX_TAIL_FRACTION and b1 > 0:
-                res = float(np.max(np.abs(pts[:, 1] - model)) / b1)
-                return a1 / (1 - m), b1 / (1 - m), float(m), res
+    pts = _points(regions, data)
     got = _lsq(pts, False)
     if got is None:
         return None
-    (a1, b1), model = got
-    return a1, b1, None, float(np.max(np.abs(pts[:, 1] - model)) / b1) if b1 > 0 else math.inf
+    (offset, gain), model = got
+    plain = (float(offset), float(gain), None, _residual(pts, model, gain))
+    if gain <= 0:
+        return plain
+    return _fit_tail(regions, data, window, offset) or plain
 
 
 def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) -> dict:
@@ -181,10 +216,7 @@ def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) ->
     refl = np.array([lv[0] for lv in levels])
     vals = np.array([lv[1] for lv in levels])
     if refl.size and np.ptp(refl) > 0.05:
-        kernel = _tail_kernel()
-        finite = data[np.isfinite(data)]
-        tail = (_tail_sum(data, window, kernel, float(np.mean(finite[:: max(1, finite.size // _MAX_SAMPLES)]))), window)
-        fit = _fit(_points(regions, data, tail), float(kernel.sum() + 2 * math.pi / TAIL_RMAX_PX))
+        fit = _fit(regions, data, window)
         if fit is not None and fit[1] > 0:
             offset, gain, m, res = fit
             how = (
