@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from satchain.measure._auto_common import Frame, Skip
+from satchain.scene.targets import SlantedEdge
 
 __all__ = ["ERODE_PX", "TAIL_RMAX_PX", "TAIL_RMIN_PX", "calibrate"]
 
@@ -193,7 +194,7 @@ def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) ->
     of the PSF beyond :data:`TAIL_RMIN_PX`, None when not modelled)."""
     regions: list[_Region] = []
     for it in items:
-        if it.get("kind") == "slanted_edge":
+        if it.get("kind") == SlantedEdge.kind:
             try:
                 regions += _edge_regions(data, it, frame)
             except (KeyError, TypeError, ValueError):
