@@ -67,7 +67,6 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "direction": r.direction,
         "direction_truth": measures.upper(),
         "mtf_at_nyquist": r.mtf_at_nyquist,
-        "mtf_at_nyquist_std": r.mtf_at_nyquist_std,
         "mtf_at_nyquist_sigma": r.mtf_at_nyquist_sigma,
         "mtf_sigma": r.mtf_sigma,
         "flags": list(r.flags),
