@@ -35,18 +35,20 @@ def _blur(rho: np.ndarray, q: float, eps: float) -> np.ndarray:
     return BG + np.fft.irfft2(np.fft.rfft2(a) * otf, s=a.shape)[PAD:-PAD, PAD:-PAD]
 
 
-def _scene() -> Scene:
+def _scene(apart: bool = False) -> Scene:
+    """Two slanted edges in a 0.2 background; ``apart``: 240 m apart (their tail windows are separate)."""
+    y2 = 272.0 if apart else 92.0
     items = (
         SlantedEdge("e1", center_m=(32.0, 32.0), size_m=50.0, angle_deg=5.0, measures="act"),
-        SlantedEdge("e2", center_m=(32.0, 92.0), size_m=50.0, angle_deg=8.0, measures="alt", dark=0.1, bright=0.6),
+        SlantedEdge("e2", center_m=(32.0, y2), size_m=50.0, angle_deg=8.0, measures="alt", dark=0.1, bright=0.6),
     )
-    return Scene(64.0, 124.0, items, background=BG, pixel_m=P)
+    return Scene(64.0, y2 + 32.0, items, background=BG, pixel_m=P)
 
 
 @functools.lru_cache(maxsize=4)
-def _blurred(q: float, eps: float) -> tuple[np.ndarray, dict]:
+def _blurred(q: float, eps: float, apart: bool = False) -> tuple[np.ndarray, dict]:
     """(image in reflectance seen through the pupil, truth record)."""
-    scene = _scene()
+    scene = _scene(apart)
     return _blur(scene.render(), q, eps), scene.truth()
 
 
@@ -57,9 +59,11 @@ def _line_through_medians(cal: dict) -> tuple[float, float]:
     return float(offset), float(gain)
 
 
-@pytest.mark.parametrize("q, eps", [(1.07, 0.33), (2.0, 0.2), (0.7, 0.0)])
-def test_gain_and_offset_recovered_through_the_diffraction_tail(q, eps):
-    img, truth = _blurred(q, eps)
+@pytest.mark.parametrize(
+    "q, eps, apart", [(1.07, 0.33, False), (2.0, 0.2, False), (0.7, 0.0, False), (1.07, 0.33, True)]
+)
+def test_gain_and_offset_recovered_through_the_diffraction_tail(q, eps, apart):
+    img, truth = _blurred(q, eps, apart)
     offset, gain = 37.0, 4200.0
     cal = measure_auto(offset + gain * img, truth, pixel_m=P, ids=[]).calibration
     assert cal["fitted"] and cal["tail_fraction"] > 0.01

@@ -43,6 +43,9 @@ _BINS = 8
 _MAX_TAIL_FRACTION = 0.5
 _PASSES = 3
 
+#: Background ring (px) around each edge's sides that enters the tail model with them.
+_RING_PX = 64
+
 _Region = tuple[float, np.ndarray, np.ndarray]  # (reflectance, rows, cols) of a uniform area's pixels
 
 
@@ -123,12 +126,13 @@ class _Tail:
         return s[rows - self.y0, cols - self.x0]
 
 
-def _points(regions: list[_Region], data: np.ndarray, tail: _Tail | None = None, s=None) -> np.ndarray:
-    """Per region, up to ``_BINS`` points (rho, median value, median S, count) of its pixels binned by S."""
+def _points(regions: list[_Region], data: np.ndarray, s_at=None) -> np.ndarray:
+    """Per region, up to ``_BINS`` points (rho, median value, median S, count) of its pixels binned by S;
+    ``s_at(k, rows, cols)`` gives S at the pixels of region ``k`` (0 without)."""
     out = []
-    for refl, rows, cols in regions:
+    for k, (refl, rows, cols) in enumerate(regions):
         v = data[rows, cols].astype(float)
-        sv = np.zeros_like(v) if tail is None else tail.at(s, rows, cols)
+        sv = np.zeros_like(v) if s_at is None else s_at(k, rows, cols)
         order = np.argsort(sv, kind="stable")
         nb = max(1, min(_BINS, v.size // _MIN_REGION_PX))
         for chunk in np.array_split(order, nb):
@@ -150,31 +154,31 @@ def _residual(pts: np.ndarray, model: np.ndarray, gain: float) -> float:
     return float(np.max(np.abs(pts[:, 1] - model)) / gain) if gain > 0 else math.inf
 
 
-def _fit_tail(regions: list[_Region], data: np.ndarray, window, offset0: float):
+def _fit_tail(regions: list[_Region], owner: list[int], windows: list, data: np.ndarray, offset0: float):
     """(offset, gain, tail fraction M, max residual) of the tail model, or None when it does not apply.
 
-    ``u`` estimates the scene above the offset, ``gain * rho``; each pass fits ``value = offset +
-    (1 - M) gain rho + K S(u)`` and deconvolves the tail from the image for the next ``u``
-    (``u = (value - offset - K S(u)) / (1 - M)``): the error shrinks by ~M per pass."""
-    tail = _Tail(data, window)
-    u = tail.crop - offset0
+    Region ``k`` lies in ``windows[owner[k]]``.  ``u`` estimates the scene above the offset, ``gain * rho``;
+    each pass fits ``value = offset + (1 - M) gain rho + K S(u)`` and deconvolves the tail from the image for
+    the next ``u`` (``u = (value - offset - K S(u)) / (1 - M)``): the error shrinks by ~M per pass."""
+    tails = [_Tail(data, w) for w in windows]
+    us = [t.crop - offset0 for t in tails]
     fit = None
     for _ in range(_PASSES):
-        s = tail.sum(u)
-        pts = _points(regions, data, tail, s)
+        ss = [t.sum(u) for t, u in zip(tails, us, strict=True)]
+        pts = _points(regions, data, lambda k, r, c, ss=ss: tails[owner[k]].at(ss[owner[k]], r, c))
         got = _lsq(pts, True) if len(pts) >= 4 else None
         if got is None:
             return None
         (offset, g1, k), model = got
-        m = k * tail.weight
+        m = k * tails[0].weight
         if not (0.0 <= m < _MAX_TAIL_FRACTION and g1 > 0):
             return None
         fit = (float(offset), float(g1 / (1 - m)), float(m), _residual(pts, model, g1))
-        u = (tail.crop - offset - k * s) / (1 - m)
+        us = [(t.crop - offset - k * s_) / (1 - m) for t, s_ in zip(tails, ss, strict=True)]
     return fit
 
 
-def _fit(regions: list[_Region], data: np.ndarray, window):
+def _fit(regions: list[_Region], owner: list[int], windows: list, data: np.ndarray):
     """(offset, gain, tail fraction M or None, max residual in reflectance), or None when no line fits."""
     pts = _points(regions, data)
     got = _lsq(pts, False)
@@ -182,9 +186,45 @@ def _fit(regions: list[_Region], data: np.ndarray, window):
         return None
     (offset, gain), model = got
     plain = (float(offset), float(gain), None, _residual(pts, model, gain))
-    if gain <= 0:
+    if gain <= 0 or not windows:
         return plain
-    return _fit_tail(regions, data, window, offset) or plain
+    return _fit_tail(regions, owner, windows, data, offset) or plain
+
+
+def _windows(groups: list[list[_Region]], shape) -> list[tuple[int, int, int, int]]:
+    """Boxes ``(x0, y0, x1, y1)`` around each edge's sides grown by ``_RING_PX``, overlapping ones merged."""
+    ny, nx = shape
+    boxes = []
+    for g in groups:
+        rr = np.concatenate([r[1] for r in g])
+        cc = np.concatenate([r[2] for r in g])
+        boxes.append(
+            (
+                max(0, int(cc.min()) - _RING_PX),
+                max(0, int(rr.min()) - _RING_PX),
+                min(nx, int(cc.max()) + _RING_PX + 1),
+                min(ny, int(rr.max()) + _RING_PX + 1),
+            )
+        )
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                a, b = boxes[i], boxes[j]
+                if a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]:
+                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+                    del boxes[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return boxes
+
+
+def _inside(box, rows: np.ndarray, cols: np.ndarray) -> bool:
+    x0, y0, x1, y1 = box
+    return bool(x0 <= cols[0] < x1 and y0 <= rows[0] < y1)
 
 
 def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) -> dict:
@@ -192,23 +232,24 @@ def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) ->
     modelled (see the module docstring).  Returns ``offset``, ``gain``, ``fitted``, ``note``, ``levels``
     (reflectance, median value, pixel count of every area used) and ``tail_fraction`` (the fitted fraction
     of the PSF beyond :data:`TAIL_RMIN_PX`, None when not modelled)."""
-    regions: list[_Region] = []
+    groups: list[list[_Region]] = []
     for it in items:
         if it.get("kind") == SlantedEdge.kind:
             try:
-                regions += _edge_regions(data, it, frame)
+                g = _edge_regions(data, it, frame)
             except (KeyError, TypeError, ValueError):
                 continue
-    ny, nx = data.shape
-    window = (0, 0, nx, ny)
-    if regions:  # the tail sum is needed around the edges only: the background is taken there too
-        g = TAIL_RMAX_PX + 1
-        rr = np.concatenate([r[1] for r in regions])
-        cc = np.concatenate([r[2] for r in regions])
-        window = (max(0, cc.min() - g), max(0, rr.min() - g), min(nx, cc.max() + g + 1), min(ny, rr.max() + g + 1))
-    bg = _background_region(data, truth, items, frame, window)
-    if bg is not None:
-        regions.append(bg)
+            groups += [g] if g else []
+    # the tail sum is needed around the edges only (bounded work on any image size): the background is taken
+    # there too; without edges, the background of the whole image gives one level
+    windows = _windows(groups, data.shape)
+    regions = [r for g in groups for r in g]
+    owner = [next(i for i, w in enumerate(windows) if _inside(w, r[1], r[2])) for r in regions]
+    for i, w in enumerate(windows or [(0, 0, data.shape[1], data.shape[0])]):
+        bg = _background_region(data, truth, items, frame, w)
+        if bg is not None:
+            regions.append(bg)
+            owner.append(i)
     levels = [(r, float(np.median(data[rows, cols])), int(rows.size)) for r, rows, cols in regions]
     info = {
         "levels": [{"reflectance": r, "median": v, "n_px": n} for r, v, n in levels],
@@ -217,7 +258,7 @@ def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) ->
     refl = np.array([lv[0] for lv in levels])
     vals = np.array([lv[1] for lv in levels])
     if refl.size and np.ptp(refl) > 0.05:
-        fit = _fit(regions, data, window)
+        fit = _fit(regions, owner, windows, data)
         if fit is not None and fit[1] > 0:
             offset, gain, m, res = fit
             how = (
