@@ -1,5 +1,5 @@
-"""Why every compared bar residual (measured - Coltman predicted CTF) of the default `satchain run` is positive
-(issue 18, point 4): a controlled decomposition.
+"""Why every compared bar residual (measured - Coltman predicted CTF) of the default `satchain run` was positive
+(issue 18, point 4), and what is left after the fix: a controlled decomposition.
 
 1. Noise: the default run without noise (``[simulation] noise = false``) is measured; its residuals are printed
    beside the noisy run's (they are the same: the cause is not noise).
@@ -8,15 +8,16 @@
    satchain.measure), 16 random grid phases, the large-area levels given: the mean residual (about 0: the fit,
    the joint model and the finite-group correction are not biased).
 3. The levels: the noise-free run's bar targets measured again, once with the image calibrated to reflectance
-   as ``measure auto`` does (a straight line fitted to the medians of the slanted edges' sides and of the
-   background) and once with the sensor's true response (``satchain.engine.sensor.sensor_from_system``: DN =
-   floor((offset_e + dark_e + rho e_per_unit) / gain)).  The edges' sides are finite squares in a 0.2
-   background: the obscured Airy pattern's long tail pulls their medians toward the surroundings (0.8 reads
-   ~0.794, 0.05 reads ~0.053), so the fitted gain is ~1.2 % low and the offset ~0.0035 in reflectance too high;
-   a bar group's mean level then reads low and its modulation A / a high by ~0.8 %.  With the true response the
-   residuals fall to +0.001..+0.003: what is left is the target's 2-D geometry (bars 5 widths long on a plate
-   one bar width wide in a 0.2 background, under the same long tail), which Coltman's infinite square wave
-   leaves out.
+   as ``measure auto`` does and once with the sensor's true response
+   (``satchain.engine.sensor.sensor_from_system``: DN = floor((offset_e + dark_e + rho e_per_unit) / gain)).
+   The cause found: the obscured Airy pattern's long (r^-3) tail pulls the medians of the slanted edges' sides
+   toward their surroundings (0.8 reads ~0.794, 0.05 reads ~0.053 even 6 px inside), so a straight line fitted
+   to those medians has a gain ~1.2 % low and an offset ~0.0035 in reflectance high; a bar group's mean level
+   then reads low and its modulation A / a high by ~0.8 %.  The calibration now models that tail
+   (satchain/measure/_auto_calibrate.py); the plain line on the same medians is printed beside it.  With the
+   true response the residuals are +0.001..+0.003: what is left is the target's 2-D geometry (bars 5 widths
+   long on a plate one bar width wide in a 0.2 background, under the same long tail), which Coltman's infinite
+   square wave leaves out.
 
 Run:  PYTHONPATH=src python benchmarks/bench_bar_residuals.py [--run DIR_OF_A_NOISE_FREE_RUN] [--noisy DIR]
 """
@@ -37,7 +38,10 @@ from _render import bar_coltman, render_bar_group  # noqa: E402
 
 from satchain import load_preset  # noqa: E402
 from satchain.engine.sensor import sensor_from_system  # noqa: E402
-from satchain.measure.auto import _bars_item, _calibrate, _Frame, _geometry, _truth_items  # noqa: E402
+from satchain.measure._auto_calibrate import calibrate  # noqa: E402
+from satchain.measure._auto_common import AutoContext, Frame  # noqa: E402
+from satchain.measure._auto_items import bars_item  # noqa: E402
+from satchain.measure.auto import _geometry, _truth_items  # noqa: E402
 from satchain.measure.bars import measure_bars  # noqa: E402
 
 Q = 6.4961e-7 * 9.72 / 5.88e-6  # lambda F / p of the ankarasat3 preset
@@ -45,6 +49,7 @@ EPS = 0.3323
 
 
 def _run(out: Path, noise: bool) -> Path:
+    out.mkdir(parents=True, exist_ok=True)
     cfg = out / "cfg.toml"
     cfg.write_text(f"[simulation]\nnoise = {'true' if noise else 'false'}\n")
     subprocess.run(
@@ -76,30 +81,44 @@ def _remeasure(run: Path) -> None:
     res = json.loads((run / "results.json").read_text())
     items = _truth_items(truth)
     p, origin = _geometry(truth, img.shape, res["gsd_m"], None)
-    frame = _Frame(p, origin, img.shape)
-    cal = _calibrate(img, truth, items, frame)
+    frame = Frame(p, origin, img.shape)
+    cal = calibrate(img, truth, items, frame)
     sensor = sensor_from_system(load_preset("ankarasat3"))
     g = sensor.gain_e_per_dn
     true_off, true_gain = (sensor.offset_e + sensor.dark_e) / g - 0.5, sensor.electrons_per_unit / g  # floor: -0.5
-    print(
-        f"calibration of measure auto: DN = {cal['offset']:.2f} + {cal['gain']:.1f} rho; sensor: DN = "
-        f"{true_off:.2f} + {true_gain:.1f} rho"
-    )
+    lv_r = np.array([lv["reflectance"] for lv in cal["levels"]])
+    lv_m = np.array([lv["median"] for lv in cal["levels"]])
+    line_gain, line_off = np.polyfit(lv_r, lv_m, 1, w=np.sqrt([lv["n_px"] for lv in cal["levels"]]))
+    print(f"sensor's true response:               DN = {true_off:7.2f} + {true_gain:.1f} rho")
+    for name, off, gain in (
+        ("straight line on the areas' medians", line_off, line_gain),
+        ("measure auto (PSF tail modelled)", cal["offset"], cal["gain"]),
+    ):
+        print(
+            f"{name + ':':38s} DN = {off:7.2f} + {gain:.1f} rho   gain {100 * (gain / true_gain - 1):+.2f} %, "
+            f"offset {(off - true_off) / true_gain:+.4f} in reflectance"
+        )
+    print(f"  ({cal['note']})")
     for lv in cal["levels"]:
         print(
             f"  area of reflectance {lv['reflectance']:.2f} ({lv['n_px']} px): median reads "
             f"{(lv['median'] - true_off) / true_gain:.4f} in true reflectance"
         )
     pred = {k: v for k, v in _residuals(run).items()}
-    for name, off, gain in (("auto calibration", cal["offset"], cal["gain"]), ("true response", true_off, true_gain)):
-        refl = (img - off) / gain
+    for name, off, gain in (
+        ("straight line", line_off, line_gain),
+        ("measure auto", cal["offset"], cal["gain"]),
+        ("true response", true_off, true_gain),
+    ):
+        ctx = AutoContext(img, (img - off) / gain, frame, True, 0.15)
         for it in items:
             if it.get("kind") != "bar_target":
                 continue
-            r = _bars_item(refl, it, frame, True)[0].result
+            r = bars_item(ctx, it)[0].result
             f, _, _, col = pred[it["id"]]
             ok = r.f_cy_per_px <= f.max() + 1e-9
-            print(f"  {name:17s} {it['id']}: CTF - Coltman {np.round(r.ctf[ok] - col, 4).tolist()}")
+            d = r.ctf[ok] - col
+            print(f"  {name:14s} {it['id']}: CTF - Coltman {np.round(d, 4).tolist()}  mean {d.mean():+.4f}")
 
 
 def _exact_targets(periods, n_phases: int = 16, seed: int = 0) -> None:
@@ -136,6 +155,12 @@ def main() -> None:
             print(f"{k}: f {np.round(f, 3).tolist()}")
             print(f"  default run   CTF - Coltman {np.round(d, 4).tolist()}  z {np.round(d / s, 2).tolist()}")
             print(f"  without noise CTF - Coltman {np.round(rc[k][1], 4).tolist()}")
+        alld = np.concatenate([v[1] for v in rn.values()])
+        allz = np.concatenate([v[1] / v[2] for v in rn.values()])
+        print(
+            f"default run, all compared groups: {np.sum(alld > 0)} of {alld.size} residuals positive, mean "
+            f"{alld.mean():+.4f}, mean z {allz.mean():+.2f}"
+        )
         _remeasure(clean)
         f = rn[next(iter(rn))][0]
         _exact_targets(list(1 / f))

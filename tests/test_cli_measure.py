@@ -83,10 +83,10 @@ def _pixel_args(fmt):
 def test_edge_every_format(tmp_path, fmt):
     path = _write(tmp_path, "edge", _edge_image(), fmt, scale=255)
     d = _json(["edge", str(path), *_pixel_args(fmt)])
-    keys = {"f_cy_per_px", "mtf", "mtf_at_nyquist", "mtf50_cy_per_px", "edge_angle_deg", "rer", "overshoot"}
+    keys = {"f_cy_per_px", "mtf", "mtf_at_nyquist", "mtf50_cy_per_px", "angle_deg", "rer", "overshoot"}
     assert keys <= set(d)
     assert d["pixel_m"] == pytest.approx(GSD)  # from the file's metadata, or --pixel-m for NPY
-    assert d["edge_angle_deg"] == pytest.approx(5.0, abs=0.05) and d["direction"] == "ACT"
+    assert d["angle_deg"] == pytest.approx(5.0, abs=0.05) and d["direction"] == "ACT"
     assert d["mtf_at_nyquist"] == pytest.approx(_gauss(0.5), abs=0.01)
     f = np.asarray(d["f_cy_per_px"])
     np.testing.assert_allclose(d["f_cy_per_m_ground"], f / GSD)

@@ -33,25 +33,23 @@ def _safe(name: str) -> str:
 
 
 def _auto_plots(res, d: Path) -> list[Path]:
-    from satchain.report.measure_plots import plot_bars, plot_edge, plot_star, plot_wedge
+    from satchain.report.kinds import REPORT_KINDS
 
-    plotters = {"slanted_edge": plot_edge, "siemens_star": plot_star, "bar_target": plot_bars}
     written = []
     for it in res.items:
         path = d / f"{it.kind}_{_safe(it.id)}.png"
-        if it.kind == "hyperbolic_wedge":
-            plot_wedge(it.result, path, pixel_m=res.pixel_m, title=it.id)
-        else:
-            plotters[it.kind](it.result, path, title=it.id)
+        REPORT_KINDS[it.kind].plot(it.result, path, title=it.id, pixel_m=res.pixel_m)
         written.append(path)
     return written
 
 
 def _edges_table(d: dict) -> Table:
+    from satchain.report.kinds import EDGES
+
     t = Table(title=f"slanted edges (pixel {d['pixel_m']:g} m)")
     for col in ("id", "dir", "angle", "truth", "MTF@Nyq", "MTF50 cy/px", "RER", "H"):
         t.add_column(col, justify="right")
-    for e in d["slanted_edges"]:
+    for e in d[EDGES.key]:
         t.add_row(
             e["id"],
             e["direction"],
@@ -66,18 +64,20 @@ def _edges_table(d: dict) -> Table:
 
 
 def _auto_tables(d: dict) -> None:
+    from satchain.report.kinds import BARS, STARS, WEDGES
+
     c = wide_console()
     c.print(_edges_table(d))
-    for s in d["siemens_star"]:
+    for s in d[STARS.key]:
         rows = [(f"MTF at Nyquist, {k}", v) for k, v in s["mtf_at_nyquist"].items()]
         c.print(kv_table(f"Siemens star {s['id']} ({s['cycles']} cycles)", rows))
-    for b in d["bar_targets"]:
+    for b in d[BARS.key]:
         rows = [
             (f"period {g['period_m']:g} m ({g['period_px']:.3g} px): CTF, MTF", f"{g['ctf']:.4f}, {g['mtf']:.4f}")
             for g in b["groups"]
         ]
         c.print(kv_table(f"bar target {b['id']} ({b['direction']})", rows))
-    for w in d["hyperbolic_wedge"]:
+    for w in d[WEDGES.key]:
         rows = [
             ("resolution (line width, m)", w["resolution_m"]),
             ("frequency (cy/px)", w["resolved_f_cy_per_px"]),

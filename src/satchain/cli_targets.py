@@ -284,9 +284,10 @@ def _line_widths(start_px: float, end_px: float, n: int, profile: str):
 def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, threshold: float):
     """The wedge of a truth file, measured as ``measure auto`` does; returns (WedgeResult, summary, pixel_m)."""
     from satchain.measure.auto import measure_auto
+    from satchain.scene.targets import HyperbolicWedge
 
     truth = read_truth(truth_path)
-    wedges = [str(it.get("id")) for it in truth.get("items", []) if it.get("kind") == "hyperbolic_wedge"]
+    wedges = [str(it.get("id")) for it in truth.get("items", []) if it.get("kind") == HyperbolicWedge.kind]
     if item_id is None:
         if len(wedges) != 1:
             raise ConfigError(f"--id: the truth file has {len(wedges)} hyperbolic wedges {wedges}; name one")
@@ -294,7 +295,7 @@ def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, th
     elif item_id not in wedges:
         raise ConfigError(f"--id = {item_id!r}: not a hyperbolic wedge of the truth file; choose from {wedges}")
     res = measure_auto(data, truth, pixel_m=p, origin_m=origin, ids=[item_id], wedge_threshold=threshold)
-    found = res.by_kind("hyperbolic_wedge")
+    found = res.by_kind(HyperbolicWedge.kind)
     if not found:
         raise ConfigError(f"wedge {item_id!r} not measured: {res.skipped[0]['reason']}")
     return found[0].result, found[0].summary, res.pixel_m

@@ -36,3 +36,8 @@ class ParameterTypeError(ConfigError, TypeError):
 class SatchainWarning(UserWarning):
     """An input used other than as it stands (a colour image converted to grey, page 1 of a multi-page TIFF, an
     implausible pixel size); the command line prints it as ``warning: ...``."""
+
+
+class SatchainDeprecationWarning(DeprecationWarning):
+    """A name satchain still accepts but will remove; the message names the version that deprecated it, the one
+    that removes it, and what to use instead."""

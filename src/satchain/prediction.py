@@ -29,6 +29,7 @@ import numpy as np
 
 from satchain._argcheck import checked
 from satchain.errors import InputError
+from satchain.scene.targets import HyperbolicWedge, SlantedEdge
 from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
 
 if TYPE_CHECKING:
@@ -219,7 +220,7 @@ def predict_from_mtf(
     along = {d: AxisMTF(mtf2d, u) for d, u in DIRECTIONS.items()}
     edges = {}
     for it in truth.get("items", []):
-        if it.get("kind") != "slanted_edge":
+        if it.get("kind") != SlantedEdge.kind:
             continue
         nx, ny = (float(v) for v in it["normal_to_bright"])
         m = AxisMTF(mtf2d, (nx, ny))
@@ -266,7 +267,7 @@ def _predict_wedges(
     truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
     background = float(truth.get("background", 0.2))
     for it in truth.get("items", []):
-        if it.get("kind") != "hyperbolic_wedge":
+        if it.get("kind") != HyperbolicWedge.kind:
             continue
         try:
             out[str(it["id"])] = predict_wedge(

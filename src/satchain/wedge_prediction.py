@@ -170,9 +170,10 @@ def wedge_model_image(
 
 def _measure_model(image, item, origin_m, gsd_m, threshold):
     from satchain.measure.auto import measure_auto
+    from satchain.scene.targets import HyperbolicWedge
 
     res = measure_auto(image, {"items": [dict(item)]}, pixel_m=gsd_m, origin_m=origin_m, wedge_threshold=threshold)
-    found = res.to_dict().get("hyperbolic_wedge", [])
+    found = [it.summary for it in res.by_kind(HyperbolicWedge.kind)]
     if not found:
         reason = "; ".join(str(s.get("reason")) for s in res.skipped) or "no result"
         raise InputError(f"wedge {item['id']!r}: its predicted image cannot be measured ({reason})")

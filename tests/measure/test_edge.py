@@ -56,7 +56,7 @@ def test_snr100_accuracy(diffraction_edges):
     assert np.sqrt(np.mean(err**2)) < 0.015
     r = measure_edge(clean + rng.normal(0, 0.01, clean.shape))
     assert r.noise_sigma == pytest.approx(0.01, rel=0.15)
-    assert 0.002 < r.mtf_at_nyquist_std < 0.03
+    assert 0.002 < r.mtf_at_nyquist_sigma < 0.03
 
 
 def test_rer_and_overshoot_match_exact_esf(diffraction_edges):
@@ -99,7 +99,7 @@ def test_pixel_edges_any_angle_size_noise(tilt, sign, alt, ny, nx, offset, inver
     # an edge seen only by the pixel is not band-limited: its ESF has corners that the 1/4-px bins average
     # and alias, worst on short ROIs (a 40 x 40, 9.5 deg case reads 0.015 off); band-limited edges (diffraction
     # included, the accuracy target) are tested to 0.003 in test_noise_free_mtf_at_nyquist_within_0_003
-    tol = 0.02 if not np.isfinite(snr) else 0.02 + 5 * r.mtf_at_nyquist_std
+    tol = 0.02 if not np.isfinite(snr) else 0.02 + 5 * r.mtf_at_nyquist_sigma
     assert abs(r.mtf_at_nyquist - _pixel_truth(angle)) < tol
     # contrast sign: + when the image rises along +x (ACT) or +y (ALT)
     rising = 1.0 if not alt else -sign
@@ -144,7 +144,7 @@ def test_to_dict_is_json_ready(diffraction_edges):
         "mtf",
         "mtf_at_nyquist",
         "mtf50_cy_per_px",
-        "edge_angle_deg",
+        "angle_deg",
         "rer",
         "overshoot",
     ):

@@ -51,6 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import uniform_filter
 
+from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, crop_roi, first_crossing, robust_sigma
@@ -89,7 +90,7 @@ _CURVE_SCREEN = 0.3  # ... computed exactly where the estimate from the position
 class EdgeResult(ResultMixin):
     """Result of :func:`measure_edge`; frequencies are along the edge normal.
 
-    ``mtf_at_nyquist_std`` (= ``mtf_at_nyquist_sigma``) is the predicted 1-sigma noise of ``mtf_at_nyquist``
+    ``mtf_at_nyquist_sigma`` is the predicted 1-sigma noise of ``mtf_at_nyquist``
     (propagated from the measured pixel noise), ``mtf_sigma`` the same at every frequency; ``noise_sigma`` is
     that pixel noise in image units; ``contrast`` the edge step, positive when the image rises along +x (ACT
     edges) or +y (ALT edges); ``cnr`` = |contrast| / noise_sigma (inf without noise).
@@ -108,7 +109,6 @@ class EdgeResult(ResultMixin):
     angle_deg: float
     direction: str
     mtf_at_nyquist: float
-    mtf_at_nyquist_std: float
     mtf50_cy_per_px: float | None
     rer: float
     overshoot: float
@@ -130,13 +130,15 @@ class EdgeResult(ResultMixin):
 
     @property
     def edge_angle_deg(self) -> float:
-        """Alias of ``angle_deg`` (the CLI's JSON name)."""
+        """Deprecated in satchain 0.1, removed in 0.2: ``angle_deg``."""
+        warn_renamed("EdgeResult", "edge_angle_deg", "angle_deg")
         return self.angle_deg
 
-    def to_dict(self) -> dict:
-        d = super().to_dict()
-        d["edge_angle_deg"] = d["angle_deg"]
-        return d
+    @property
+    def mtf_at_nyquist_std(self) -> float:
+        """Deprecated in satchain 0.1, removed in 0.2: ``mtf_at_nyquist_sigma``."""
+        warn_renamed("EdgeResult", "mtf_at_nyquist_std", "mtf_at_nyquist_sigma")
+        return self.mtf_at_nyquist_sigma
 
 
 def measure_edge(
@@ -241,7 +243,6 @@ def measure_edge(
         angle_deg=_angle_deg(slope, transposed),
         direction=direction,
         mtf_at_nyquist=float(mtf[i_nyq]),
-        mtf_at_nyquist_std=float(mtf_sig[i_nyq]),
         mtf50_cy_per_px=first_crossing(f, mtf, 0.5),
         rer=rer,
         overshoot=overshoot,

@@ -115,9 +115,8 @@ def rejection_counts(rejected) -> dict[str, int]:
 
 
 def _nyquist_sigma(r: EdgeResult) -> float:
-    """The edge's statistical 1-sigma at Nyquist (``mtf_at_nyquist_sigma`` where set, else ``_std``)."""
-    s = getattr(r, "mtf_at_nyquist_sigma", None)
-    return float(r.mtf_at_nyquist_std if s is None or not np.isfinite(s) else s)
+    """The edge's statistical 1-sigma at Nyquist."""
+    return float(r.mtf_at_nyquist_sigma)
 
 
 def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:

@@ -26,6 +26,7 @@ import numpy as np
 
 from satchain._validate import as_float_array, check_positive
 from satchain.measure._common import ResultMixin, robust_sigma
+from satchain.scene.targets import SlantedEdge
 
 if TYPE_CHECKING:
     from satchain.scene.truth import Truth
@@ -142,7 +143,7 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> S
     items = list(truth.get("items", []))
     gains, plateaus = [], []
     for it in items:
-        if it.get("kind") == "slanted_edge":
+        if it.get("kind") == SlantedEdge.kind:
             g, levels = _edge_plateaus(a, it, pixel_m)
             if g:
                 gains.append(g)

@@ -23,6 +23,7 @@ from satchain import ctf as _ctf
 from satchain import units
 from satchain.prediction import WIDE_COMPONENTS
 from satchain.report._save import write_text
+from satchain.report.kinds import BARS, EDGES, STARS, WEDGES
 
 __all__ = ["CSV_FAMILIES", "build_curves", "crossing", "predicted_lsf", "write_curves"]
 
@@ -90,9 +91,9 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
     from satchain.measure import measure_edge
 
     truth = {it["id"]: it for it in ctx.truth["items"]}
-    by_id = {e["id"]: e for e in (ctx.measured or {}).get("slanted_edges", [])}
+    by_id = {e["id"]: e for e in (ctx.measured or {}).get(EDGES.key, [])}
     out = []
-    for e in res.get("slanted_edges", []):
+    for e in res.get(EDGES.key, []):
         m = by_id.get(e["id"], {})
         roi = m.get("roi_px")
         if roi is None:
@@ -126,7 +127,7 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
                 "mtf50": (crossing(f, mm, 0.5), crossing(f, mp, 0.5)),
                 "mtf10": (crossing(f, mm, 0.1), crossing(f, mp, 0.1)),
                 "nyquist": (e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")),
-                "sigma": e.get("mtf_at_nyquist_sigma", m.get("mtf_at_nyquist_std")),
+                "sigma": e.get("mtf_at_nyquist_sigma", m.get("mtf_at_nyquist_sigma")),
             }
         )
     return out
@@ -135,9 +136,9 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
 def _wedge_curves(ctx, res: dict) -> list[dict]:
     from satchain.prediction import AxisMTF, system_mtf_cy_per_px
 
-    by_id = {w["id"]: w for w in (ctx.measured or {}).get("hyperbolic_wedge", [])}
+    by_id = {w["id"]: w for w in (ctx.measured or {}).get(WEDGES.key, [])}
     out = []
-    for w in res.get("hyperbolic_wedge", []):
+    for w in res.get(WEDGES.key, []):
         m = by_id.get(w["id"], {})
         lw = m.get("line_width_m")
         if lw is None or w.get("contrast") is None:
@@ -173,8 +174,8 @@ def build_curves(ctx) -> dict[str, Any]:
     b = ctx.budget or {}
     return {
         "edges": _edge_curves(ctx, res),
-        "stars": list(res.get("siemens_star", [])),
-        "bars": list(res.get("bar_targets", [])),
+        "stars": list(res.get(STARS.key, [])),
+        "bars": list(res.get(BARS.key, [])),
         "wedges": _wedge_curves(ctx, res),
         "system": {
             "f_cy_per_mm": b.get("frequencies_cy_per_mm"),

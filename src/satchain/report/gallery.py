@@ -19,18 +19,14 @@ from matplotlib.patches import Rectangle
 
 from satchain.report._save import save_figure
 from satchain.report.compare_plots import rc_for
+from satchain.report.kinds import REPORT_KINDS, measured_entries
+from satchain.scene.objects import Car, House, Railway, Wagon
 
 __all__ = ["GALLERY_KINDS", "plot_image_with_rois", "target_thumbnails"]
 
 #: Measurement targets (every one is shown) and real-world objects (the first of each kind is shown).
-GALLERY_KINDS = ("slanted_edge", "siemens_star", "bar_target", "hyperbolic_wedge")
-OBJECT_KINDS = ("car", "wagon", "house", "railway")
-_COLOURS = {
-    "slanted_edge": "tab:red",
-    "bar_target": "tab:orange",
-    "hyperbolic_wedge": "tab:green",
-    "siemens_star": "tab:blue",
-}
+GALLERY_KINDS = tuple(REPORT_KINDS)
+OBJECT_KINDS = (Car.kind, Wagon.kind, House.kind, Railway.kind)
 _OBJECT_COLOUR = "#d0d000"
 #: Largest side of a native-resolution crop (px); larger crops are block-averaged by an integer factor.
 MAX_SIDE_PX = 2000
@@ -55,11 +51,7 @@ def plot_image_with_rois(ctx, path: Path) -> None:
     img = _to_reflectance(ctx)
     gsd = float(ctx.system.gsd_act_m)
     h, w = img.shape
-    rois = {}
-    for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge"):
-        for m in (ctx.measured or {}).get(key, []):
-            if m.get("roi_px") is not None:
-                rois[m["id"]] = m["roi_px"]
+    rois = {m["id"]: m["roi_px"] for _, m in measured_entries(ctx.measured) if m.get("roi_px") is not None}
     scale = min(820.0 / w, 1150.0 / h, 3.0)
     width_in = w * scale / 100 + 1.0
     with matplotlib.rc_context(rc_for(width_in)):
@@ -70,8 +62,8 @@ def plot_image_with_rois(ctx, path: Path) -> None:
         for it in ctx.truth["items"]:
             x0, y0, x1, y1 = it["bbox_m"]
             kind = it["kind"]
-            if kind in _COLOURS:
-                c = _COLOURS[kind]
+            if kind in REPORT_KINDS:
+                c = REPORT_KINDS[kind].colour
                 ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
                 if it["id"] in rois:
                     rx0, ry0, rx1, ry1 = rois[it["id"]]

@@ -20,6 +20,7 @@ from satchain import ctf as _ctf
 from satchain.report import tables
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
+from satchain.report.kinds import BARS, WEDGES, measured_entries
 
 __all__ = ["SECTIONS", "table1_rows", "write_report"]
 
@@ -124,11 +125,7 @@ def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
 
     items = {it["id"]: it for it in ctx.truth["items"]}
     meas = ctx.measured or {}
-    by_id = {
-        m["id"]: m
-        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
-        for m in meas.get(key, [])
-    }
+    by_id = {m["id"]: m for _, m in measured_entries(meas)}
     origin = tuple(meas.get("origin_m") or (0.0, 0.0))
     for t in thumbs:
         w, h = t["box_m"][2] - t["box_m"][0], t["box_m"][3] - t["box_m"][1]
@@ -177,7 +174,7 @@ def _all_flags(ctx, res: dict) -> dict:
     """The flags results.json holds per target, plus the measurement's own flags of targets whose
     results.json entry carries none (the wedges')."""
     out = tables.measurement_flags(res)
-    for m in (ctx.measured or {}).get("hyperbolic_wedge", []):
+    for m in (ctx.measured or {}).get(WEDGES.key, []):
         if not out.get(m.get("id")):
             out[m.get("id")] = [str(f) for f in m.get("flags") or []]
     return out
@@ -186,7 +183,7 @@ def _all_flags(ctx, res: dict) -> dict:
 def _bar_limit(res: dict) -> float:
     from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX
 
-    bars = res.get("bar_targets") or []
+    bars = res.get(BARS.key) or []
     return float(bars[0].get("compared_up_to_cy_per_px") or BAR_COMPARE_MAX_CY_PER_PX) if bars else 0.4
 
 

@@ -42,8 +42,9 @@ def _nyquist(ax, top: float = 1.05) -> None:
     ax.text(0.5, top, " Nyquist", color="gray", va="top", fontsize=8)
 
 
-def plot_edge(result, path: str | Path, *, title: str = "") -> None:
-    """ESF, LSF and MTF (along the edge normal) of an :class:`~satchain.measure.edge.EdgeResult`."""
+def plot_edge(result, path: str | Path, *, title: str = "", pixel_m: float | None = None) -> None:
+    """ESF, LSF and MTF (along the edge normal) of an :class:`~satchain.measure.edge.EdgeResult` (in cycles per
+    pixel; ``pixel_m`` is accepted so that every kind's figure has one signature)."""
     fig = Figure(figsize=(14, 4.2))
     axes = fig.subplots(1, 3)
     x = np.asarray(result.esf_x_px)
@@ -78,8 +79,9 @@ def plot_edge(result, path: str | Path, *, title: str = "") -> None:
     save_figure(fig, path, dpi=110)
 
 
-def plot_star(result, path: str | Path, *, title: str = "") -> None:
-    """MTF per direction (ACT, ALT, diagonals) of a :class:`~satchain.measure.star.StarResult`."""
+def plot_star(result, path: str | Path, *, title: str = "", pixel_m: float | None = None) -> None:
+    """MTF per direction (ACT, ALT, diagonals) of a :class:`~satchain.measure.star.StarResult` (in cycles per
+    pixel; ``pixel_m`` is accepted so that every kind's figure has one signature)."""
     fig = Figure(figsize=(7, 4.6))
     ax = fig.subplots()
     f = np.asarray(result.f_cy_per_px)
@@ -97,8 +99,9 @@ def plot_star(result, path: str | Path, *, title: str = "") -> None:
     save_figure(fig, path, dpi=110)
 
 
-def plot_bars(result, path: str | Path, *, title: str = "") -> None:
-    """CTF per bar group and the MTF from the inverse Coltman series (a ``BarsResult``)."""
+def plot_bars(result, path: str | Path, *, title: str = "", pixel_m: float | None = None) -> None:
+    """CTF per bar group and the MTF from the inverse Coltman series (a ``BarsResult``; in cycles per pixel,
+    ``pixel_m`` is accepted so that every kind's figure has one signature)."""
     fig = Figure(figsize=(7, 4.6))
     ax = fig.subplots()
     f = np.asarray(result.f_cy_per_px)

@@ -16,14 +16,26 @@ panels and scales with the click-to-zoom. What is drawn, per kind:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from html import escape
 
-__all__ = ["overlay_svg"]
+__all__ = ["OverlayView", "bars_overlay", "edge_overlay", "overlay_svg", "star_overlay", "wedge_overlay"]
 
 _LINE = 'vector-effect="non-scaling-stroke" fill="none"'
 _COMPARED, _NOT_COMPARED, _NOT_MEASURED = "#ff8c00", "#3fa0ff", "#c0c0c0"
 #: Width of an average character in ems (sans-serif), to fit a label into a box.
 _CHAR_EM = 0.6
+
+
+@dataclass(frozen=True)
+class OverlayView:
+    """How an overlay is drawn: the image's ground pixel and top-left corner (m), the text size (m), and the
+    highest bar-group frequency compared with the prediction (cy/px)."""
+
+    gsd_m: float
+    origin_m: tuple[float, float]
+    size: float
+    compared_up_to_cy_per_px: float = 0.4
 
 
 def _text(x: float, y: float, s: str, size: float, colour: str, anchor: str = "start", rotate: bool = False) -> str:
@@ -51,7 +63,9 @@ def _roi_m(m: dict, gsd: float, origin) -> tuple[float, float, float, float] | N
     return ox + r[0] * gsd, oy + r[1] * gsd, ox + r[2] * gsd, oy + r[3] * gsd
 
 
-def _edge(it: dict, m: dict, gsd: float, origin, size: float) -> list[str]:
+def edge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
+    """Slanted edge: the measured region and the fitted edge line."""
+    gsd, origin, size = v.gsd_m, v.origin_m, v.size
     out = []
     roi = _roi_m(m, gsd, origin)
     if roi:
@@ -78,7 +92,9 @@ def _circle(cx: float, cy: float, r: float, colour: str, dash: str = "") -> str:
     return f'<circle cx="{cx:.3f}" cy="{cy:.3f}" r="{r:.3f}" stroke="{colour}" stroke-width="1.5" {_LINE}{d}/>'
 
 
-def _star(it: dict, m: dict, gsd: float, size: float) -> list[str]:
+def star_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
+    """Siemens star: the measured annulus and the Nyquist radius."""
+    gsd, size = v.gsd_m, v.size
     cx, cy = it["center_m"]
     out = []
     radii = m.get("radius_px")
@@ -92,7 +108,9 @@ def _star(it: dict, m: dict, gsd: float, size: float) -> list[str]:
     return out
 
 
-def _bars(it: dict, m: dict, gsd: float, lim: float, size: float) -> list[str]:
+def bars_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
+    """Bar target: each group's box with its period and whether it is compared, measured or not."""
+    gsd, lim, size = v.gsd_m, v.compared_up_to_cy_per_px, v.size
     measured = {round(float(g.get("period_m", 0)), 9) for g in (m.get("groups") or [])}
     out = []
     for g in it.get("groups", []):
@@ -114,8 +132,10 @@ def _bars(it: dict, m: dict, gsd: float, lim: float, size: float) -> list[str]:
     return out
 
 
-def _wedge(it: dict, m: dict, size: float) -> list[str]:
-    """The scan along s at the middle of the stripes, and the measured resolution as a cross line."""
+def wedge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
+    """Hyperbolic wedge: the scan along s at the middle of the stripes, and the measured resolution as a cross
+    line."""
+    size = v.size
     ox, oy = it["local_origin_m"]
     w0, x0, n, length = (float(it[k]) for k in ("line_width_start_m", "x0_m", "n_stripes", "length_m"))
     orient = str(it.get("orientation")).lower()
@@ -156,18 +176,13 @@ def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_
     thumbnail is shown ``display_px`` wide."""
     x0, y0, x1, y1 = (float(v) for v in box_m)
     size = 12.0 * (x1 - x0) / max(display_px, 1.0)
-    m = measured or {}
-    kind = it.get("kind")
-    if kind == "slanted_edge":
-        body = _edge(it, m, gsd_m, origin_m, size)
-    elif kind == "siemens_star":
-        body = _star(it, m, gsd_m, size)
-    elif kind == "bar_target":
-        body = _bars(it, m, gsd_m, compared_up_to_cy_per_px, size)
-    elif kind == "hyperbolic_wedge":
-        body = _wedge(it, m, size)
-    else:
+    from satchain.report.kinds import REPORT_KINDS  # the registry names this module's overlays
+
+    entry = REPORT_KINDS.get(str(it.get("kind")))
+    if entry is None:
         return ""
+    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px))
+    body = entry.overlay(it, measured or {}, view)
     return (
         f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
         f'xmlns="http://www.w3.org/2000/svg" aria-hidden="true">{"".join(body)}</svg>'

@@ -14,15 +14,9 @@ from matplotlib.patches import Rectangle
 from satchain.report import compare_plots as cp
 from satchain.report._save import save_figure
 from satchain.report.compare_plots import rc_for
+from satchain.report.kinds import EDGES, REPORT_KINDS, WEDGES
 
 __all__ = ["plot_edges_overview", "plot_scene_overview", "plot_target_chain", "write_run_figures"]
-
-_KIND_COLOURS = {
-    "slanted_edge": "tab:red",
-    "bar_target": "tab:orange",
-    "hyperbolic_wedge": "tab:green",
-    "siemens_star": "tab:blue",
-}
 
 
 def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Path) -> None:
@@ -33,9 +27,9 @@ def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Pa
         ax = fig.add_subplot()
         ax.imshow(image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest")
         for it in truth["items"]:
-            c = _KIND_COLOURS.get(it["kind"])
-            if c is None:
+            if it["kind"] not in REPORT_KINDS:
                 continue
+            c = REPORT_KINDS[it["kind"]].colour
             x0, y0, x1, y1 = it["bbox_m"]
             ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1))
             ax.text(x0, y0 - 1, it["id"], color=c, va="bottom")
@@ -121,10 +115,10 @@ def write_run_figures(ctx, curves: dict | None = None) -> dict:
     tol = ctx.config.tolerances
     plot_image_with_rois(ctx, d / "image_rois.png")
     for item in ctx.truth["items"]:
-        if item["kind"] == "hyperbolic_wedge" and any(w["id"] == item["id"] for w in r.get("hyperbolic_wedge", [])):
+        if item["kind"] == WEDGES.kind and any(w["id"] == item["id"] for w in r.get(WEDGES.key, [])):
             plot_target_chain(ctx, item, d / f"fig4_wedge_{item['id']}.png")
-    if r.get("slanted_edges"):
-        plot_edges_overview(r["slanted_edges"], d / "edges_mtf.png")
+    if r.get(EDGES.key):
+        plot_edges_overview(r[EDGES.key], d / "edges_mtf.png")
     for c in curves["edges"]:
         cp.plot_edge_comparison(c, d / f"edge_{c['id']}.png", tol=tol.edge_mtf_at_nyquist)
     for st in curves["stars"]:

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from satchain.report.kinds import BARS, EDGES, STARS, WEDGES, measured_entries
+
 __all__ = [
     "PAPER",
     "PAPER_CITATION",
@@ -99,7 +101,7 @@ def verdict(res: dict) -> dict[str, Any]:
 
 def key_figures(res: dict, budget: dict) -> list[dict]:
     """GSD, MTF at Nyquist (ACT/ALT, predicted and measured), SNR and NIIRS, as label/predicted/measured."""
-    edges = res.get("slanted_edges", [])
+    edges = res.get(EDGES.key, [])
     mtf_n = res.get("mtf_at_nyquist") or {}
     niirs = res.get("niirs") or {}
     rad = res.get("radiometry") or {}
@@ -190,7 +192,7 @@ def _with_sigma(row: dict, s: dict | None, flags: dict) -> dict:
 def _mtf_rows(res: dict, tol: dict) -> list[dict]:
     """Rows of the edges, stars and bars."""
     rows = []
-    for e in res.get("slanted_edges", []):
+    for e in res.get(EDGES.key, []):
         m, p = e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")
         d = _diff(m, p)
         rows.append(
@@ -205,7 +207,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
             )
             | {"_key": ("edge_mtf_at_nyquist", e.get("id"))}
         )
-    for st in res.get("siemens_star", []):
+    for st in res.get(STARS.key, []):
         rows.append(
             _row(
                 "largest MTF difference up to Nyquist, all directions",
@@ -219,7 +221,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
             )
             | {"_key": ("star_mtf", st.get("id"))}
         )
-    for b in res.get("bar_targets", []):
+    for b in res.get(BARS.key, []):
         lim = b.get("compared_up_to_cy_per_px")
         q = "largest CTF difference to Coltman's CTF" + (f" (groups ≤ {lim:g} cy/px)" if lim else "")
         rows.append(
@@ -241,7 +243,7 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
 def _resolution_rows(res: dict, tol: dict) -> list[dict]:
     """Rows of the wedges and NIIRS."""
     rows = []
-    for w in res.get("hyperbolic_wedge", []):
+    for w in res.get(WEDGES.key, []):
         m, p = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
         m_cm = None if m is None else 100 * m
         p_cm = None if p is None else 100 * p
@@ -295,9 +297,8 @@ def measurement_flags(res: dict) -> dict[str | None, list[str]]:
     """Every flag results.json holds, by target id: the edges', star's, bars' and wedges' ``flags`` (None: the
     run's ``warnings``)."""
     out: dict[str | None, list[str]] = {}
-    for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge"):
-        for x in res.get(key, []):
-            out.setdefault(x.get("id"), []).extend(str(f) for f in x.get("flags") or [])
+    for _, x in measured_entries(res):
+        out.setdefault(x.get("id"), []).extend(str(f) for f in x.get("flags") or [])
     out[None] = [str(w) for w in res.get("warnings") or []]
     return out
 
@@ -326,11 +327,7 @@ def _angle_rows(res: dict) -> list[dict]:
 
 def _not_measured_rows(res: dict) -> list[dict]:
     """The checks of targets the measurement had to skip: n/a, with the reason as the target's note."""
-    shown = {
-        x.get("id")
-        for key in ("slanted_edges", "siemens_star", "bar_targets", "hyperbolic_wedge")
-        for x in res.get(key, [])
-    }
+    shown = {x.get("id") for _, x in measured_entries(res)}
     rows = []
     for r in res.get("summary", []):
         if r.get("pass") is not None or r.get("kind") not in _KIND_WORDS or r.get("id") in shown:
@@ -427,10 +424,8 @@ def radiometry_rows(rad: dict) -> list[tuple[str, str]]:
 def paper_rows(res: dict) -> list[dict]:
     """The paper's own results beside satchain's prediction and measurement."""
     mtf_n = _num((res.get("mtf_at_nyquist") or {}).get("alt"))
-    alt_edges = _mean(
-        e.get("mtf_at_nyquist_measured") for e in res.get("slanted_edges", []) if e.get("direction") == "ALT"
-    )
-    wedges = [w for w in res.get("hyperbolic_wedge", []) if w.get("axis") == "ALT"] or res.get("hyperbolic_wedge", [])
+    alt_edges = _mean(e.get("mtf_at_nyquist_measured") for e in res.get(EDGES.key, []) if e.get("direction") == "ALT")
+    wedges = [w for w in res.get(WEDGES.key, []) if w.get("axis") == "ALT"] or res.get(WEDGES.key, [])
     w = wedges[0] if wedges else {}
     wm, wp = _num(w.get("resolution_m")), _num(w.get("resolution_predicted_m"))
     return [

@@ -8,6 +8,8 @@ See :mod:`satchain.scene.shapes` (exact coverage), :mod:`satchain.scene.layout` 
 from satchain.scene.image import ImageScene
 from satchain.scene.layout import (
     ITEM_KINDS,
+    OBJECT_KINDS,
+    TARGET_KINDS,
     Scene,
     layout_from_dict,
     layout_to_dict,
@@ -21,6 +23,8 @@ from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, Slan
 
 __all__ = [
     "ITEM_KINDS",
+    "OBJECT_KINDS",
+    "TARGET_KINDS",
     "BarTarget",
     "Car",
     "House",

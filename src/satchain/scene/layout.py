@@ -54,6 +54,8 @@ else:  # pragma: no cover
 
 __all__ = [
     "ITEM_KINDS",
+    "OBJECT_KINDS",
+    "TARGET_KINDS",
     "Scene",
     "TRUTH_FORMAT",
     "layout_from_dict",
@@ -62,6 +64,10 @@ __all__ = [
     "paper_layout",
 ]
 
+#: Test targets (an image-quality measurement is defined for each) and real-world objects (none), by kind.
+TARGET_KINDS: tuple[str, ...] = tuple(c.kind for c in (SlantedEdge, BarTarget, HyperbolicWedge, SiemensStar))
+OBJECT_KINDS: tuple[str, ...] = tuple(c.kind for c in (Road, Car, Railway, Wagon, House))
+#: The scene layer's registry: every item kind a layout may name, to its class.
 ITEM_KINDS: dict[str, type[Item]] = {
     cls.kind: cls for cls in (SlantedEdge, BarTarget, HyperbolicWedge, SiemensStar, Road, Car, Railway, Wagon, House)
 }

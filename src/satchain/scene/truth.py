@@ -27,6 +27,7 @@ from typing import Any
 
 from satchain.errors import InputError, SatchainIOError
 from satchain.geometry import Rect
+from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
 __all__ = [
     "BarGroupTruth",
@@ -231,10 +232,10 @@ class ObjectTruth(TruthItem):
 
 
 _KINDS: dict[str, type[TruthItem]] = {
-    "slanted_edge": EdgeTruth,
-    "siemens_star": StarTruth,
-    "bar_target": BarTargetTruth,
-    "hyperbolic_wedge": WedgeTruth,
+    SlantedEdge.kind: EdgeTruth,
+    SiemensStar.kind: StarTruth,
+    BarTarget.kind: BarTargetTruth,
+    HyperbolicWedge.kind: WedgeTruth,
 }
 
 

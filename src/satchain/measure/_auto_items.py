@@ -1,0 +1,239 @@
+"""The per-kind measurers of :func:`satchain.measure.auto.measure_auto` for slanted edges, Siemens stars and bar
+targets (regions of interest: see that module's docstring).  Each takes the shared :class:`AutoContext` and one
+truth item and returns ``(AutoItem, skipped)``; an item it cannot measure raises :class:`Skip`."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from satchain.errors import InputError
+from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
+from satchain.measure._common import to_jsonable
+from satchain.measure.bars import measure_bars
+from satchain.measure.edge import measure_edge
+from satchain.measure.star import measure_star
+from satchain.scene.targets import BarTarget, SiemensStar, SlantedEdge
+
+__all__ = ["bars_item", "edge_item", "star_item"]
+
+_EDGE_MIN_PX = 16
+_EDGE_MARGIN_PX = 3
+_STAR_EDGE_PX = 2.0
+_STAR_MIN_PX = 8.0
+
+
+def _wrap_deg(a: float) -> float:
+    """Angle of an undirected line, wrapped into (-90, 90]."""
+    a = (a + 90.0) % 180.0 - 90.0
+    return 90.0 if a == -90.0 else a
+
+
+def _to_truth_convention(angle_image_deg: float, measures: str) -> float:
+    """measure_edge's angle (from +y towards +x) -> the truth's (``act``: the same; ``alt``: +x to +y)."""
+    return _wrap_deg(angle_image_deg if measures == "act" else 90.0 - angle_image_deg)
+
+
+def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
+    """Slanted edge: the square shrunk by max(3 px, 10 %) on each side."""
+    raw, frame = ctx.raw, ctx.frame
+    x0, y0, x1, y1 = frame.inside(it["bbox_m"])
+    side = min(x1 - x0, y1 - y0)
+    margin = max(_EDGE_MARGIN_PX, int(math.ceil(0.1 * side)))
+    roi = (x0 + margin, y0 + margin, x1 - margin, y1 - margin)
+    if min(roi[2] - roi[0], roi[3] - roi[1]) < _EDGE_MIN_PX:
+        raise Skip(
+            f"too small at {frame.pixel_m:g} m pixels: the square is {side} px wide, its inner region "
+            f"{max(0, side - 2 * margin)} px; need >= {_EDGE_MIN_PX} px"
+        )
+    frame.check_roi(roi)
+    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m)
+    measures = str(it["measures"]).lower()
+    dx, dy = it["edge_direction"]
+    truth_image = _wrap_deg(math.degrees(math.atan2(dx, dy)))
+    warnings = list(r.warnings)
+    if r.direction != measures.upper():
+        warnings.append(f"the edge was measured as {r.direction} although the truth says {measures.upper()}")
+    summary = {
+        "id": it["id"],
+        "roi_px": list(roi),
+        "angle_deg": _to_truth_convention(r.angle_deg, measures),
+        "angle_deg_truth": float(it["angle_deg"]),
+        "angle_convention": "truth's: act = from +y towards +x, alt = from +x towards +y",
+        "edge_angle_deg_image": r.angle_deg,
+        "edge_angle_deg_image_truth": truth_image,
+        "direction": r.direction,
+        "direction_truth": measures.upper(),
+        "mtf_at_nyquist": r.mtf_at_nyquist,
+        "mtf_at_nyquist_sigma": r.mtf_at_nyquist_sigma,
+        "mtf_sigma": r.mtf_sigma,
+        "flags": list(r.flags),
+        "mtf50_cy_per_px": r.mtf50_cy_per_px,
+        "rer": r.rer,
+        "overshoot": r.overshoot,
+        "n_lines": r.n_lines,
+        "warnings": warnings,
+        "f_cy_per_px": r.f_cy_per_px,
+        "f_cy_per_m_ground": r.f_cy_per_m_ground,
+        "mtf": r.mtf,
+    }
+    return AutoItem(str(it["id"]), SlantedEdge.kind, r, to_jsonable(summary)), []
+
+
+def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
+    """Siemens star: centre, radius and cycles from the truth; input modulation = amplitude / mean."""
+    refl, frame, calibrated = ctx.refl, ctx.frame, ctx.calibrated
+    p = frame.pixel_m
+    cycles = int(it["cycles"])
+    xc, yc = frame.px(*it["center_m"])
+    radius = float(it["radius_m"]) / p - _STAR_EDGE_PX
+    inner = float(it.get("inner_radius_m", 0.0)) / p + 1.0
+    if radius < _STAR_MIN_PX:
+        raise Skip(f"too small at {p:g} m pixels: usable radius {radius:.1f} px < {_STAR_MIN_PX:g} px")
+    roi = (
+        math.floor(xc - radius) - 1,
+        math.floor(yc - radius) - 1,
+        math.ceil(xc + radius) + 2,
+        math.ceil(yc + radius) + 2,
+    )
+    frame.check_roi(roi)
+    f_max = min(0.75, cycles / (2 * math.pi * max(inner, 2.0)))
+    m0 = float(it["amplitude"]) / float(it["mean"]) if calibrated else None
+    r = measure_star(
+        refl,
+        cycles=cycles,
+        center=(xc - roi[0], yc - roi[1]),
+        radius_px=radius,
+        roi=roi,
+        input_modulation=m0,
+        f_max_cy_per_px=f_max,
+        pixel_m=p,
+    )
+    summary = {
+        "id": it["id"],
+        "roi_px": list(roi),
+        "cycles": cycles,
+        "center_xy_px": [xc, yc],
+        "radius_px": [float(r.radius_px.min()), float(r.radius_px.max())],
+        "input_modulation": r.input_modulation,
+        "input_modulation_from": "truth" if m0 is not None else r.input_modulation_from,
+        "center_xy_px_measured": [r.center_xy_px[0] + roi[0], r.center_xy_px[1] + roi[1]],
+        "center_std_px": r.center_std_px,
+        "input_modulation_std": r.input_modulation_std,
+        "mtf_at_nyquist": r.mtf_at_nyquist,
+        "mtf_at_nyquist_std": r.mtf_at_nyquist_std,
+        "f_cy_per_px": r.f_cy_per_px,
+        "f_cy_per_m_ground": r.f_cy_per_m_ground,
+        "mtf": r.mtf,
+        "mtf_std": r.mtf_std,
+        "mtf_all": r.mtf_all,
+        "flags": list(r.flags),
+    }
+    return AutoItem(str(it["id"]), SiemensStar.kind, r, to_jsonable(summary)), []
+
+
+def _group_roi(group: dict, frame: Frame, orientation: str):
+    """Bar-group ROI: first to last bar centre across the bars, one bar width in from each end along them."""
+    bars = np.asarray(group["bars_m"], dtype=float)
+    b = float(group["bar_width_m"])
+    across, along = (0, 1) if orientation == "act" else (1, 0)
+    centres = 0.5 * (bars[:, across] + bars[:, across + 2])
+    a0, a1 = frame.centres(float(centres.min()), float(centres.max()), across)
+    lo, hi = float(bars[:, along].max()) + b, float(bars[:, along + 2].min()) - b
+    l0, l1 = frame.centres(lo, hi, along)
+    return (a0, l0, a1, l1) if orientation == "act" else (l0, a0, l1, a1)
+
+
+def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
+    """Bar target: one ROI per group; groups beyond Nyquist or too small are skipped (listed)."""
+    refl, frame, calibrated = ctx.refl, ctx.frame, ctx.calibrated
+    p = frame.pixel_m
+    orientation = str(it["orientation"]).lower()
+    if int(it["n_bars"]) < 2:
+        raise Skip("a single bar per group has no period to measure a CTF on")
+    keep, rois, skipped = [], [], []
+    for k, g in enumerate(it["groups"]):
+        gid = f"{it['id']}/group_{k}"
+        period_px = float(g["period_m"]) / p
+        if period_px < 2.0:
+            reason = f"period {g['period_m']:g} m = {period_px:.2f} px < 2 px: beyond the Nyquist frequency"
+            skipped.append(skip_entry(gid, "bar_group", reason))
+            continue
+        roi = _group_roi(g, frame, orientation)
+        if roi[2] - roi[0] < 2 or roi[3] - roi[1] < 2:
+            skipped.append(skip_entry(gid, "bar_group", f"region {roi} is under 2 px on a side at {p:g} m pixels"))
+            continue
+        try:
+            frame.check_roi(roi)
+        except Skip as exc:
+            skipped.append(skip_entry(gid, "bar_group", str(exc)))
+            continue
+        keep.append(k)
+        rois.append(roi)
+    if not keep:
+        raise Skip(f"no bar group is measurable at {p:g} m pixels (see the bar_group entries)")
+    levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
+    direction = "ACT" if orientation == "act" else "ALT"
+    while True:  # a group refused (no bars at its period, ...) is listed and the others measured
+        groups = [it["groups"][k] for k in keep]
+        periods_px = [float(g["period_m"]) / p for g in groups]
+        try:
+            r = measure_bars(
+                refl,
+                periods_px=periods_px,
+                group_rois=rois,
+                direction=direction,
+                levels=levels,
+                pixel_m=p,
+                bars_per_group=int(it["n_bars"]),
+            )
+        except InputError as exc:
+            bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))
+            if bad is None or len(keep) < 2:
+                raise
+            j = int(bad.group(1))
+            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {exc}"))
+            del keep[j], rois[j]
+            continue
+        if not r.refused:
+            break
+        for j, why in sorted(r.refused, reverse=True):  # refused alone by measure_bars: listed, the rest remeasured
+            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {why}"))
+            del keep[j], rois[j]
+    rows = [
+        {
+            "group": k,
+            "period_m": float(g["period_m"]),
+            "period_px": pp,
+            "roi_px": list(roi),
+            "ctf": c,
+            "ctf_std": cs,
+            "mtf": m,
+            "phase_px": ph,
+            "ctf_correction": None if r.ctf_correction is None else float(r.ctf_correction[j]),
+            "flags": [f for f in r.flags if f.startswith(f"group {j}:")],
+        }
+        for j, (k, g, pp, roi, c, cs, m, ph) in enumerate(
+            zip(keep, groups, periods_px, rois, r.ctf, r.ctf_std, r.mtf, r.phase_px, strict=True)
+        )
+    ]
+    summary = {
+        "id": it["id"],
+        "direction": direction,
+        "periods_m": [float(g["period_m"]) for g in groups],
+        "periods_px": periods_px,
+        "f_cy_per_px": r.f_cy_per_px,
+        "f_cy_per_m_ground": r.f_cy_per_m_ground,
+        "ctf": r.ctf,
+        "ctf_std": r.ctf_std,
+        "ctf_correction": r.ctf_correction,
+        "mtf": r.mtf,
+        "mtf_std": r.mtf_std,
+        "large_area_contrast": r.large_area_contrast,
+        "levels_from": "truth" if levels is not None else r.levels_from,
+        "flags": list(r.flags),
+        "groups": rows,
+    }
+    return AutoItem(str(it["id"]), BarTarget.kind, r, to_jsonable(summary)), skipped
