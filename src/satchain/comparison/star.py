@@ -98,7 +98,7 @@ def _prediction_text(sp, measured_m0_from) -> str:
     cal = sp.calibration or {}
     text = "the star measured on its noise-free predicted image"
     if cal.get("offset") is not None:
-        text += f" (calibrated as measured: offset {cal['offset']:+.4f}, gain {cal['gain']:.4f})"
+        text += f" (calibrated the way the image is: fitted offset {cal['offset']:+.4f}, gain {cal['gain']:.4f})"
     if measured_m0_from and sp.input_modulation_from and measured_m0_from != sp.input_modulation_from:
         text += (
             f"; its input modulation is {sp.input_modulation_from}, the measured star's "
