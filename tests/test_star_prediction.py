@@ -143,6 +143,28 @@ def test_more_blur_than_predicted_fails_the_star(setup):
     assert row.passed is False and row.error < -0.05 and row.z < -5
 
 
+def test_far_apart_targets_calibrate_on_the_background_and_no_prediction_falls_back_to_the_system_mtf(
+    setup, monkeypatch
+):
+    """Stars and edges too far apart for one canvas: each star is formed alone, calibrated on the background (the
+    prediction says so); a star whose predicted image cannot be measured is compared with the system MTF, and
+    the detail says why."""
+    from satchain import star_prediction
+
+    _, truth, pred, img = setup
+    monkeypatch.setattr(star_prediction, "MAX_CANVAS_PX", 100)
+    p = predict_from_mtf(_otf(SIGMA_PX), truth, gsd_m=GSD).stars["s"]
+    assert p.reason is None and "background alone" in p.calibration_note
+    assert p.calibration["note"].startswith("one reflectance level")  # the background: offset assumed 0
+    (meas,) = measure_auto(img, truth, pixel_m=GSD).to_dict()["siemens_star"]
+    tiny = dict(truth, items=[dict(it, radius_m=2.0) if it["kind"] == "siemens_star" else it for it in truth["items"]])
+    none = predict_from_mtf(_otf(SIGMA_PX), tiny, gsd_m=GSD)
+    assert none.stars["s"].reason and "cannot be measured" in none.stars["s"].reason
+    s = compare({"siemens_star": [meas]}, none, Tolerances()).siemens_star[0]
+    assert s.prediction.startswith("the system MTF along each direction (")
+    assert s.directions["ALT"]["mtf_predicted"] == s.directions["ALT"]["mtf_model"]
+
+
 def test_max_error_sigma_against_monte_carlo():
     """The 1-sigma of the signed largest of independent normal errors, against direct draws."""
     rng = np.random.default_rng(5)

@@ -1,8 +1,8 @@
 """Predicted figures of merit, evaluated the way each measurement sees them (the prediction half of a run).
 
 Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF (:mod:`satchain.ctf`), the
-wedge resolution measured on the wedge's noise-free predicted image (:mod:`satchain.wedge_prediction`) and
-GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the targets of a truth
+wedge resolution and the Siemens star's MTF measured on their noise-free predicted images
+(:mod:`satchain.wedge_prediction`, :mod:`satchain.star_prediction`) and GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the targets of a truth
 record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements
 beside them without needing the system.
 

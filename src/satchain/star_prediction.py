@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from satchain.errors import InputError
-from satchain.target_image import scene_model_image
+from satchain.target_image import item_from_truth, scene_model_image
 
 __all__ = ["CALIBRATION_KINDS", "MAX_OVERSAMPLE", "StarPrediction", "predict_stars"]
 
@@ -81,15 +81,60 @@ class StarPrediction:
         return np.interp(f, self.f_cy_per_px, curve, left=np.nan, right=np.nan)
 
 
-def _sources(truth: Mapping[str, Any], stars: list[Mapping[str, Any]], gsd_m: float) -> tuple[list, str | None]:
-    """The stars and the calibration sources whose union fits :data:`MAX_CANVAS_PX`."""
-    cal = [it for it in truth.get("items", []) if it.get("kind") in CALIBRATION_KINDS]
+def _rebuildable(record: Mapping[str, Any]) -> bool:
+    try:
+        item_from_truth(record)
+    except InputError:
+        return False
+    return True
+
+
+def _groups(truth: Mapping[str, Any], stars: list[Mapping[str, Any]], gsd_m: float) -> list[tuple[list, str | None]]:
+    """The canvases to form: the stars with the calibration sources when their union fits
+    :data:`MAX_CANVAS_PX`, else each star alone on the background (with the note that says so)."""
+    cal = [it for it in truth.get("items", []) if it.get("kind") in CALIBRATION_KINDS and _rebuildable(it)]
     boxes = np.array([it["bbox_m"] for it in stars + cal], dtype=float)
     w = (boxes[:, 2].max() - boxes[:, 0].min()) / gsd_m
     h = (boxes[:, 3].max() - boxes[:, 1].min()) / gsd_m
     if w * h <= MAX_CANVAS_PX:
-        return stars + cal, None
-    return stars, f"the stars and edges span {w:.0f} x {h:.0f} px: calibrated on the background alone"
+        return [(stars + cal, None)]
+    note = f"the stars and edges span {w:.0f} x {h:.0f} px: each star calibrated on the background alone"
+    return [([st], note) for st in stars]
+
+
+def _predict_group(otf2d, records, note, truth, gsd_m, max_oversample) -> dict[str, StarPrediction]:
+    """The stars of ``records`` measured on one canvas of ``records``' noise-free images."""
+    from satchain.measure.auto import measure_auto
+
+    background = float(truth.get("background", 0.2))
+    truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
+    ids = [str(it["id"]) for it in records if it.get("kind") == "siemens_star"]
+    try:
+        canvas, origin, _ = scene_model_image(
+            otf2d, records, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, max_oversample=max_oversample
+        )
+        res = measure_auto(canvas, {"items": list(records), "background": background}, pixel_m=gsd_m,
+                           origin_m=origin, ids=ids)  # fmt: skip
+    except InputError as exc:
+        return {i: StarPrediction(i, reason=f"the predicted image cannot be formed or measured: {exc}") for i in ids}
+    cal = {k: res.calibration.get(k) for k in ("offset", "gain", "fitted", "note")}
+    found = {str(s["id"]): s for s in res.to_dict().get("siemens_star", [])}
+    why = {str(s["id"]): str(s.get("reason")) for s in res.skipped}
+    out = {}
+    for i in ids:
+        s = found.get(i)
+        if s is None:
+            out[i] = StarPrediction(i, reason=f"its noise-free predicted image cannot be measured: {why.get(i)}")
+            continue
+        out[i] = StarPrediction(
+            i,
+            f_cy_per_px=np.asarray(s["f_cy_per_px"], dtype=float),
+            mtf={d: np.asarray(v, dtype=float) for d, v in s["mtf"].items()},
+            input_modulation_from=s.get("input_modulation_from"),
+            calibration=cal,
+            calibration_note=note,
+        )
+    return out
 
 
 def predict_stars(
@@ -118,38 +163,9 @@ def predict_stars(
     dict
         Star id -> :class:`StarPrediction` (with ``reason`` when the predicted image cannot be measured).
     """
-    from satchain.measure.auto import measure_auto
-
     stars = [it for it in truth.get("items", []) if it.get("kind") == "siemens_star"]
-    if not stars:
-        return {}
-    records, note = _sources(truth, stars, gsd_m)
-    background = float(truth.get("background", 0.2))
-    truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
-    ids = [str(it["id"]) for it in stars]
-    try:
-        canvas, origin, _ = scene_model_image(
-            otf2d, records, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, max_oversample=max_oversample
-        )
-        res = measure_auto(canvas, {"items": list(records), "background": background}, pixel_m=gsd_m,
-                           origin_m=origin, ids=ids)  # fmt: skip
-    except InputError as exc:
-        return {i: StarPrediction(i, reason=f"the predicted image cannot be formed or measured: {exc}") for i in ids}
-    cal = {k: res.calibration.get(k) for k in ("offset", "gain", "fitted", "note")}
-    found = {str(s["id"]): s for s in res.to_dict().get("siemens_star", [])}
-    why = {str(s["id"]): str(s.get("reason")) for s in res.skipped}
-    out = {}
-    for i in ids:
-        s = found.get(i)
-        if s is None:
-            out[i] = StarPrediction(i, reason=f"its noise-free predicted image cannot be measured: {why.get(i)}")
-            continue
-        out[i] = StarPrediction(
-            i,
-            f_cy_per_px=np.asarray(s["f_cy_per_px"], dtype=float),
-            mtf={d: np.asarray(v, dtype=float) for d, v in s["mtf"].items()},
-            input_modulation_from=s.get("input_modulation_from"),
-            calibration=cal,
-            calibration_note=note,
-        )
+    out: dict[str, StarPrediction] = {}
+    if stars:
+        for records, note in _groups(truth, stars, gsd_m):
+            out.update(_predict_group(otf2d, records, note, truth, gsd_m, max_oversample))
     return out

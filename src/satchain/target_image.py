@@ -121,6 +121,8 @@ def item_from_truth(record: Mapping[str, Any]):
         return FROM_TRUTH[kind](record)
     except KeyError as exc:
         raise InputError(f"truth item {record.get('id')!r} ({kind}): missing key {exc}") from None
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"truth item {record.get('id')!r} ({kind}): {exc}") from None
 
 
 def _box(f: np.ndarray, width: float) -> np.ndarray:
