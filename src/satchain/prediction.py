@@ -2,9 +2,10 @@
 
 Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF (:mod:`satchain.ctf`), the
 wedge resolution and the Siemens star's MTF measured on their noise-free predicted images
-(:mod:`satchain.wedge_prediction`, :mod:`satchain.star_prediction`) and GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the targets of a truth
-record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements
-beside them without needing the system.
+(:mod:`satchain.wedge_prediction`, :mod:`satchain.star_prediction`) and GIQE 5 (:mod:`satchain.quality`).
+:func:`predict` evaluates them once per run for the targets of a truth record and returns a frozen
+:class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements beside them without needing
+the system.
 
 Frequencies are in cycles per pixel (cy/px) along a direction ``(ux, uy)`` of the image plane: x = ACT
 (columns), y = ALT (rows). Square detector pixels are assumed for the cy/mm <-> cy/px conversion
