@@ -163,6 +163,7 @@ def test_far_apart_targets_calibrate_on_the_background_and_no_prediction_falls_b
     s = compare({"siemens_star": [meas]}, none, Tolerances()).siemens_star[0]
     assert s.prediction.startswith("the system MTF along each direction (")
     assert s.directions["ALT"]["mtf_predicted"] == s.directions["ALT"]["mtf_model"]
+    assert s.estimator_systematic is None  # nothing measured on a predicted image: no systematic to report
 
 
 def test_max_error_sigma_against_monte_carlo():

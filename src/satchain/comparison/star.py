@@ -82,7 +82,7 @@ def _star_direction(f: np.ndarray, curve, std, pred: np.ndarray, model: np.ndarr
             predicted=float(pred[i]),
             model=float(model[i]),
         )
-    j = _worst(pred - model, np.isfinite(pred) & band)
+    j = None if pred is model else _worst(pred - model, np.isfinite(pred) & band)  # no systematic without a prediction
     if j is not None:
         out.update(estimator_systematic=float(pred[j] - model[j]), estimator_systematic_f_cy_per_px=float(f[j]))
     k = _worst(meas - model, np.isfinite(meas) & band)
@@ -122,7 +122,7 @@ def _star_detail(st: dict, pred: Predictions, tol: Any) -> tuple[dict[str, Any],
     wd = max(done, key=lambda d: done[d]["max_abs_error_to_nyquist"]) if done else None
     w = done.get(wd, {})
     sys_d = [d for d, v in per_dir.items() if v.get("estimator_systematic") is not None]
-    sd = max(sys_d, key=lambda d: abs(per_dir[d]["estimator_systematic"])) if sys_d else None
+    sys_dir = max(sys_d, key=lambda d: abs(per_dir[d]["estimator_systematic"])) if sys_d else None
     to_model = [v["max_abs_error_to_model"] for v in per_dir.values() if v["max_abs_error_to_model"] is not None]
     worst = w.get("max_abs_error_to_nyquist")
     return {
@@ -142,9 +142,11 @@ def _star_detail(st: dict, pred: Predictions, tol: Any) -> tuple[dict[str, Any],
         "measured_at_worst": w.get("measured"),
         "predicted_at_worst": w.get("predicted"),
         "model_at_worst": w.get("model"),
-        "estimator_systematic": None if sd is None else per_dir[sd]["estimator_systematic"],
-        "estimator_systematic_direction": sd,
-        "estimator_systematic_f_cy_per_px": None if sd is None else per_dir[sd]["estimator_systematic_f_cy_per_px"],
+        "estimator_systematic": None if sys_dir is None else per_dir[sys_dir]["estimator_systematic"],
+        "estimator_systematic_direction": sys_dir,
+        "estimator_systematic_f_cy_per_px": None
+        if sys_dir is None
+        else per_dir[sys_dir]["estimator_systematic_f_cy_per_px"],
         "max_abs_error_to_model": max(to_model) if to_model else None,
         "prediction": _prediction_text(sp, st.get("input_modulation_from")),
     }, int(sigmas.size)
