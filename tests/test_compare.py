@@ -151,7 +151,8 @@ def test_star_exact_measurement_has_zero_error_per_direction():
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
     c = compare(star_meas(), p, TOL)
     (row,) = rows_of(c, "star_mtf")
-    assert row.measured == pytest.approx(0.0, abs=1e-12) and row.passed is True
+    assert row.error == pytest.approx(0.0, abs=1e-12) and row.passed is True
+    assert row.measured == pytest.approx(row.predicted, abs=1e-12) == row.model_prediction  # no star prediction
     for d, v in c.siemens_star[0].directions.items():
         assert v["max_abs_error_to_nyquist"] == pytest.approx(0.0, abs=1e-12), d
 
@@ -159,11 +160,13 @@ def test_star_exact_measurement_has_zero_error_per_direction():
 @pytest.mark.parametrize("d", ["ACT", "ALT", "D45", "D135"])
 def test_star_error_is_the_largest_absolute_difference_in_any_direction(d):
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=1.0)
-    c = compare(star_meas({d: -0.04}), p, TOL)  # below the prediction: the error is |-0.04|
+    c = compare(star_meas({d: -0.04}), p, TOL)  # below the prediction: the error is -0.04, |-0.04| checked
     (row,) = rows_of(c, "star_mtf")
-    assert row.measured == pytest.approx(0.04, abs=1e-12) and row.passed is True
+    assert row.error == pytest.approx(-0.04, abs=1e-12) and row.passed is True
+    assert row.measured - row.predicted == pytest.approx(-0.04, abs=1e-12)
+    assert c.siemens_star[0].worst_direction == d and c.siemens_star[0].max_abs_error_to_nyquist == pytest.approx(0.04)
     c = compare(star_meas({d: -0.07}), p, TOL)
-    assert rows_of(c, "star_mtf")[0].measured == pytest.approx(0.07, abs=1e-12)
+    assert rows_of(c, "star_mtf")[0].error == pytest.approx(-0.07, abs=1e-12)
     assert c.passed is False
 
 

@@ -1,10 +1,11 @@
 """Predicted figures of merit, evaluated the way each measurement sees them (the prediction half of a run).
 
 Everything here is prediction: the system OTF (``satchain.tf``), Coltman's CTF (:mod:`satchain.ctf`), the
-wedge resolution measured on the wedge's noise-free predicted image (:mod:`satchain.wedge_prediction`) and
-GIQE 5 (:mod:`satchain.quality`). :func:`predict` evaluates them once per run for the targets of a truth
-record and returns a frozen :class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements
-beside them without needing the system.
+wedge resolution and the Siemens star's MTF measured on their noise-free predicted images
+(:mod:`satchain.wedge_prediction`, :mod:`satchain.star_prediction`) and GIQE 5 (:mod:`satchain.quality`).
+:func:`predict` evaluates them once per run for the targets of a truth record and returns a frozen
+:class:`Predictions`; :func:`satchain.comparison.compare` then puts measurements beside them without needing
+the system.
 
 Frequencies are in cycles per pixel (cy/px) along a direction ``(ux, uy)`` of the image plane: x = ACT
 (columns), y = ALT (rows). Square detector pixels are assumed for the cy/mm <-> cy/px conversion
@@ -30,6 +31,7 @@ import numpy as np
 from satchain._argcheck import checked
 from satchain.errors import InputError
 from satchain.scene.targets import HyperbolicWedge, SlantedEdge
+from satchain.star_prediction import StarPrediction, predict_stars
 from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
 
 if TYPE_CHECKING:
@@ -42,6 +44,7 @@ __all__ = [
     "AxisMTF",
     "EdgePrediction",
     "Predictions",
+    "StarPrediction",
     "WedgePrediction",
     "predict",
     "predict_from_mtf",
@@ -165,6 +168,10 @@ class Predictions:
         Wedge id -> :class:`~satchain.wedge_prediction.WedgePrediction` for every wedge of the truth record: its
         resolution measured on its noise-free predicted image (never clamped to the GSD), the spread over
         sub-pixel placements and the predicted contrast scan.
+    stars : mapping
+        Star id -> :class:`~satchain.star_prediction.StarPrediction` for every Siemens star of the truth record: its
+        MTF per direction measured on its noise-free predicted image (the same calibration, annuli and input
+        modulation as the measured star); empty when made without a truth star (the system MTF is compared).
     giqe5, rer, snr : float
         Predicted NIIRS (GIQE 5), its RER (GIQE 5 combination of the axes) and contrast SNR.
     gsd_los_m, elevation_deg : float
@@ -186,6 +193,7 @@ class Predictions:
     wedge_threshold: float = 0.15
     warnings: tuple[str, ...] = ()
     mtf2d: MTF2D | None = field(default=None, repr=False, compare=False)
+    stars: Mapping[str, StarPrediction] = field(default_factory=dict)
 
     def edge(self, edge_id: str, direction: str) -> EdgePrediction:
         """The prediction of edge ``edge_id``; an edge the truth does not list gets its axis ``direction``."""
@@ -215,7 +223,9 @@ def predict_from_mtf(
     predicted wedge images (default ``mtf2d``, exact when the OTF is real and non-negative); the wedges are
     rendered at the truth's ``pixel_m`` on its ``background``
     (:func:`satchain.wedge_prediction.predict_wedge`); ``noise_sigma`` (per-pixel noise in reflectance as a
-    function of reflectance, :func:`sensor_noise_reflectance`) gives their crossings' 1-sigma from noise.
+    function of reflectance, :func:`sensor_noise_reflectance`) gives their crossings' 1-sigma from noise. The
+    stars' measured MTF is predicted on their noise-free predicted images formed with ``otf2d`` too
+    (:func:`satchain.star_prediction.predict_stars`).
     """
     along = {d: AxisMTF(mtf2d, u) for d, u in DIRECTIONS.items()}
     edges = {}
@@ -225,7 +235,8 @@ def predict_from_mtf(
         nx, ny = (float(v) for v in it["normal_to_bright"])
         m = AxisMTF(mtf2d, (nx, ny))
         edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
-    wedges = _predict_wedges(mtf2d if otf2d is None else otf2d, truth, gsd_m, wedge_threshold, noise_sigma)
+    otf = mtf2d if otf2d is None else otf2d
+    wedges = _predict_wedges(otf, truth, gsd_m, wedge_threshold, noise_sigma)
     q = quality or {}
     return Predictions(
         mtf_along=along,
@@ -239,6 +250,7 @@ def predict_from_mtf(
         wedge_threshold=float(wedge_threshold),
         warnings=tuple(warnings),
         mtf2d=mtf2d,
+        stars=predict_stars(otf, truth, gsd_m=gsd_m),
     )
 
 

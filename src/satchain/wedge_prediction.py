@@ -39,16 +39,15 @@ from typing import Any
 import numpy as np
 
 from satchain.errors import InputError
+from satchain.target_image import MARGIN_PX, TargetImageModel, item_from_truth
 
-__all__ = ["PLACEMENTS_PX", "WedgePrediction", "predict_wedge", "wedge_model_image"]
+__all__ = ["MARGIN_PX", "PLACEMENTS_PX", "WedgePrediction", "predict_wedge", "wedge_model_image"]
 
 #: The axis across a wedge's stripes for each wedge orientation of the scene.
 WEDGE_AXES = {"horizontal": "ALT", "vertical": "ACT", "diagonal": "D135"}
 #: Sub-pixel placements ``(dx, dy)`` (output px) of the pixel grid over which the prediction's spread is taken;
 #: the first is the image's own placement (the predicted value).
 PLACEMENTS_PX = ((0.0, 0.0), (0.25, 0.5), (0.5, 0.25), (0.75, 0.75))
-#: Output pixels of background around the wedge's plate in the model window (the PSF's support).
-MARGIN_PX = 16
 #: Noisy copies of the predicted image re-measured for the crossing's 1-sigma from noise.
 N_NOISE = 16
 
@@ -91,61 +90,14 @@ class WedgePrediction:
         return np.interp(x, self.position_m, self.contrast, left=np.nan, right=np.nan)
 
 
-def _wedge_scene(item: Mapping[str, Any], background: float, pixel_m: float, size_m: tuple[float, float]):
-    """A scene holding only the wedge of a truth record (rebuilt from its parameters) on ``background``."""
-    from satchain.scene import HyperbolicWedge, Scene
-
-    w0 = float(item["line_width_start_m"])
-    lox, loy = (float(v) for v in item["local_origin_m"])
-    wedge = HyperbolicWedge(
-        str(item["id"]),
-        origin_m=(lox - w0, loy - w0),
-        orientation=str(item["orientation"]),
-        length_m=float(item["length_m"]),
-        line_width_start_m=w0,
-        line_width_end_m=float(item["line_width_end_m"]),
-        n_stripes=int(item["n_stripes"]),
-        bright=float(item["bright"]),
-        dark=float(item["dark"]),
-    )
-    return Scene(size_m[0], size_m[1], (wedge,), background=background, pixel_m=pixel_m)
-
-
-class _WedgeModel:
-    """A truth record's wedge rendered once at the fine pixel, its spectrum filtered by the OTF once (only inside
-    the OTF's ``cutoff``, cy/px, when it has one); :meth:`image` then samples it for any placement."""
+class _WedgeModel(TargetImageModel):
+    """A truth record's wedge rendered once at the truth's pixel, its spectrum filtered by the OTF once;
+    :meth:`image` then samples it for any placement (:class:`satchain.target_image.TargetImageModel`)."""
 
     def __init__(self, otf2d: OTF2D, item: Mapping[str, Any], gsd_m: float, truth_pixel_m: float, background: float):
-        d = max(1, int(round(gsd_m / truth_pixel_m)))
-        bx0, by0, bx1, by1 = (float(v) for v in item["bbox_m"])
-        m = MARGIN_PX * gsd_m
-        c0, r0 = math.floor((bx0 - m) / gsd_m), math.floor((by0 - m) / gsd_m)  # output px, on the image's grid
-        nc, nr = math.ceil((bx1 + m) / gsd_m) - c0, math.ceil((by1 + m) / gsd_m) - r0
-        size_m = (max(bx1 + 2 * m, (c0 + nc) * gsd_m), max(by1 + 2 * m, (r0 + nr) * gsd_m))
-        scene = _wedge_scene(item, background, gsd_m / d, size_m)
-        fine = np.full((nr * d, nc * d), float(background))  # before the scene's corner: background
-        y0, x0 = max(-r0 * d, 0), max(-c0 * d, 0)
-        win = (r0 * d + y0, c0 * d + x0, nr * d - y0, nc * d - x0)
-        fine[y0:, x0:] = scene.render(win, pixel_m=gsd_m / d)
-        spec = np.fft.fft2(fine - background)  # the window's border is background: periodic without a seam
-        fmax = float(getattr(otf2d, "cutoff", np.inf))
-        fy, fx = np.fft.fftfreq(nr * d) * d, np.fft.fftfreq(nc * d) * d  # cy per output px
-        self.iy, self.ix = np.nonzero(np.abs(fy) <= fmax)[0], np.nonzero(np.abs(fx) <= fmax)[0]
-        self.fy, self.fx = fy[self.iy][:, None], fx[self.ix][None, :]
-        self.band = spec[np.ix_(self.iy, self.ix)] * np.asarray(otf2d(self.fx, self.fy))
-        self.d, self.shape, self.background = d, (nr, nc), float(background)
-        self.origin_m = (c0 * gsd_m, r0 * gsd_m)
-
-    def image(self, shift_px: tuple[float, float]) -> np.ndarray:
-        """Point samples at the output pixel centres (fine index ``j d + d/2 - 1/2 + shift d``): a phase ramp,
-        the band folded modulo the output size (the aliasing of sampling every d-th fine sample), an inverse
-        DFT of the output size."""
-        d, (nr, nc) = self.d, self.shape
-        sx, sy = d / 2 - 0.5 + shift_px[0] * d, d / 2 - 0.5 + shift_px[1] * d
-        g = self.band * np.exp(2j * np.pi * (self.fx * sx + self.fy * sy) / d)
-        folded = np.zeros((nr, nc), dtype=complex)
-        np.add.at(folded, (self.iy[:, None] % nr, self.ix[None, :] % nc), g)
-        return np.fft.ifft2(folded).real / (d * d) + self.background
+        super().__init__(
+            otf2d, item_from_truth(item), gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background
+        )
 
 
 def wedge_model_image(

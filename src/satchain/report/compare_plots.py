@@ -197,16 +197,23 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
 
 
 def plot_star_comparison(st: dict, path: Path, *, tol: float | None) -> None:
-    """Siemens-star MTF per direction: measured (markers), predicted (lines), residuals with the band."""
+    """Siemens-star MTF per direction: measured (markers), predicted (lines: the star measured on its noise-free
+    predicted image), the system MTF (grey dots, where it differs), residuals with the band."""
     with matplotlib.rc_context(rc_for(8.5)):
         fig, (ax,), (r,) = _figure(8.5, 6.4)
         f = np.asarray(st["f_cy_per_px"], float)
+        shown_model = False
         for d, curve in (st.get("mtf_measured") or {}).items():
             sty = _DIR_STYLE.get(d, dict(color="gray", marker="x", ls="-"))
             meas = np.asarray(curve, float)
             pred = np.asarray(st["directions"][d]["mtf_predicted"], float)
             ax.plot(f, meas, sty["marker"], color=sty["color"], ms=4, mfc="none", label=f"{d} measured")
             ax.plot(f, pred, ls=sty["ls"], color=sty["color"], lw=1.4, label=f"{d} predicted")
+            model = st["directions"][d].get("mtf_model")
+            if model is not None and not np.allclose(np.asarray(model, float), pred, equal_nan=True):
+                lab = "system MTF (model)" if not shown_model else None
+                ax.plot(f, np.asarray(model, float), ls=(0, (1, 2)), color="0.35", lw=0.9, label=lab)
+                shown_model = True
             r.plot(f, meas - pred, ls=sty["ls"], marker=sty["marker"], ms=3, color=sty["color"], lw=1)
         lo, hi = 0.05, 0.5
         r.fill_between([lo, hi], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g} (checked)")

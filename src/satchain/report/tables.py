@@ -144,6 +144,7 @@ def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=T
         "z": "–",
         "noise": False,
         "sigma_note": "",
+        "note": "",
         "anchor": "",
         "n_flags": 0,
     }
@@ -183,6 +184,7 @@ def _with_sigma(row: dict, s: dict | None, flags: dict) -> dict:
         z=fmt(z, 1, signed=True) if z is not None else "–",
         noise=s.get("tolerance_inside_noise") is True,
         sigma_note="" if _num(s.get("sigma")) is not None else str(s.get("sigma_null_means") or ""),
+        note=str(s.get("note") or ""),
         anchor=_ANCHORS.get(str(s.get("kind")), ""),
         n_flags=len(flags.get(s.get("id"), ())) if s.get("kind") != "edge_angle" else 0,
     )
@@ -208,16 +210,17 @@ def _mtf_rows(res: dict, tol: dict) -> list[dict]:
             | {"_key": ("edge_mtf_at_nyquist", e.get("id"))}
         )
     for st in res.get(STARS.key, []):
+        signed = st.get("error") is not None  # the MTF at the largest difference, measured and predicted
         rows.append(
             _row(
                 "largest MTF difference up to Nyquist, all directions",
                 f"Siemens star {st['id']}",
-                None,
-                None,
-                st.get("max_abs_error_to_nyquist"),
+                st.get("measured_at_worst"),
+                st.get("predicted_at_worst"),
+                st.get("error") if signed else st.get("max_abs_error_to_nyquist"),
                 f"≤ {fmt(tol.get('star_mtf'), 3)}",
                 st.get("pass"),
-                signed=False,
+                signed=signed,
             )
             | {"_key": ("star_mtf", st.get("id"))}
         )

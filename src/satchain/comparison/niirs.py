@@ -1,0 +1,88 @@
+"""The NIIRS check: GIQE 5 from the measured edge RERs and image SNR vs the predicted GIQE 5."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from satchain.check_sigma import niirs_sigma, rer_sigma_bound
+from satchain.comparison._common import finite, within
+from satchain.comparison.records import CheckRow, EdgeCheck, NiirsCheck
+from satchain.prediction import Predictions
+
+__all__ = ["niirs_check"]
+
+
+def _mean_rer(edges: tuple[EdgeCheck, ...], direction: str) -> float | None:
+    v = [e.rer_measured for e in edges if e.direction == direction and e.rer_measured is not None]
+    return float(np.mean(v)) if v else None
+
+
+def _mean_rer_sigma(edges: tuple[EdgeCheck, ...], direction: str) -> float | None:
+    """1-sigma of the mean RER of the edges along ``direction`` (independent noise per edge)."""
+    sig = [rer_sigma_bound(e.f_cy_per_px, e.mtf_sigma) for e in edges if e.direction == direction and e.rer_measured]
+    if not sig or any(v is None for v in sig):
+        return None
+    return float(np.sqrt(np.sum(np.square(sig))) / len(sig))
+
+
+def _niirs_sigma(r_act: float, r_alt: float, snr_m: float, edges: tuple[EdgeCheck, ...], gsd_in: float,
+                 elevation_deg: float) -> tuple[float | None, str | None]:  # fmt: skip
+    s_act, s_alt = _mean_rer_sigma(edges, "ACT"), _mean_rer_sigma(edges, "ALT")
+    if s_act is None or s_alt is None:
+        return None, "an edge gave no MTF sigma, so the RER has none"
+    sig = niirs_sigma(r_act, r_alt, snr_m, rer_act_sigma=s_act, rer_alt_sigma=s_alt, gsd_in=gsd_in,
+                      elevation_deg=elevation_deg)  # fmt: skip
+    return sig, None
+
+
+def niirs_check(
+    edges: tuple[EdgeCheck, ...], snr: Mapping[str, Any], pred: Predictions, tol: Any
+) -> tuple[NiirsCheck, CheckRow]:
+    """GIQE 5 from the measured edges' mean RER per axis and the image SNR vs the predicted GIQE 5; sigma
+    the RER and SNR sigmas through GIQE 5."""
+    from satchain import units
+    from satchain.quality import giqe5, giqe5_rer
+
+    r_act, r_alt = _mean_rer(edges, "ACT"), _mean_rer(edges, "ALT")
+    snr_m = finite(snr.get("snr"))
+    rer_m = giqe5_rer(r_act, r_alt) if r_act and r_alt else None
+    niirs_m, why, sig = None, None, (None, "no error (the check is n/a)")
+    if rer_m is None:
+        why = "needs a measured RER from both an ACT and an ALT edge"
+    elif snr_m is None or snr_m <= 0:
+        why = "no SNR measured on the image: " + str(snr.get("reason") or "missing")
+    else:
+        gsd_in = float(units.m_to_inches(pred.gsd_los_m))
+        niirs_m = giqe5(gsd_in=gsd_in, rer=rer_m, snr=snr_m, elevation_deg=pred.elevation_deg)
+        sig = _niirs_sigma(r_act, r_alt, snr_m, edges, gsd_in, pred.elevation_deg)
+    pr = finite(pred.giqe5)
+    err = None if niirs_m is None or pr is None else niirs_m - pr
+    detail = {
+        "giqe5_predicted": pr,
+        "giqe5_measured": niirs_m,
+        "rer_predicted": finite(pred.rer),
+        "rer_measured": rer_m,
+        "snr_predicted": finite(pred.snr),
+        "snr_measured": snr_m,
+        "pass": within(err, tol.niirs),
+        "reason": why,
+        "giqe5_measured_sigma": sig[0] if err is not None else None,
+    }
+    sig = sig if err is not None else (None, "no error (the check is n/a)")
+    row = CheckRow(
+        "NIIRS (GIQE 5)",
+        "niirs",
+        None,
+        niirs_m,
+        pr,
+        err,
+        tol.niirs,
+        f"±{tol.niirs}",
+        within(err, tol.niirs),
+        why,
+        *sig,
+    )
+    return NiirsCheck.from_dict(detail), row
