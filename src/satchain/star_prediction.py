@@ -40,12 +40,13 @@ from typing import Any
 import numpy as np
 
 from satchain.errors import InputError
+from satchain.scene.targets import SiemensStar, SlantedEdge
 from satchain.target_image import item_from_truth, scene_model_image
 
 __all__ = ["CALIBRATION_KINDS", "MAX_OVERSAMPLE", "StarPrediction", "predict_stars"]
 
 #: Truth kinds formed beside the stars because the measurement's radiometric calibration reads their levels.
-CALIBRATION_KINDS = ("slanted_edge",)
+CALIBRATION_KINDS = (SlantedEdge.kind,)
 #: The model's fine pixel is ``gsd / min(D, MAX_OVERSAMPLE)``: the star's sine has no frequency above
 #: ``cycles / (2 pi inner_radius)`` and the OTF none above its cutoff (< 1 cy/px), so the 4x fine sampling aliases
 #: only the outlines into the band; the measured curves agree with the truth pixel's (D = 14) to 1e-5.
@@ -104,11 +105,11 @@ def _groups(truth: Mapping[str, Any], stars: list[Mapping[str, Any]], gsd_m: flo
 
 def _predict_group(otf2d, records, note, truth, gsd_m, max_oversample) -> dict[str, StarPrediction]:
     """The stars of ``records`` measured on one canvas of ``records``' noise-free images."""
-    from satchain.measure.auto import measure_auto
+    from satchain.measure.auto import MEASURERS, measure_auto
 
     background = float(truth.get("background", 0.2))
     truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
-    ids = [str(it["id"]) for it in records if it.get("kind") == "siemens_star"]
+    ids = [str(it["id"]) for it in records if it.get("kind") == SiemensStar.kind]
     try:
         canvas, origin, _ = scene_model_image(
             otf2d, records, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, max_oversample=max_oversample
@@ -118,7 +119,7 @@ def _predict_group(otf2d, records, note, truth, gsd_m, max_oversample) -> dict[s
     except InputError as exc:
         return {i: StarPrediction(i, reason=f"the predicted image cannot be formed or measured: {exc}") for i in ids}
     cal = {k: res.calibration.get(k) for k in ("offset", "gain", "fitted", "note")}
-    found = {str(s["id"]): s for s in res.to_dict().get("siemens_star", [])}
+    found = {str(s["id"]): s for s in res.to_dict().get(MEASURERS[SiemensStar.kind].key, [])}
     why = {str(s["id"]): str(s.get("reason")) for s in res.skipped}
     out = {}
     for i in ids:
@@ -163,7 +164,7 @@ def predict_stars(
     dict
         Star id -> :class:`StarPrediction` (with ``reason`` when the predicted image cannot be measured).
     """
-    stars = [it for it in truth.get("items", []) if it.get("kind") == "siemens_star"]
+    stars = [it for it in truth.get("items", []) if it.get("kind") == SiemensStar.kind]
     out: dict[str, StarPrediction] = {}
     if stars:
         for records, note in _groups(truth, stars, gsd_m):

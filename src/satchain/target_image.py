@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from satchain.errors import InputError
+from satchain.scene.targets import HyperbolicWedge, SiemensStar, SlantedEdge
 
 __all__ = ["MARGIN_PX", "TargetImageModel", "item_from_truth", "scene_model_image"]
 
@@ -100,9 +101,9 @@ def _wedge_from_truth(rec: Mapping[str, Any]):
 
 #: Truth-record kind -> the function that rebuilds its scene item (one entry per target kind).
 FROM_TRUTH = {
-    "slanted_edge": _edge_from_truth,
-    "siemens_star": _star_from_truth,
-    "hyperbolic_wedge": _wedge_from_truth,
+    SlantedEdge.kind: _edge_from_truth,
+    SiemensStar.kind: _star_from_truth,
+    HyperbolicWedge.kind: _wedge_from_truth,
 }
 
 

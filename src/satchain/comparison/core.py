@@ -9,10 +9,11 @@ from typing import Any
 from satchain.comparison.bars import bar_checks
 from satchain.comparison.edge import edge_checks
 from satchain.comparison.niirs import niirs_check
-from satchain.comparison.records import CheckRow, Comparison
+from satchain.comparison.records import CheckRow, Comparison, result_key
 from satchain.comparison.star import star_checks
 from satchain.comparison.wedge import wedge_checks
 from satchain.prediction import Predictions
+from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
 __all__ = ["CHECKS", "TargetChecks", "compare"]
 
@@ -34,17 +35,21 @@ class TargetChecks:
 
 #: Truth kind -> its checks, in the order the rows are listed. A new target kind is one entry here.
 CHECKS: dict[str, TargetChecks] = {
-    "slanted_edge": TargetChecks(
-        "slanted_edges", edge_checks, ("edge {} MTF@Nyquist", "edge_mtf_at_nyquist", "edge_mtf_at_nyquist", "±{}")
+    SlantedEdge.kind: TargetChecks(
+        result_key(SlantedEdge.kind),
+        edge_checks,
+        ("edge {} MTF@Nyquist", "edge_mtf_at_nyquist", "edge_mtf_at_nyquist", "±{}"),
     ),
-    "siemens_star": TargetChecks(
-        "siemens_star", star_checks, ("star {} MTF, largest error to Nyquist", "star_mtf", "star_mtf", "≤{}")
+    SiemensStar.kind: TargetChecks(
+        result_key(SiemensStar.kind),
+        star_checks,
+        ("star {} MTF, largest error to Nyquist", "star_mtf", "star_mtf", "≤{}"),
     ),
-    "bar_target": TargetChecks(
-        "bar_targets", bar_checks, ("bars {} max |CTF error| (Coltman)", "bar_ctf", "bar_ctf", "≤{}")
+    BarTarget.kind: TargetChecks(
+        result_key(BarTarget.kind), bar_checks, ("bars {} max |CTF error| (Coltman)", "bar_ctf", "bar_ctf", "≤{}")
     ),
-    "hyperbolic_wedge": TargetChecks(
-        "hyperbolic_wedge",
+    HyperbolicWedge.kind: TargetChecks(
+        result_key(HyperbolicWedge.kind),
         wedge_checks,
         ("wedge {} resolution (m)", "wedge_resolution", "wedge_resolution_rel", "±{:.0%}"),
     ),
@@ -93,9 +98,10 @@ def _with_edge_cnr(auto: Any) -> dict[str, Any]:
     for it in getattr(auto, "items", ()):
         r = getattr(it, "result", None)
         c, n = getattr(r, "contrast", None), getattr(r, "noise_sigma", None)
-        if it.kind == "slanted_edge" and c is not None and n:
+        if it.kind == SlantedEdge.kind and c is not None and n:
             cnr[it.id] = abs(float(c)) / float(n)
-    out["slanted_edges"] = [dict(e, cnr=e.get("cnr", cnr.get(e.get("id")))) for e in out.get("slanted_edges", [])]
+    edges = result_key(SlantedEdge.kind)
+    out[edges] = [dict(e, cnr=e.get("cnr", cnr.get(e.get("id")))) for e in out.get(edges, [])]
     return out
 
 
@@ -128,7 +134,7 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
         rows += r
     snr = dict(m.get("snr") or {})
     rows += _skipped_rows(m, tolerances)
-    niirs, row = niirs_check(details["slanted_edges"], snr, predicted, tolerances)
+    niirs, row = niirs_check(details[result_key(SlantedEdge.kind)], snr, predicted, tolerances)
     rows.append(row)
     rows = [_with_sigma_reason(r) for r in rows]
     return Comparison(tuple(rows), details, niirs, snr)

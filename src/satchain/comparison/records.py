@@ -8,6 +8,16 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
+
+
+def result_key(kind: str) -> str:
+    """The results.json key of a target kind: the measurement registry's (:data:`satchain.measure.auto.MEASURERS`)."""
+    from satchain.measure.auto import MEASURERS
+
+    return MEASURERS[kind].key
+
+
 __all__ = [
     "NOISE_SIGMAS",
     "BarCheck",
@@ -258,19 +268,19 @@ class Comparison:
 
     @property
     def slanted_edges(self) -> tuple[EdgeCheck, ...]:
-        return tuple(self.details.get("slanted_edges", ()))
+        return tuple(self.details.get(result_key(SlantedEdge.kind), ()))
 
     @property
     def siemens_star(self) -> tuple[StarCheck, ...]:
-        return tuple(self.details.get("siemens_star", ()))
+        return tuple(self.details.get(result_key(SiemensStar.kind), ()))
 
     @property
     def bar_targets(self) -> tuple[BarCheck, ...]:
-        return tuple(self.details.get("bar_targets", ()))
+        return tuple(self.details.get(result_key(BarTarget.kind), ()))
 
     @property
     def hyperbolic_wedge(self) -> tuple[WedgeCheck, ...]:
-        return tuple(self.details.get("hyperbolic_wedge", ()))
+        return tuple(self.details.get(result_key(HyperbolicWedge.kind), ()))
 
     @property
     def n_checked(self) -> int:
