@@ -35,13 +35,14 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import to_jsonable
 from satchain.measure.bars import measure_bars
 from satchain.measure.edge import measure_edge
@@ -113,6 +114,8 @@ class _Frame:
     pixel_m: float
     origin_m: tuple[float, float]
     shape: tuple[int, int]
+    full_scale: float | None = None  # the sensor's full scale in the image's units (None: unknown) ...
+    full_scale_refl: float | None = None  # ... and in the calibrated reflectance the star/bars/wedge read
 
     def px(self, x_m: float, y_m: float) -> tuple[float, float]:
         """Scene point -> continuous pixel coordinates with pixel centres at integers (x = col, y = row)."""
@@ -154,6 +157,7 @@ def measure_auto(
     origin_m: tuple[float, float] | None = None,
     ids=None,
     wedge_threshold: float = 0.15,
+    full_scale: float | None = None,
 ) -> AutoResult:
     """Run every applicable measurement on a simulated image, guided by its scene's truth record.
 
@@ -173,6 +177,10 @@ def measure_auto(
         Measure only these item ids.
     wedge_threshold : float
         Contrast at which wedge stripes count as no longer resolved (the paper's 15 %).
+    full_scale : float, optional
+        The sensor's full scale in the image's units (``2**bit_depth - 1`` for DN; the run passes its
+        detector's); integer images default to their dtype maximum.  Pixels at it are clipped; without it
+        clipping is named only on other evidence (:func:`satchain.measure.find_clipping`).
 
     Returns
     -------
@@ -196,6 +204,8 @@ def measure_auto(
     frame = _Frame(p, origin, data.shape)
     cal = _calibrate(data, truth, items, frame)
     refl = (data - cal["offset"]) / cal["gain"]
+    fs = resolve_full_scale(raw, full_scale)
+    frame = replace(frame, full_scale=fs, full_scale_refl=None if fs is None else (fs - cal["offset"]) / cal["gain"])
     wanted = None if ids is None else {str(i) for i in ids}
     measured, skipped = [], []
     for it in items:
@@ -387,7 +397,7 @@ def _edge_item(raw: np.ndarray, it: dict, frame: _Frame) -> AutoItem:
             f"{max(0, side - 2 * margin)} px; need >= {_EDGE_MIN_PX} px"
         )
     frame.check_roi(roi)
-    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m)
+    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m, full_scale=frame.full_scale)
     measures = str(it["measures"]).lower()
     dx, dy = it["edge_direction"]
     truth_image = _wrap_deg(math.degrees(math.atan2(dx, dy)))
@@ -448,6 +458,7 @@ def _star_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool) -> A
         input_modulation=m0,
         f_max_cy_per_px=f_max,
         pixel_m=p,
+        full_scale=frame.full_scale_refl,
     )
     summary = {
         "id": it["id"],
@@ -525,6 +536,7 @@ def _bars_item(refl: np.ndarray, it: dict, frame: _Frame, calibrated: bool):
                 levels=levels,
                 pixel_m=p,
                 bars_per_group=int(it["n_bars"]),
+                full_scale=frame.full_scale_refl,
             )
         except InputError as exc:
             bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))
@@ -610,7 +622,7 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
     w0, x0, length, n, horizontal, (lox, loy) = _wedge_geometry(it)
     if str(it["orientation"]).lower() == "diagonal":
         ts, s_m, t_m = _diagonal_wedge_grid(refl, it, frame)
-        return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, t_m[1] - t_m[0], threshold, "D135", None)
+        return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, t_m[1] - t_m[0], threshold, "D135", None, frame.full_scale_refl)
     if w0 / p < 1.0:
         raise _Skip(f"too small: the widest lines ({w0:g} m = {w0 / p:.2f} px) are finer than 1 px (Nyquist)")
     s_ax, t_ax = (0, 1) if horizontal else (1, 0)
@@ -623,10 +635,11 @@ def _wedge_item(refl: np.ndarray, it: dict, frame: _Frame, threshold: float) -> 
     ts = np.array(sub if horizontal else sub.T, dtype=float)  # rows = t (across the stripes), cols = s
     s_m = frame.origin_m[s_ax] + (np.arange(s0, s1) + 0.5) * p - s_org
     t_m = frame.origin_m[t_ax] + (np.arange(t0, t1) + 0.5) * p - t_org
-    return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, "ALT" if horizontal else "ACT", roi)
+    direction = "ALT" if horizontal else "ACT"
+    return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi, frame.full_scale_refl)
 
 
-def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> AutoItem:
+def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi, full_scale=None) -> AutoItem:
     """The contrast scan on a wedge laid out as rows = t (across the stripes, spacing ``p`` m), columns = s
     (along it)."""
     w = w0 * x0 / (x0 + s_m)
@@ -646,6 +659,7 @@ def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> Au
         direction="ACT" if direction == "ACT" else "ALT",
         threshold=threshold,
         pixel_m=p,
+        full_scale=full_scale,
     )
     summary = {
         "id": it["id"],

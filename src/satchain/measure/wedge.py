@@ -27,6 +27,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_range
 from satchain.errors import InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, first_crossing, robust_sigma
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -70,6 +71,7 @@ def measure_wedge(
     threshold: float = 0.15,
     average_px: int = 1,
     pixel_m: float | None = None,
+    full_scale: float | None = None,
 ) -> WedgeResult:
     """Contrast scan along a hyperbolic (or any) wedge; resolvable line width at ``threshold`` contrast.
 
@@ -90,6 +92,10 @@ def measure_wedge(
         Number of neighbouring profiles averaged at each position (noise reduction).
     pixel_m : float, optional
         Ground sample distance: adds the line width in metres and the frequency in cy/m on the ground.
+    full_scale : float, optional
+        The sensor's full scale in the image's units; integer images default to their dtype maximum.  The
+        wedge is flagged ``clipping`` only on evidence: pixels at the full scale, or a flat run at its top
+        (bottom) that shows saturation (:func:`satchain.measure.find_clipping`).
 
     Examples
     --------
@@ -103,6 +109,7 @@ def measure_wedge(
     check_choice("direction", direction, ("ALT", "ACT"))
     thr = check_range("threshold", threshold, 0.0, 1.0, lo_open=True, hi_open=True)
     avg = int(check_range("average_px", average_px, 1, 1000))
+    full_scale = resolve_full_scale(image, full_scale)
     data = crop_roi(image, roi, min_size=4)
     work = data if direction == "ALT" else data.T  # profiles are columns of `work`
     pos = np.arange(work.shape[1], dtype=float)
@@ -114,7 +121,7 @@ def measure_wedge(
         )
     # second differences along the axis: a stripe pattern that shifts linearly from profile to profile cancels
     noise = float(robust_sigma(np.diff(work, n=2, axis=1)) / np.sqrt(6)) if work.shape[1] > 2 else 0.0
-    flags = [f for f in [clipping_flag(work, noise_std=noise)] if f]
+    flags = [f for f in [clipping_flag(work, full_scale=full_scale, noise_std=noise)] if f]
     if avg > 1:
         kernel = np.ones(avg) / avg
         work = np.apply_along_axis(lambda r: np.convolve(r, kernel, mode="same"), 1, work)
