@@ -174,14 +174,16 @@ def measure_groups(image, periods, group_rois, direction, full_scale: float | No
     g = Groups()
     deferred = {} if periods.size >= 3 else None
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
+        fl = []
         try:
             prof, noise, fl = _profile(image, roi, direction, p, i, full_scale)
             fit = fit_group(prof, p, noise)
             fl = fl + _check_group(fit, prof, p, i, deferred)
         except InputError as exc:
+            why = str(exc) + "".join(f" ({f.removeprefix(f'group {i}: ')})" for f in fl)  # e.g. the clipping
             if periods.size < 2:
-                raise
-            g.refused[i] = str(exc)
+                raise InputError(why) from None
+            g.refused[i] = why
             continue
         if deferred is not None and i in deferred:  # kept out of the joint model until the model has explained it
             fit = replace(fit, cov=None)

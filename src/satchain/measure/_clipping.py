@@ -11,25 +11,31 @@ its plateau value exactly.  Clipping is named when one of these holds:
 (b) **a plateau that shows saturation** -- at least ``max(10 px, 0.5 %)`` of the pixels are *exactly* equal
     (within ``1e-9`` of the range, far below any noise) to the region's maximum (or minimum), and either
 
-    (b1) *zero variance where noise is expected*: the data elsewhere has a pixel noise ``sigma`` above twice
-         the quantum of its values (the caller's ``noise_std``, else estimated from second differences of
-         the pixels off both extremes), and the pixels next to the plateau stand off it by more than
-         ``0.1 sigma`` (noisy data never repeats one value on many pixels); or
+    (b1) *zero variance where noise is expected*: the data has a pixel noise ``sigma`` above twice the
+         quantum of its values and 1e-4 of its range (the caller's ``noise_std``; else estimated from the
+         second and fourth differences of the pixels off both extremes, and trusted only when the other
+         extreme is no exact plateau), and the plateau's neighbours stand off it by more than ``0.1 sigma``:
+         noisy data never repeats one value on many pixels; or
 
-    (b2) *a kink into a flat top* (noise-free data): the signal runs into the plateau with a finite slope
-         and stops there.  For every plateau pixel ``p`` with a non-plateau neighbour ``n = p + u`` and
-         ``n2 = p + 2u`` (``u`` one of the four pixel steps), the gaps ``g1 = |d(n) - v|`` and
-         ``g2 = |d(n2) - v|`` to the plateau value ``v`` are compared: a profile cut flat at ``v`` (finite
-         derivative at ``v``) gives ``g1 / g2 = delta / (1 + delta)`` with a uniform sub-pixel phase
-         ``delta`` (median 1/3), a smooth approach (derivative falling to zero, ``g ~ x**k``, ``k >= 2``;
-         a Gaussian tail reaching the float's last bit) gives ``g1 / g2 <= 0.11`` (median).  The kink is
-         ``kappa = median(g1 / g2)``; it counts when ``kappa >= 0.2``, ``median(g1)`` is above twice the
-         quantum (one quantisation step onto a plateau is no kink), and the opposite extreme does not show
-         the same kink (``kappa_other < kappa / 2``): an unblurred (pixel-sharp) target has the same kink
-         at its top and at its bottom, a clip cuts one side only.
+    (b2) *a step onto a flat top, on one side only* (noise-free data): along the rows or the columns
+         (whichever cross the plateau's border more often), the pixel that follows a flat run (three plateau
+         pixels in a row) stands off the plateau by ``g1``.  A profile cut flat runs into the plateau with a
+         finite slope: median ``g1`` above ``max(2 quanta, 0.1 % of the range)``.  A smooth approach leaves
+         far less: a blurred edge's Gaussian tail meets the plateau at the float's last bits (``g1 < 1e-6``
+         of the range for a blur of 0.4 px or more), a quantised ramp arrives one quantum at a time.  It
+         counts only when the other extreme has no flat run, or is met smoothly -- a step below 0.1 % of the
+         range and 100 times below the cut side's, seen at six or more sub-pixel phases, or at two or more
+         within ``1e-6`` of the range.  A pixel-sharp (unblurred) target steps onto both its plateaus, a
+         clip cuts one side; but a border along an axis or at a critical tilt (``atan(1/n)``) samples n
+         phases only, and a few phases can make one side of a sharp target look smooth by luck (down to
+         ``1e-9`` of the range at one phase, no lower than ``6.7e-6`` at two to five, over 9000 sharp edges).
 
-Not detectable from the data alone (so not named): a noise-free image clipped at both extremes (the same as
-a pixel-sharp target), and clipping of a few pixels when the full scale is not known.
+Not named, because the data alone cannot tell them from an unclipped target: a noise-free image clipped at
+both extremes, one blurred by less than ~0.3 px (as a pixel-sharp target), one whose other extreme is a
+flat run sampled at one phase (a border along a pixel axis or at 45 deg); a plateau narrower than three
+pixels; a few clipped pixels when the full scale is not known.  Where the noise is only estimated, a noisy
+image clipped at both extremes is not named either (an exact plateau at the other extreme says the data is
+noise-free there); the measurements that know their noise pass it.
 """
 
 from __future__ import annotations
@@ -47,8 +53,10 @@ __all__ = ["Clipping", "find_clipping", "integer_full_scale", "resolve_full_scal
 
 MIN_PLATEAU_PX = 10  # fewer equal pixels at the extreme are never a plateau ...
 MIN_PLATEAU_FRACTION = 0.005  # ... nor a smaller share of the region
-KINK_MIN = 0.2  # median g1 / g2 from which the run into the plateau is a kink (cut: ~1/3; smooth: <= 0.11)
-KINK_STEP_MIN = 1e-3  # a step onto a plateau above this share of the range can be a kink; below, smooth
+STEP_RATIO = 100.0  # ... and its step at most this many times smaller than the cut side's
+MIN_PHASES = 6  # a smooth approach counts when seen at this many sub-pixel phases (critical tilts: n <= 5) ...
+TAIL_MAX = 1e-6  # ... or at two or more, meeting the plateau within this share of the range (a blur's tail)
+STEP_MIN = 1e-3  # a step onto a plateau above this share of the range is a cut; below, a smooth approach
 NOISE_MIN = 1e-4  # data whose pixel noise is below this share of the range count as noise-free
 NOISY_STEP = 0.1  # noisy data: the plateau's neighbours stand off it by more than this many sigma
 _TIE_REL = 1e-9  # "exactly equal": within this share of the range
@@ -59,7 +67,7 @@ class Clipping:
     """Evidence of clipping found by :func:`find_clipping`.
 
     ``side``: ``"maximum"`` or ``"minimum"``; ``level``: the clipped value; ``n_pixels`` and ``fraction``:
-    the pixels at it; ``evidence``: ``"full_scale"``, ``"noisy_plateau"`` (b1) or ``"kink"`` (b2);
+    the pixels at it; ``evidence``: ``"full_scale"`` (a), ``"noisy_plateau"`` (b1) or ``"kink"`` (b2);
     ``message``: one line for flags and refusals (starts with ``clipping:``).
     """
 
@@ -148,27 +156,39 @@ def find_clipping(data, *, full_scale: float | None = None, noise_std: float | N
         return None
     tol = _TIE_REL * span
     quantum = _quantum(d)
-    step_min = max(2 * quantum, KINK_STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
+    step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
     plateaus = {side: _plateau(d, v, tol) for side, v in (("maximum", hi), ("minimum", lo))}
-    sigma = _pixel_noise(d, lo, hi, tol) if noise_std is None else noise_std
+    if noise_std is None:  # estimated: trusted where the other extreme is no exact plateau (noise-free there)
+        sigma = _pixel_noise(d, lo, hi, tol)
+        trusted = {"maximum": plateaus["minimum"] is None, "minimum": plateaus["maximum"] is None}
+    else:
+        sigma, trusted = noise_std, {"maximum": True, "minimum": True}
     noisy = sigma > max(2 * quantum, NOISE_MIN * span)
     for side, other in (("maximum", "minimum"), ("minimum", "maximum")):
         p = plateaus[side]
         if p is None:
             continue
-        n, g_near, g1, kappa = p
+        n, g_near, g1, _ = p
         v, frac = (hi if side == "maximum" else lo), n / d.size
         head = f"clipping: {n} pixel(s) ({100 * frac:.1f} %) exactly at the region {side} {v:g}"
-        if noisy and g_near > max(NOISY_STEP * sigma, 2 * quantum):
+        if noisy and trusted[side] and g_near > max(NOISY_STEP * sigma, 2 * quantum):
             msg = f"{head} while the noise elsewhere is {sigma:.3g} (a flat run where noise is expected)"
             return Clipping(side, v, n, frac, "noisy_plateau", msg)
         po = plateaus[other]
-        smooth_other = po is None or not po[2] > step_min  # NaN: no flat run there
-        if g1 > step_min and kappa >= KINK_MIN and smooth_other:
+        # the other extreme: no flat run (NaN), or flat runs met smoothly at several sub-pixel phases
+        smooth_other = (
+            po is None
+            or not np.isfinite(po[2])
+            or (
+                po[2] <= min(step_min, g1 / STEP_RATIO)
+                and (po[3] >= MIN_PHASES or (po[3] >= 2 and po[2] <= TAIL_MAX * span))
+            )
+        )
+        if g1 > step_min and smooth_other:
             how = "has no flat run" if po is None or not np.isfinite(po[2]) else "is reached smoothly"
             msg = (
                 f"{head}, reached with a kink (median step onto it {g1:.3g} = {100 * g1 / span:.1f} % of the "
-                f"range, {kappa:.2f} of the step two pixels off) while the {other} {how}"
+                f"range) while the {other} {how}: a profile cut flat"
             )
             return Clipping(side, v, n, frac, "kink", msg)
     return None
@@ -181,34 +201,36 @@ def _quantum(d: np.ndarray) -> float:
 
 
 def _plateau(d: np.ndarray, v: float, tol: float):
-    """``(n, g_near, g1, kappa)`` of the pixels equal to ``v``, None when too few for a plateau.
+    """``(n, g_near, g1, phases)`` of the pixels equal to ``v``, None when too few for a plateau.
 
-    ``g_near``: median gap to ``v`` of the plateau's off-plateau 4-neighbours; ``g1``, ``kappa``: median
-    ``g1`` and ``g1 / g2`` over the flat runs (two plateau pixels, then two off it, along a row or a column;
-    NaN without any: a plateau one pixel wide, such as a ridge, is no flat run)."""
+    ``g_near``: median gap to ``v`` of the plateau's off-plateau 4-neighbours.  ``g1``: median gap of the
+    pixel after each flat run (three plateau pixels, then one off it) along the axis (rows or columns) with
+    the most such runs, the one most across the plateau's border; NaN without any (a ridge, or a smooth
+    extremum sampled symmetrically, two equal pixels, is no flat run).  ``phases``: how many different gaps
+    (to 1 % in log) follow those runs: a tilted target samples its profile at many sub-pixel phases, one
+    near 45 deg or along an axis at a few, which can make one side look smooth by luck."""
     at = np.abs(d - v) <= tol
     n = int(np.count_nonzero(at))
     if n < max(MIN_PLATEAU_PX, MIN_PLATEAU_FRACTION * d.size):
         return None
-    near, g1s, g2s = [], [], []
+    near, per_axis = [], []
     for a, m in ((d, at), (d.T, at.T)):  # steps along x, then along y
+        after = []
         for sl in (slice(None), slice(None, None, -1)):  # both senses
             aa, mm = a[:, sl], m[:, sl]
             near.append(np.abs(aa[:, 1:][mm[:, :-1] & ~mm[:, 1:]] - v))
-            if aa.shape[1] < 4:
-                continue
-            run = mm[:, :-3] & mm[:, 1:-2] & ~mm[:, 2:-1] & ~mm[:, 3:]
-            g1s.append(np.abs(aa[:, 2:-1][run] - v))
-            g2s.append(np.abs(aa[:, 3:][run] - v))
+            if aa.shape[1] >= 4:
+                run = mm[:, :-3] & mm[:, 1:-2] & mm[:, 2:-1] & ~mm[:, 3:]
+                after.append(np.abs(aa[:, 3:][run] - v))
+        per_axis.append(np.concatenate(after) if after else np.zeros(0))
     g_near = np.concatenate(near)
-    g1 = np.concatenate(g1s) if g1s else np.zeros(0)
     if g_near.size == 0:
         return None
+    g1 = max(per_axis, key=lambda g: g.size)
     if g1.size < 3:
-        return n, float(np.median(g_near)), float("nan"), float("nan")
-    g2 = np.concatenate(g2s)
-    ratio = np.where(g2 > 0, g1 / np.where(g2 > 0, g2, 1.0), 1.0)
-    return n, float(np.median(g_near)), float(np.median(g1)), float(np.median(np.minimum(ratio, 1.0)))
+        return n, float(np.median(g_near)), float("nan"), 0
+    phases = np.unique(np.round(100 * np.log10(np.maximum(g1, 1e-300)))).size
+    return n, float(np.median(g_near)), float(np.median(g1)), int(phases)
 
 
 def _pixel_noise(d: np.ndarray, lo: float, hi: float, tol: float) -> float:
