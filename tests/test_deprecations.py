@@ -44,3 +44,19 @@ def test_canonical_names_do_not_warn_and_json_has_no_duplicates(edge):
         assert edge.mtf_at_nyquist_sigma > 0 and edge.angle_deg == pytest.approx(5.0, abs=0.1)
     assert "mtf_at_nyquist_std" not in d and "edge_angle_deg" not in d
     assert d["mtf_at_nyquist_sigma"] == pytest.approx(edge.mtf_at_nyquist_sigma)
+
+
+def test_retired_parameter_name_warns_and_means_the_same(edge):
+    """``measure_edge(saturation_level=...)`` is ``full_scale`` under its former name: it warns, naming the
+    versions, and gives the same result."""
+    from scipy.special import erf
+
+    y, x = np.mgrid[0:60, 0:60].astype(float)
+    d = (x - 30.0) * np.cos(np.deg2rad(5.0)) - (y - 30.0) * np.sin(np.deg2rad(5.0))
+    img = np.floor(500 + 3000 * 0.5 * (1 + erf(d / (1.2 * np.sqrt(2)))))
+    img[40, 50:53] = 4095
+    with pytest.warns(SatchainDeprecationWarning, match=r"saturation_level is deprecated in satchain 0\.1"):
+        old = measure_edge(img, saturation_level=4095)
+    new = measure_edge(img, full_scale=4095)
+    assert old.flags == new.flags and "clipping" in new.flags
+    assert old.mtf_at_nyquist == new.mtf_at_nyquist

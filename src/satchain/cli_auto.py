@@ -12,6 +12,7 @@ from rich.table import Table
 from satchain._cli_common import handle_errors, print_warning
 from satchain._safety import check_dir_outputs
 from satchain.cli_options import (
+    FullScaleOpt,
     ImageArg,
     JsonOpt,
     OriginOpt,
@@ -20,6 +21,7 @@ from satchain.cli_options import (
     ThresholdOpt,
     TruthRequiredOpt,
     load_image,
+    parse_full_scale,
     parse_origin,
     read_truth,
 )
@@ -103,6 +105,7 @@ def auto(
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """Every applicable measurement of a (simulated) image, guided by its scene's truth file."""
     from satchain.measure.auto import measure_auto
@@ -111,7 +114,8 @@ def auto(
     data, p, meta = load_image(image, pixel_m)
     truth_dict = read_truth(truth)  # read before --origin-m is parsed (the order of the checks is kept)
     origin = parse_origin(origin_m, meta)
-    res = measure_auto(data, truth_dict, pixel_m=p, origin_m=origin, wedge_threshold=threshold)
+    fs = parse_full_scale(full_scale, data, meta)
+    res = measure_auto(data, truth_dict, pixel_m=p, origin_m=origin, wedge_threshold=threshold, full_scale=fs)
     payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
     emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))
     if not res.items:  # a run that measured nothing is not a success (exit status 2, the reasons on stderr)

@@ -15,7 +15,7 @@ import typer
 from rich.table import Table
 
 from satchain._cli_common import handle_errors
-from satchain.cli_options import ImageArg, JsonOpt, OutOpt, PixelOpt, load_image
+from satchain.cli_options import FullScaleOpt, ImageArg, JsonOpt, OutOpt, PixelOpt, load_image, parse_full_scale
 from satchain.cli_output import emit, fmt, wide_console
 
 __all__ = ["find"]
@@ -95,6 +95,7 @@ def find(
     as_csv: Annotated[bool, typer.Option("--csv", help="print the CEOS table as CSV")] = False,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """ACT and ALT MTF (with 1-sigma) from every usable slanted edge found automatically (no truth file)."""
     from satchain._validate import check_positive, check_range
@@ -105,8 +106,11 @@ def find(
     check_range("--min-length", min_length, 12, None)
     check_range("--max-edges", max_edges, 1, None)
     check_positive("--min-cnr", min_cnr)
-    data, p, _ = load_image(image, pixel_m)
-    res = measure_found_edges(data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr)
+    data, p, meta = load_image(image, pixel_m)
+    fs = parse_full_scale(full_scale, data, meta)
+    res = measure_found_edges(
+        data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr, full_scale=fs
+    )
     csv_text = ceos_csv(res, f_max=f_max, pixel_m=p)
     payload = {"image": str(image), "pixel_m": p, **res.to_dict(), "ceos_csv": csv_text}
 

@@ -18,6 +18,7 @@ import json
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 
 from satchain._cli_common import parse_numbers
@@ -26,6 +27,7 @@ from satchain.errors import ConfigError, SatchainIOError
 __all__ = [
     "SHARED_OPTIONS",
     "FitDegreeOpt",
+    "FullScaleOpt",
     "ImageArg",
     "JsonOpt",
     "OriginOpt",
@@ -37,6 +39,7 @@ __all__ = [
     "TruthRequiredOpt",
     "load_image",
     "parse_fit_degree",
+    "parse_full_scale",
     "parse_origin",
     "parse_roi",
     "read_truth",
@@ -71,6 +74,15 @@ FitDegreeOpt = Annotated[
     ),
 ]
 
+FullScaleOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--full-scale",
+        help="the sensor's full scale in the image's units (DN): pixels at it are clipped; default: 2**bits - 1 "
+        "of an integer image (its stated bit depth, else its type); clipping is otherwise named only on evidence",
+    ),
+]
+
 #: Every shared option, by its long name (``--truth`` has two forms: required and optional).
 SHARED_OPTIONS: dict[str, tuple] = {
     "--roi": (RoiOpt,),
@@ -81,6 +93,7 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--origin-m": (OriginOpt,),
     "--threshold": (ThresholdOpt,),
     "--fit-degree": (FitDegreeOpt,),
+    "--full-scale": (FullScaleOpt,),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing
@@ -110,6 +123,27 @@ def parse_fit_degree(text: str) -> str:
     if value not in ("auto", "1", "2", "3"):
         raise ConfigError(f"--fit-degree = {text!r}: must be auto, 1, 2 or 3")
     return value
+
+
+def parse_full_scale(value: float | None, image, meta: dict) -> float | None:
+    """``--full-scale`` (finite), else ``2**bits - 1`` of an unsigned integer image (the file's stated
+    ``bit_depth``, else its type: 255, 65535), else None (unknown: clipping is named only on evidence).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> parse_full_scale(None, np.zeros(2, np.uint16), {"bit_depth": 12}), parse_full_scale(None, np.zeros(2), {})
+    (4095.0, None)
+    """
+    from satchain._validate import check_range
+    from satchain.io import integer_scale
+
+    if value is not None:
+        return check_range("--full-scale", value, None, None)
+    dt = np.asarray(image).dtype
+    if dt.kind != "u":
+        return None
+    return float(round(1.0 / integer_scale(dt, meta)))
 
 
 def parse_origin(text: str | None, meta: dict) -> tuple[float, float] | None:

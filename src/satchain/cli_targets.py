@@ -17,6 +17,7 @@ from satchain._cli_common import handle_errors, parse_numbers, print_warning
 from satchain._safety import check_dir_outputs, check_star_radius
 from satchain.cli_options import (
     FitDegreeOpt,
+    FullScaleOpt,
     ImageArg,
     JsonOpt,
     OriginOpt,
@@ -27,6 +28,7 @@ from satchain.cli_options import (
     TruthOpt,
     load_image,
     parse_fit_degree,
+    parse_full_scale,
     parse_origin,
     parse_roi,
     read_truth,
@@ -74,6 +76,7 @@ def edge(
     as_json: JsonOpt = False,
     out: OutOpt = None,
     fit_degree: FitDegreeOpt = "auto",
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """Slanted-edge MTF (ISO 12233 e-SFR, improved): MTF +- 1 sigma, MTF at Nyquist, MTF50, RER, overshoot.
 
@@ -85,9 +88,10 @@ def edge(
     from satchain.report.measure_plots import plot_edge
 
     check_dir_outputs(out, ["edge.json", "edge.png"], {"IMAGE": image})
-    data, p, _ = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m)
     region = parse_roi("--roi", roi)
-    r = measure_edge(data, roi=region, pixel_m=p, fit_degree=parse_fit_degree(fit_degree))
+    fs = parse_full_scale(full_scale, data, meta)
+    r = measure_edge(data, roi=region, pixel_m=p, fit_degree=parse_fit_degree(fit_degree), full_scale=fs)
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
     emit(
         payload, as_json, out, "edge", lambda d: one_plot(plot_edge, r, d / "edge.png"),
@@ -138,13 +142,14 @@ def star(
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """Siemens-star MTF per direction (ACT, ALT, diagonals). ``--center`` is in whole-image pixels."""
     from satchain.measure.star import measure_star
     from satchain.report.measure_plots import plot_star
 
     check_dir_outputs(out, ["star.json", "star.png"], {"IMAGE": image})
-    data, p, _ = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m)
     check_star_radius(radius, data.shape)
     region = parse_roi("--roi", roi)
     c = None if center is None else parse_numbers("--center", center, 2)
@@ -152,7 +157,7 @@ def star(
         c = [c[0] - region[0], c[1] - region[1]]
     r = measure_star(
         data, cycles=cycles, center=c, radius_px=radius, roi=region, input_modulation=input_modulation,
-        pixel_m=p, refine_center=refine_center,
+        pixel_m=p, refine_center=refine_center, full_scale=parse_full_scale(full_scale, data, meta),
     )  # fmt: skip
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
     emit(
@@ -236,6 +241,7 @@ def bars(
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """Bar-target CTF per group (the square-wave CTF: with 3 or more groups, corrected for the finite group,
     aliased harmonics and grid phase through the target's joint MTF) and the MTF from the inverse Coltman
@@ -244,7 +250,7 @@ def bars(
     from satchain.report.measure_plots import plot_bars
 
     check_dir_outputs(out, ["bars.json", "bars.png"], {"IMAGE": image})
-    data, p, _ = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m)
     periods = parse_numbers("--periods-px", periods_px)
     rois = _bar_group_rois(periods, periods_px, group_roi, roi, data.shape)
     lv = None if levels is None else tuple(parse_numbers("--levels", levels, 2))
@@ -254,7 +260,7 @@ def bars(
         )
     r = measure_bars(
         data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p,
-        bars_per_group=bars_per_group or None,
+        bars_per_group=bars_per_group or None, full_scale=parse_full_scale(full_scale, data, meta),
     )  # fmt: skip
     payload = {"image": str(image), "group_rois": rois, "pixel_m": p, **r.to_dict()}
     emit(
@@ -281,7 +287,7 @@ def _line_widths(start_px: float, end_px: float, n: int, profile: str):
     return a + (b - a) * u if profile == "linear" else 1.0 / (1.0 / a + (1.0 / b - 1.0 / a) * u)
 
 
-def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, threshold: float):
+def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, threshold: float, full_scale=None):
     """The wedge of a truth file, measured as ``measure auto`` does; returns (WedgeResult, summary, pixel_m)."""
     from satchain.measure.auto import measure_auto
     from satchain.scene.targets import HyperbolicWedge
@@ -294,14 +300,16 @@ def _wedge_from_truth(data, truth_path: Path, item_id: str | None, p, origin, th
         item_id = wedges[0]
     elif item_id not in wedges:
         raise ConfigError(f"--id = {item_id!r}: not a hyperbolic wedge of the truth file; choose from {wedges}")
-    res = measure_auto(data, truth, pixel_m=p, origin_m=origin, ids=[item_id], wedge_threshold=threshold)
+    res = measure_auto(
+        data, truth, pixel_m=p, origin_m=origin, ids=[item_id], wedge_threshold=threshold, full_scale=full_scale
+    )
     found = res.by_kind(HyperbolicWedge.kind)
     if not found:
         raise ConfigError(f"wedge {item_id!r} not measured: {res.skipped[0]['reason']}")
     return found[0].result, found[0].summary, res.pixel_m
 
 
-def _wedge_from_widths(data, roi, start_px, end_px, profile: str, direction: str, threshold: float, p):
+def _wedge_from_widths(data, roi, start_px, end_px, profile: str, direction: str, threshold: float, p, full_scale=None):
     """The wedge in ``--roi`` (default: the image) with line widths from start to end; returns (result, dict)."""
     from satchain.measure.wedge import measure_wedge
 
@@ -310,7 +318,10 @@ def _wedge_from_widths(data, roi, start_px, end_px, profile: str, direction: str
     region = parse_roi("--roi", roi) or (0, 0, data.shape[-1], data.shape[0])
     axis = region[2] - region[0] if direction.upper() == "ALT" else region[3] - region[1]
     lw = _line_widths(start_px, end_px, axis, profile)
-    r = measure_wedge(data, line_width_px=lw, direction=direction.upper(), roi=region, threshold=threshold, pixel_m=p)
+    r = measure_wedge(
+        data, line_width_px=lw, direction=direction.upper(), roi=region, threshold=threshold, pixel_m=p,
+        full_scale=full_scale,
+    )  # fmt: skip
     return r, {"roi": region, "pixel_m": p, "profile": profile, **r.to_dict()}
 
 
@@ -351,6 +362,7 @@ def wedge(
     pixel_m: PixelOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
+    full_scale: FullScaleOpt = None,
 ) -> None:
     """Hyperbolic-wedge contrast scan (the paper's): resolvable line width where the contrast falls to 15 %.
 
@@ -362,14 +374,15 @@ def wedge(
 
     check_dir_outputs(out, ["wedge.json", "wedge.png"], {"IMAGE": image, "--truth": truth})
     data, p, meta = load_image(image, pixel_m)
+    fs = parse_full_scale(full_scale, data, meta)
     if truth is not None:
         if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
             raise ConfigError("--truth: the geometry comes from the truth file; drop --roi and --line-width-*")
-        r, summary, p = _wedge_from_truth(data, truth, item_id, p, parse_origin(origin_m, meta), threshold)
+        r, summary, p = _wedge_from_truth(data, truth, item_id, p, parse_origin(origin_m, meta), threshold, fs)
         payload = {"image": str(image), "truth": str(truth), "pixel_m": p, **summary}
     else:
         r, summary = _wedge_from_widths(
-            data, roi, line_width_start_px, line_width_end_px, profile, direction, threshold, p
+            data, roi, line_width_start_px, line_width_end_px, profile, direction, threshold, p, fs
         )
         payload = {"image": str(image), **summary}
     emit(

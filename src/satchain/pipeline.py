@@ -107,12 +107,15 @@ def _stage_simulate(
 
 
 def _stage_measure(
-    system: ImagingSystem, scene: SceneResult, sim: SimulationResult, progress: Progress
+    system: ImagingSystem, scene: SceneResult, sim: SimulationResult, noise: bool, progress: Progress
 ) -> Measurements:
+    """Every target measured; clipping is named where pixels reach the simulated detector's full scale (in the
+    image's units: ``2**bit_depth - 1`` DN, or the full well) or on the data's own evidence."""
     from satchain.measure.auto import measure_auto
     from satchain.measure.snr import measure_snr
 
-    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m)  # measure_auto reads the dict
+    full_scale = sim.sensor.full_scale(sim.units, noise=noise)
+    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m, full_scale=full_scale)
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m)
     progress("measure", 1, 1)
     return Measurements(auto, snr)
@@ -150,7 +153,9 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
     budget = timed("budget", _stage_budget, config)
     scene = timed("scene", _stage_scene, config)
     sim = timed("simulate", _stage_simulate, config, budget, scene)
-    measured = timed("measure", _stage_measure, sim.system or budget.system, scene, sim)  # the image's own GSD
+    measured = timed(  # the image's own GSD and the simulated detector's full scale
+        "measure", _stage_measure, sim.system or budget.system, scene, sim, config.simulation.noise
+    )
     predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
     return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
 

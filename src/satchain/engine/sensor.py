@@ -84,6 +84,27 @@ class SensorModel:
             raise ConfigError("full_well_e = inf: DN output needs a finite full well")
         return self.full_well_e / 2 ** int(self.bit_depth)
 
+    def full_scale(self, units: str = "dn", *, noise: bool = True) -> float | None:
+        """The value at which :meth:`convert` clips, in ``units`` (the sensor's full scale): ``2**bit_depth - 1``
+        DN, the full well in electrons, or the full well's reflectance/radiance (dark and offset removed).
+        None where the output is never clipped: an infinite full well, or noise-free reflectance/radiance.
+
+        Examples
+        --------
+        >>> s = SensorModel(electrons_per_unit=50000.0, offset_e=1000.0, full_well_e=41000.0, bit_depth=12)
+        >>> s.full_scale("dn"), s.full_scale("electrons"), s.full_scale("reflectance")
+        (4095.0, 41000.0, 0.8)
+        """
+        check_choice("units", units, OUTPUT_UNITS)
+        if units == "dn":
+            return float(2 ** int(self.bit_depth) - 1)
+        if math.isinf(self.full_well_e) or (not noise and units != "electrons"):
+            return None
+        if units == "electrons":
+            return float(self.full_well_e)
+        unit = (self.full_well_e - self.dark_e - self.offset_e) / self.electrons_per_unit
+        return unit if units == "reflectance" else self.radiance_offset + self.radiance_per_unit * unit
+
     def convert(
         self,
         values: np.ndarray,

@@ -4,6 +4,7 @@ Independent of the prediction path (``satchain.tf``, ``satchain.ctf``): agreemen
 project's check of correctness.
 """
 
+from satchain.measure._clipping import Clipping, find_clipping
 from satchain.measure.bars import BarsResult, measure_bars, mtf_from_ctf_samples
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.star import StarResult, measure_star
@@ -11,9 +12,11 @@ from satchain.measure.wedge import WedgeResult, measure_wedge
 
 __all__ = [
     "BarsResult",
+    "Clipping",
     "EdgeResult",
     "StarResult",
     "WedgeResult",
+    "find_clipping",
     "measure_bars",
     "measure_edge",
     "measure_star",

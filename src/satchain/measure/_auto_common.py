@@ -89,3 +89,5 @@ class AutoContext:
     frame: Frame
     calibrated: bool
     wedge_threshold: float
+    full_scale: float | None = None  # the sensor's full scale in the image's units (None: unknown) ...
+    full_scale_refl: float | None = None  # ... and in the calibrated reflectance the star/bars/wedge read

@@ -49,7 +49,7 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
             f"{max(0, side - 2 * margin)} px; need >= {_EDGE_MIN_PX} px"
         )
     frame.check_roi(roi)
-    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m)
+    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m, full_scale=ctx.full_scale)
     measures = str(it["measures"]).lower()
     dx, dy = it["edge_direction"]
     truth_image = _wrap_deg(math.degrees(math.atan2(dx, dy)))
@@ -110,6 +110,7 @@ def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         input_modulation=m0,
         f_max_cy_per_px=f_max,
         pixel_m=p,
+        full_scale=ctx.full_scale_refl,
     )
     summary = {
         "id": it["id"],
@@ -188,6 +189,7 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
                 levels=levels,
                 pixel_m=p,
                 bars_per_group=int(it["n_bars"]),
+                full_scale=ctx.full_scale_refl,
             )
         except InputError as exc:
             bad = re.search(r"(?:group_rois|periods_px)\[(\d+)\]", str(exc))

@@ -49,7 +49,8 @@ def wedge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     w0, x0, length, n, horizontal, (lox, loy) = _wedge_geometry(it)
     if str(it["orientation"]).lower() == "diagonal":
         ts, s_m, t_m = _diagonal_wedge_grid(refl, it, frame)
-        return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, t_m[1] - t_m[0], threshold, "D135", None), []
+        fs = ctx.full_scale_refl
+        return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, t_m[1] - t_m[0], threshold, "D135", None, fs), []
     if w0 / p < 1.0:
         raise Skip(f"too small: the widest lines ({w0:g} m = {w0 / p:.2f} px) are finer than 1 px (Nyquist)")
     s_ax, t_ax = (0, 1) if horizontal else (1, 0)
@@ -62,10 +63,11 @@ def wedge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     ts = np.array(sub if horizontal else sub.T, dtype=float)  # rows = t (across the stripes), cols = s
     s_m = frame.origin_m[s_ax] + (np.arange(s0, s1) + 0.5) * p - s_org
     t_m = frame.origin_m[t_ax] + (np.arange(t0, t1) + 0.5) * p - t_org
-    return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, "ALT" if horizontal else "ACT", roi), []
+    direction = "ALT" if horizontal else "ACT"
+    return _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi, ctx.full_scale_refl), []
 
 
-def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> AutoItem:
+def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi, full_scale=None) -> AutoItem:
     """The contrast scan on a wedge laid out as rows = t (across the stripes, spacing ``p`` m), columns = s
     (along it)."""
     w = w0 * x0 / (x0 + s_m)
@@ -86,6 +88,7 @@ def _scan_wedge(ts, s_m, t_m, it, w0, x0, n, p, threshold, direction, roi) -> Au
         threshold=threshold,
         pixel_m=p,
         valid=inside if direction != "ACT" else inside.T,
+        full_scale=full_scale,
     )
     summary = {
         "id": it["id"],

@@ -21,8 +21,9 @@ from satchain.measure._common import clipping_flag, crop_roi
 __all__ = ["measure_groups", "validate_deferred", "scatter", "renumber", "refusal_flags", "Groups"]
 
 
-def _profile(image, roi, direction: str, period: float, index: int):
-    """Profile across the bars (mean along them), its noise (from the rows' scatter about it) and flags."""
+def _profile(image, roi, direction: str, period: float, index: int, full_scale: float | None = None):
+    """Profile across the bars (mean along them), its noise (from the rows' scatter about it) and flags
+    (clipping only on evidence: pixels at ``full_scale``, or a flat run at an extreme that shows saturation)."""
     data = crop_roi(image, roi, min_size=2)
     work = data if direction == "ACT" else data.T  # rows run along the bars' profile
     prof = work.mean(axis=0)
@@ -35,7 +36,7 @@ def _profile(image, roi, direction: str, period: float, index: int):
     noise = None
     if rows >= 2:
         noise = float(np.std(work - prof[None, :], ddof=0) * np.sqrt(rows / (rows - 1)) / np.sqrt(rows))
-    clip = clipping_flag(work, noise_std=None if noise is None else noise * np.sqrt(rows))
+    clip = clipping_flag(work, full_scale=full_scale, noise_std=None if noise is None else noise * np.sqrt(rows))
     return prof, noise, ([f"group {index}: {clip}"] if clip else [])
 
 
@@ -166,21 +167,23 @@ class Groups:
     refused: dict = field(default_factory=dict)
 
 
-def measure_groups(image, periods, group_rois, direction) -> Groups:
+def measure_groups(image, periods, group_rois, direction, full_scale: float | None = None) -> Groups:
     """Profile, fit and check every group.  In a target of two or more groups, a group that is not bars at its
     period (or too short, or without a significant modulation) is refused alone (its reason kept) and the others
     measured; the call is refused when none is left, or for a lone group."""
     g = Groups()
     deferred = {} if periods.size >= 3 else None
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
+        fl = []
         try:
-            prof, noise, fl = _profile(image, roi, direction, p, i)
+            prof, noise, fl = _profile(image, roi, direction, p, i, full_scale)
             fit = fit_group(prof, p, noise)
             fl = fl + _check_group(fit, prof, p, i, deferred)
         except InputError as exc:
+            why = str(exc) + "".join(f" ({f.removeprefix(f'group {i}: ')})" for f in fl)  # e.g. the clipping
             if periods.size < 2:
-                raise
-            g.refused[i] = str(exc)
+                raise InputError(why) from None
+            g.refused[i] = why
             continue
         if deferred is not None and i in deferred:  # kept out of the joint model until the model has explained it
             fit = replace(fit, cov=None)

@@ -61,27 +61,24 @@ def robust_sigma(values) -> float:
     return float(1.482602218505602 * np.median(np.abs(v - np.median(v))))
 
 
-def clipping_flag(data, *, max_fraction: float = 0.005, noise_std: float | None = None) -> str | None:
-    """A quality flag when more than ``max_fraction`` of the pixels sit at the region's maximum or minimum.
+def clipping_flag(data, *, full_scale: float | None = None, noise_std: float | None = None) -> str | None:
+    """The one-line flag of :func:`satchain.measure._clipping.find_clipping` (None: no evidence of clipping).
 
-    With ``noise_std`` given and zero (noise-free synthetic data, whose plateaus repeat exact values) there is
-    no flag.
+    A region's own maximum is not evidence: pixels at the sensor's ``full_scale`` are, and so is a flat
+    run at an extreme that shows saturation (see :mod:`satchain.measure._clipping`).
 
     Examples
     --------
-    >>> clipping_flag(np.minimum(np.arange(100.0), 90.0))
-    'clipping: 10.0 % of the pixels at the region maximum (90)'
-    >>> clipping_flag(np.arange(1000.0)) is None
-    True
+    >>> ramp = np.tile(np.tanh(np.linspace(-2.0, 2.0, 100)), (4, 1))
+    >>> clipping_flag(np.minimum(ramp, 0.9))[:54]
+    'clipping: 56 pixel(s) (14.0 %) exactly at the region m'
+    >>> clipping_flag(ramp) is None, clipping_flag(ramp, full_scale=1.0) is None
+    (True, True)
     """
-    d = np.asarray(data, dtype=float)
-    if d.size == 0 or d.max() == d.min() or (noise_std is not None and noise_std <= 1e-9 * (d.max() - d.min())):
-        return None
-    hi, lo = float(np.mean(d == d.max())), float(np.mean(d == d.min()))
-    frac, which, val = (hi, "maximum", d.max()) if hi >= lo else (lo, "minimum", d.min())
-    if frac <= max_fraction:
-        return None
-    return f"clipping: {100 * frac:.1f} % of the pixels at the region {which} ({val:g})"
+    from satchain.measure._clipping import find_clipping
+
+    c = find_clipping(data, full_scale=full_scale, noise_std=noise_std)
+    return None if c is None else c.message
 
 
 def first_crossing(x, y, level: float):

@@ -47,6 +47,7 @@ import numpy as np
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._auto_calibrate import calibrate
 from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
 from satchain.measure._auto_items import bars_item, edge_item, star_item
@@ -118,6 +119,7 @@ def measure_auto(
     origin_m: tuple[float, float] | None = None,
     ids=None,
     wedge_threshold: float = 0.15,
+    full_scale: float | None = None,
 ) -> AutoResult:
     """Run every applicable measurement on a simulated image, guided by its scene's truth record.
 
@@ -137,6 +139,10 @@ def measure_auto(
         Measure only these item ids.
     wedge_threshold : float
         Contrast at which wedge stripes count as no longer resolved (the paper's 15 %).
+    full_scale : float, optional
+        The sensor's full scale in the image's units (``2**bit_depth - 1`` for DN; the run passes its
+        detector's); integer images default to their dtype maximum.  Pixels at it are clipped; without it
+        clipping is named only on other evidence (:func:`satchain.measure.find_clipping`).
 
     Returns
     -------
@@ -159,7 +165,9 @@ def measure_auto(
     thr = check_range("wedge_threshold", wedge_threshold, 0.0, 1.0, lo_open=True, hi_open=True)
     frame = Frame(p, origin, data.shape)
     cal = calibrate(data, truth, items, frame)
-    ctx = AutoContext(raw, (data - cal["offset"]) / cal["gain"], frame, cal["fitted"], thr)
+    fs = resolve_full_scale(raw, full_scale)
+    fs_refl = None if fs is None else (fs - cal["offset"]) / cal["gain"]
+    ctx = AutoContext(raw, (data - cal["offset"]) / cal["gain"], frame, cal["fitted"], thr, fs, fs_refl)
     wanted = None if ids is None else {str(i) for i in ids}
     measured, skipped = [], []
     for it in items:

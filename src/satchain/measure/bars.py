@@ -62,6 +62,7 @@ from satchain.measure._barfit import GroupFit
 from satchain.measure._barfit import plateau as _plateau
 from satchain.measure._bargroups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
 from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -223,6 +224,7 @@ def measure_bars(
     levels=None,
     pixel_m: float | None = None,
     bars_per_group: int | None = 3,
+    full_scale: float | None = None,
 ) -> BarsResult:
     """CTF of bar groups (fitted at the known period, any grid phase) and the MTF from the inverse Coltman
     series.
@@ -245,6 +247,10 @@ def measure_bars(
     bars_per_group : int or None
         Bright bars in each group (3: USAF-style and the paper's targets), for the finite-group correction of a
         target of three or more groups; ``None``: long gratings, no correction.
+    full_scale : float, optional
+        The sensor's full scale in the image's units; integer images default to their dtype maximum.  A group
+        is flagged ``clipping`` only on evidence: pixels at the full scale, or a flat run at its top (bottom)
+        that shows saturation (:func:`satchain.measure.find_clipping`), never for its own maximum.
 
     Raises
     ------
@@ -277,7 +283,7 @@ def measure_bars(
         raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
     if np.any(periods < 2.0):
         raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
-    groups = measure_groups(image, periods, group_rois, direction)
+    groups = measure_groups(image, periods, group_rois, direction, resolve_full_scale(image, full_scale))
     kept = [i for i in range(periods.size) if i not in groups.refused]
     t = _target_ctf(groups, kept, periods, levels, bars_per_group)
     for j, msg in t.deferred_refused.items():  # refused against the target's MTF model

@@ -54,6 +54,7 @@ from scipy.ndimage import uniform_filter
 from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, crop_roi, first_crossing, robust_sigma
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
@@ -151,6 +152,7 @@ def measure_edge(
     f_max_cy_per_px: float = 1.0,
     noise_target: float = 0.004,
     fit_degree: int | str = "auto",
+    full_scale: float | None = None,
     saturation_level: float | None = None,
     debias: bool = False,
 ) -> EdgeResult:
@@ -179,8 +181,14 @@ def measure_edge(
         12233:2017 allows them for lens distortion), or "auto" (default): chosen from the data.  A curvature
         the degree used leaves in the edge positions is flagged (``curvature_bias``) when it moves the MTF by
         more than 0.01.
+    full_scale : float, optional
+        The sensor's full scale in the image's units (e.g. ``2**bits - 1`` DN): pixels at it are clipped
+        (refused above 1 % of the region, flagged ``clipping`` below); for integer images the dtype maximum
+        by default.  Without it clipping is still named on evidence (a flat run at an extreme that shows
+        saturation, see :func:`satchain.measure.find_clipping`); an edge's own plateau never is.
     saturation_level : float, optional
-        Values >= this are saturated; for integer images the dtype maximum is used by default.
+        The former name of ``full_scale`` (the same meaning; give one of them): deprecated in 0.1 (a
+        ``SatchainDeprecationWarning``), removed in 0.2.
     debias : bool
         Subtract the predicted noise power from the squared MTF (removes the upward bias of noisy low MTF).
 
@@ -207,10 +215,11 @@ def measure_edge(
     f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.5, os_ / 4.0)
     check_positive("noise_target", noise_target)
     deg = _check_degree(fit_degree)
-    if saturation_level is None and np.issubdtype(np.asarray(image).dtype, np.integer):
-        saturation_level = float(np.iinfo(np.asarray(image).dtype).max)
+    if saturation_level is not None:
+        warn_renamed("measure_edge", "saturation_level", "full_scale")
+    full_scale = resolve_full_scale(image, full_scale, saturation_level)
     data = crop_roi(image, roi, min_size=12)
-    flags = check_saturation(data, saturation_level)
+    flags = check_saturation(data, full_scale)
     work, direction, transposed, sign = _orient(data)
     q_step = quantisation_step(data)
     coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step)

@@ -131,11 +131,11 @@ def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
     return np.maximum(_nyquist_sigma(r) * shape, SIGMA_FLOOR)
 
 
-def _measure_one(image, c: EdgeCandidate, pixel_m):
+def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None):
     """(EdgeResult, None) or (None, reason detail)."""
     try:
         x0, y0, x1, y1 = c.roi  # crop first: measure_edge would convert the whole image to float64 per call
-        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m)
+        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale)
     except InputError as exc:
         return None, str(exc)
     if r.direction != c.direction:
@@ -233,6 +233,7 @@ def measure_found_edges(
     max_edges: int | None = None,
     min_cnr: float = 10.0,
     search: EdgeSearch | None = None,
+    full_scale: float | None = None,
 ) -> FindResult:
     """Find every usable slanted edge of ``image``, measure each, and combine them into ACT and ALT MTFs.
 
@@ -246,6 +247,9 @@ def measure_found_edges(
         Passed to :func:`~satchain.measure.find.find_edges`.
     search : EdgeSearch, optional
         A previous :func:`find_edges` result to measure instead of searching again.
+    full_scale : float, optional
+        The sensor's full scale in the image's units, passed to the edge measurement (an edge with more than
+        1 % of its pixels there is refused as clipped); integer images default to their dtype maximum.
 
     Returns
     -------
@@ -271,7 +275,7 @@ def measure_found_edges(
     rejected = list(search.rejected)
     edges, results = [], []
     for c in search.candidates:
-        r, why = _measure_one(image, c, pixel_m)
+        r, why = _measure_one(image, c, pixel_m, full_scale)
         if r is None:
             rejected.append(Rejection(c.center_xy, c.angle_deg, c.length_px, "measurement refused", why))
             continue

@@ -36,6 +36,7 @@ import numpy as np
 
 from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError, InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
 from satchain.measure._starfit import annulus_fit, coarse_center, fit_center, harmonic_spectrum, symmetry_center
 from satchain.units import cy_per_px_to_cy_per_m_ground
@@ -226,6 +227,7 @@ def measure_star(
     f_max_cy_per_px: float = 0.75,
     pixel_m: float | None = None,
     refine_center: bool = True,
+    full_scale: float | None = None,
 ) -> StarResult:
     """Measure the MTF per direction from a sinusoidal Siemens star.
 
@@ -255,6 +257,10 @@ def measure_star(
     refine_center : bool
         Estimate/refine the centre from the data (default).  With False, ``center`` (or the region's centre)
         is used as it is.
+    full_scale : float, optional
+        The sensor's full scale in the image's units; integer images default to their dtype maximum.  The
+        star is flagged ``clipping`` only on evidence: pixels at the full scale, or a flat run at its top
+        (bottom) that shows saturation (:func:`satchain.measure.find_clipping`).
 
     Raises
     ------
@@ -277,6 +283,7 @@ def measure_star(
         if isinstance(input_modulation, bool):
             raise ConfigError(f"input_modulation = {input_modulation!r}: must be a number in (0, 1], not a bool")
         input_modulation = check_range("input_modulation", input_modulation, 0.0, 1.0, lo_open=True)
+    full_scale = resolve_full_scale(image, full_scale)
     data = crop_roi(image, roi, min_size=16)
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
@@ -315,6 +322,7 @@ def measure_star(
     amp_outer = float(np.nanmedian(mods["all"][order][:5] * levels[order][:5]))
     cnr = amp_outer / noise if noise > 0 else None
     flags = _flags(data, levels, c_std, cnr, float(mtf["all"][0]), input_modulation is None, noise, gradient)
+    flags[:0] = [c for c in [clipping_flag(data, full_scale=full_scale, noise_std=noise)] if c]
     return StarResult(
         f_cy_per_px=f,
         radius_px=radii[order],
@@ -408,9 +416,6 @@ def _check_range_of_mtf(mtf: dict, f: np.ndarray, m0: float, m0_from: str) -> No
 def _flags(data, levels, c_std, cnr, mtf_outer: float, extrapolated: bool, noise: float, gradient: float) -> list[str]:
     """Quality warnings (strings) for the JSON and the tables."""
     flags = []
-    clip = clipping_flag(data, noise_std=noise)
-    if clip:
-        flags.append(clip)
     spread = (levels.max() - levels.min()) / np.mean(levels)
     if spread > 0.05:
         flags.append(f"non-uniform illumination: the mean level varies by {100 * spread:.0f} % across radii")

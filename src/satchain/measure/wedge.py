@@ -36,6 +36,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_range
 from satchain.errors import InputError
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, first_crossing, robust_sigma
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -87,6 +88,7 @@ def measure_wedge(
     pixel_m: float | None = None,
     valid=None,
     seed: int = 0,
+    full_scale: float | None = None,
 ) -> WedgeResult:
     """Contrast scan along a hyperbolic (or any) wedge; resolvable line width at ``threshold`` contrast.
 
@@ -112,6 +114,10 @@ def measure_wedge(
         left out of the noise estimate.
     seed : int
         Seed of the noise bootstrap (the 1-sigma and the noise-bias correction); the result is reproducible.
+    full_scale : float, optional
+        The sensor's full scale in the image's units; integer images default to their dtype maximum.  The
+        wedge is flagged ``clipping`` only on evidence: pixels at the full scale, or a flat run at its top
+        (bottom) that shows saturation (:func:`satchain.measure.find_clipping`).
 
     Examples
     --------
@@ -127,6 +133,7 @@ def measure_wedge(
     avg = int(check_range("average_px", average_px, 1, 1000))
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed = {seed!r}: must be a non-negative integer")
+    full_scale = resolve_full_scale(image, full_scale)
     data = crop_roi(image, roi, min_size=4)
     work = data if direction == "ALT" else data.T  # profiles are columns of `work`
     pos = np.arange(work.shape[1], dtype=float)
@@ -139,7 +146,7 @@ def measure_wedge(
     keep = _valid_mask(valid, np.shape(image), roi, direction)
     # pixel noise from second differences along the axis where the stripes are flat (see _noise_std)
     noise = _noise_std(work, keep)
-    flags = [f for f in [clipping_flag(work, noise_std=noise)] if f]
+    flags = [f for f in [clipping_flag(work, full_scale=full_scale, noise_std=noise)] if f]
     order = np.argsort(-lw, kind="stable")  # from the widest stripes
     hi, lo = _levels(work, avg)
     if np.any(hi + lo <= 0):
