@@ -11,9 +11,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from satchain.errors import InputError
-from satchain.measure._common import robust_sigma
-from satchain.measure._edge_mtf import window_mtf
 from satchain.measure._clipping import find_clipping
+from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
     "check_model",

@@ -47,11 +47,11 @@ import numpy as np
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
-from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._auto_calibrate import calibrate
 from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
 from satchain.measure._auto_items import bars_item, edge_item, star_item
 from satchain.measure._auto_wedge import wedge_item
+from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import to_jsonable
 from satchain.scene.layout import OBJECT_KINDS
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
