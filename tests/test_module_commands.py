@@ -49,3 +49,16 @@ def test_every_named_module_imports_and_runs_as_main(module):
     else:
         importlib.import_module(module)
         assert 'if __name__ == "__main__":' in Path(spec.origin).read_text(encoding="utf-8"), module
+
+
+def test_python_dash_m_satchain_is_the_satchain_command():
+    """``python -m satchain`` runs the same CLI as the ``satchain`` script (help lists its commands; a bad
+    option is the same one-line error, exit 2)."""
+    import subprocess
+    import sys
+
+    ok = subprocess.run([sys.executable, "-m", "satchain", "--help"], capture_output=True, text=True, timeout=120)
+    assert ok.returncode == 0 and "run" in ok.stdout and "measure" in ok.stdout and "satchain" in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "satchain", "run", "--no-such-option"], capture_output=True,
+                         text=True, timeout=120)  # fmt: skip
+    assert bad.returncode == 2 and "--no-such-option" in bad.stderr
