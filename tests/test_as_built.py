@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import sys
 
 import numpy as np
@@ -203,3 +204,31 @@ def test_report_lists_what_differs(design_run, as_built_run, tmp_path):
     block = built[built.index('id="as-built"') : built.index("</div>", built.index('id="as-built"'))]
     assert "motion.smear_px" in block and f"<td>{DESIGN_SMEAR_PX}</td><td>3.0</td>" in block
     assert 'id="as-built"' not in (tmp_path / "design" / "r.html").read_text()
+
+
+def test_as_built_at_another_altitude_draws_the_image_at_its_own_gsd(tmp_path_factory):
+    """Built to fly 8 % higher (or the focal length off): the image's pixels are the as-built GSD, and the
+    report's thumbnails, overlays and edge curves place the targets with it, not with the design's GSD."""
+    from satchain.pipeline import ReportInputs
+    from satchain.report.overlays import overlay_svg
+
+    design = load_preset("ankarasat3")
+    r = _run(tmp_path_factory, "higher", {"as_built": {"orbit": {"altitude_m": 1.08 * design.orbit.altitude_m}}})
+    view = ReportInputs(r, tmp_path_factory.mktemp("view"), r.to_json_dict())
+    assert view.image_gsd_m == pytest.approx(1.08 * design.gsd_act_m, rel=1e-9)
+    assert view.image_gsd_m == r.simulation.system.gsd_act_m != view.system.gsd_act_m
+    # the image covers the scene at the as-built pixel: its width x the as-built GSD is the scene's width
+    assert r.simulation.image.shape[1] * view.image_gsd_m == pytest.approx(170.0, abs=2 * view.image_gsd_m)
+    # an edge's fit line is drawn where the edge is (scene metres), whatever the pixel
+    truth = {it["id"]: it for it in r.scene.truth_dict["items"]}
+    edge = next(e for e in r.measurements.to_dict()["slanted_edges"] if e["id"] == "edge_act")
+    box = truth["edge_act"]["bbox_m"]
+    def roi_centre(gsd):
+        svg = overlay_svg(truth["edge_act"], edge, box, gsd_m=gsd, display_px=200.0)
+        x, y, w, h = (float(re.search(f' {k}="([-0-9.]+)"', svg.split("<rect")[1]).group(1))
+                      for k in ("x", "y", "width", "height"))  # fmt: skip
+        ex, ey = truth["edge_act"]["edge_point_m"]
+        return np.hypot(x + w / 2 - ex, y + h / 2 - ey)
+
+    assert roi_centre(view.image_gsd_m) < 1.0  # the measured region drawn around the edge
+    assert roi_centre(view.system.gsd_act_m) > 2.0  # (the design's GSD would draw it 8 % off, metres away)

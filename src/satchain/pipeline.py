@@ -165,7 +165,8 @@ class ReportInputs:
     """The read-only view of a run that the report code (report/html.py, report/run_figures.py) reads:
     ``out`` (the directory being written), ``config``, ``system``, ``otf``, ``budget`` (dict), ``scene``,
     ``truth`` (the JSON dict the figures read), ``simulator``, ``image``, ``focal_plane``, ``sensor``,
-    ``measured`` (dict), ``comparison`` (``{"results": results.json's content}``) and ``timings_s``."""
+    ``measured`` (dict), ``comparison`` (``{"results": results.json's content}``), ``timings_s`` and
+    ``image_gsd_m`` (the simulated image's pixel: the as-built camera's, which may differ from ``system``'s)."""
 
     result: RunResult
     out: Path
@@ -183,6 +184,8 @@ class ReportInputs:
     measured = property(lambda self: self.result.measurements.to_dict())
     comparison = property(lambda self: {"results": self.results})
     timings_s = property(lambda self: self.result.timings_s)
+    #: The simulated image's pixel on the ground (m): the camera as built when ``[as_built]`` changes it.
+    image_gsd_m = property(lambda self: float((self.result.simulation.system or self.result.budget.system).gsd_act_m))
 
     @cached_property
     def truth(self) -> dict[str, Any]:

@@ -98,7 +98,7 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
         roi = m.get("roi_px")
         if roi is None:
             continue
-        r = measure_edge(np.asarray(ctx.image, float), roi=roi, pixel_m=ctx.system.gsd_act_m)
+        r = measure_edge(np.asarray(ctx.image, float), roi=roi, pixel_m=ctx.image_gsd_m)
         t = truth.get(e["id"], {})
         normal = t.get("normal_to_bright", (1.0, 0.0) if e["direction"] == "ACT" else (0.0, 1.0))
         x = np.asarray(r.esf_x_px, float)

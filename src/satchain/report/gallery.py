@@ -49,7 +49,7 @@ def plot_image_with_rois(ctx, path: Path) -> None:
     """The simulated image (detector samples) with every measured target's region of interest drawn and
     labelled, and every other object outlined by kind."""
     img = _to_reflectance(ctx)
-    gsd = float(ctx.system.gsd_act_m)
+    gsd = float(ctx.image_gsd_m)
     h, w = img.shape
     rois = {m["id"]: m["roi_px"] for _, m in measured_entries(ctx.measured) if m.get("roi_px") is not None}
     scale = min(820.0 / w, 1150.0 / h, 3.0)
@@ -149,7 +149,7 @@ def target_thumbnails(ctx) -> list[dict]:
     p = float(ctx.config.scene.pixel_m)
     scene = _scene(ctx)
     fp_pixel = p * float(ctx.simulator.D)
-    gsd = float(ctx.system.gsd_act_m)
+    gsd = float(ctx.image_gsd_m)
     det = _to_reflectance(ctx)
     extent = (ctx.image.shape[1] * gsd, ctx.image.shape[0] * gsd)
     out = []

@@ -131,7 +131,7 @@ def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
         w, h = t["box_m"][2] - t["box_m"][0], t["box_m"][3] - t["box_m"][1]
         t["wide"] = w > 2.5 * h
         t["tw"] = min(1100 if t["wide"] else 360, 420 * w / h)
-        svg = overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.system.gsd_act_m),
+        svg = overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.image_gsd_m),
                           origin_m=origin, compared_up_to_cy_per_px=lim, display_px=t["tw"])  # fmt: skip
         for p in t["panels"]:
             p["overlay"] = svg

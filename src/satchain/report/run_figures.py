@@ -57,7 +57,7 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
     gt = _scene(ctx).render(win, pixel_m=p)
     gt_ext = (win[1] * p, (win[1] + win[3]) * p, (win[0] + win[2]) * p, win[0] * p)
     fp, fp_ext = _crop(ctx.focal_plane, item["bbox_m"], p * ctx.simulator.D)
-    det, det_ext = _crop(ctx.image, item["bbox_m"], ctx.system.gsd_act_m)
+    det, det_ext = _crop(ctx.image, item["bbox_m"], ctx.image_gsd_m)
     aspect = (x1 - x0) / max(y1 - y0, 1e-9)
     with matplotlib.rc_context(rc_for(9)):
         if aspect > 2:  # long targets (a wedge along x): panels one above the other
@@ -72,7 +72,7 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
         panels = (
             (gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"),
             (fp, fp_ext, f"(b) focal plane, {p * ctx.simulator.D * 100:g} cm samples"),
-            (det, det_ext, f"(c) detector, GSD {ctx.system.gsd_act_m:.3g} m"),
+            (det, det_ext, f"(c) detector, GSD {ctx.image_gsd_m:.3g} m"),
         )
         for ax, (im, ext, title) in zip(axes, panels, strict=True):
             ax.imshow(im, cmap="gray", extent=ext, interpolation="nearest")
