@@ -36,9 +36,7 @@ def naive_render(scene, window, pixel_m, ss):
         if isinstance(item, SiemensStar):
             dx, dy = xx - item.center_m[0], yy - item.center_m[1]
             r = np.hypot(dx, dy)
-            val = item.mean + item.amplitude * np.sin(item.cycles * np.arctan2(dy, dx)) * (
-                r >= item.inner_radius_m
-            )
+            val = item.mean + item.amplitude * np.sin(item.cycles * np.arctan2(dy, dx)) * (r >= item.inner_radius_m)
             img = np.where(r <= item.radius_m, val, img)
             continue
         for rings, refl in item.layers(pixel_m):

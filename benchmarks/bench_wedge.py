@@ -32,18 +32,25 @@ def _wedge_rows(result) -> None:
         it = next(i for i in result.scene.truth["items"] if i["id"] == w.id)
         mod = (it["bright"] - it["dark"]) / (it["bright"] + it["dark"])
         print(f"wedge {w.id} ({w.axis})")
-        print(f"  resolution measured {w.resolution_m:.4f} m  predicted {w.resolution_predicted_m:.4f} m  "
-              f"relative error {w.relative_error:+.4f}  sigma {w.relative_error_sigma:.4f}  ({'pass' if w.passed else 'FAIL'})")  # noqa: E501
-        print(f"  crossing 1-sigma: noise bootstrap {w.resolution_m_std * 1e3:.2f} mm, measure's estimate "
-              f"{w.resolution_m_std_measure * 1e3:.1f} mm; prediction over placements {w.resolution_predicted_m_std * 1e3:.1f} mm "  # noqa: E501
-              f"{[None if v is None else round(v, 4) for v in w.resolution_predicted_by_placement_m]}")
+        print(
+            f"  resolution measured {w.resolution_m:.4f} m  predicted {w.resolution_predicted_m:.4f} m  "
+            f"relative error {w.relative_error:+.4f}  sigma {w.relative_error_sigma:.4f}  "
+            f"({'pass' if w.passed else 'FAIL'})"
+        )
+        print(
+            f"  crossing 1-sigma: noise bootstrap {w.resolution_m_std * 1e3:.2f} mm, measure's estimate "
+            f"{w.resolution_m_std_measure * 1e3:.1f} mm; prediction over placements {w.resolution_predicted_m_std * 1e3:.1f} mm "  # noqa: E501
+            f"{[None if v is None else round(v, 4) for v in w.resolution_predicted_by_placement_m]}"
+        )
         for name, sel in (("lines > 2 GSD", lw > 2 * w.gsd_m), ("lines > 0.6 m", lw > 0.6)):
             if not sel.any():
                 continue
-            print(f"  {name} ({sel.sum()} positions): max |measured - modelled| {np.max(np.abs(c - cp)[sel]):.4f}, "
-                  f"max |measured - Coltman| {np.max(np.abs(c - col)[sel]):.4f} (mean {np.mean((c - col)[sel]):+.4f}), "
-                  f"max |measured - {mod:.3f} Coltman| {np.max(np.abs(c - mod * col)[sel]):.4f} "
-                  f"(mean {np.mean((c - mod * col)[sel]):+.4f})")
+            print(
+                f"  {name} ({sel.sum()} positions): max |measured - modelled| {np.max(np.abs(c - cp)[sel]):.4f}, "
+                f"max |measured - Coltman| {np.max(np.abs(c - col)[sel]):.4f} (mean {np.mean((c - col)[sel]):+.4f}), "
+                f"max |measured - {mod:.3f} Coltman| {np.max(np.abs(c - mod * col)[sel]):.4f} "
+                f"(mean {np.mean((c - mod * col)[sel]):+.4f})"
+            )
 
 
 def main() -> None:
@@ -64,8 +71,10 @@ def main() -> None:
                 res.setdefault(w.id, []).append((w.resolution_m, w.resolution_m_std, w.resolution_m_std_measure))
         for k, v in res.items():
             v = np.asarray(v, float)
-            print(f"{k}: {len(v)} seeds, crossing spread {np.std(v[:, 0], ddof=1) * 1e3:.2f} mm; mean bootstrap "
-                  f"1-sigma {v[:, 1].mean() * 1e3:.2f} mm; mean measure's estimate {v[:, 2].mean() * 1e3:.1f} mm")
+            print(
+                f"{k}: {len(v)} seeds, crossing spread {np.std(v[:, 0], ddof=1) * 1e3:.2f} mm; mean bootstrap "
+                f"1-sigma {v[:, 1].mean() * 1e3:.2f} mm; mean measure's estimate {v[:, 2].mean() * 1e3:.1f} mm"
+            )
 
 
 if __name__ == "__main__":

@@ -15,9 +15,7 @@ def test_budget_json_schema_and_values(ankarasat3):
     r = runner.invoke(app, ["budget", "--preset", "ankarasat3", "--freqs", "10,42.5,85.034", "--json"])
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
-    assert d["derived"]["gsd_act_m"] == pytest.approx(0.49) and d["derived"]["gsd_alt_m"] == pytest.approx(
-        0.49
-    )
+    assert d["derived"]["gsd_act_m"] == pytest.approx(0.49) and d["derived"]["gsd_alt_m"] == pytest.approx(0.49)
     assert d["derived"]["nyquist_cy_per_mm"] == pytest.approx(85.034, abs=1e-3)
     assert d["frequencies_cy_per_mm"] == [10.0, 42.5, 85.034]
     for direction in ("alt", "act"):
@@ -133,10 +131,7 @@ def test_scene_then_simulate_through_cli(tmp_path):
     a, b = tmp_path / "a.tif", tmp_path / "b.tif"
     for p in (a, b):
         assert (
-            runner.invoke(
-                app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--seed", "7", "-o", str(p)]
-            ).exit_code
-            == 0
+            runner.invoke(app, ["simulate", str(tmp_path / "s" / "sc.tif"), "--seed", "7", "-o", str(p)]).exit_code == 0
         )
     da, db = tifffile.imread(a), tifffile.imread(b)
     assert da.dtype == np.uint16 and da.max() < 2**12

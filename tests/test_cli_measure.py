@@ -230,7 +230,6 @@ def test_bars_target_corrected_to_the_square_wave_ctf(tmp_path):
     _err([*args, "--bars-per-group", "1"], "--bars-per-group")
 
 
-
 def test_bars_table_names_a_refused_group_instead_of_nan(tmp_path):
     """One group of a 4-group target flattened to a uniform grey: the table says "refused" in its row and
     gives the reason; no "nan" is printed; the other groups keep their numbers."""
@@ -249,6 +248,7 @@ def test_bars_table_names_a_refused_group_instead_of_nan(tmp_path):
     d = _json(args)
     assert d["ctf"][1] is None or d["ctf"][1] != d["ctf"][1]
     assert all(isinstance(c, float) and 0 < c < 1 for i, c in enumerate(d["ctf"]) if i != 1)
+
 
 def _wedge_image():
     """Stripes 6 -> 1.05 px wide (linear) whose contrast is set to 0.8 (50 - x) / 40: 15 % at x = 42.5."""

@@ -42,9 +42,7 @@ def test_bigtiff_forced_and_tiles_streamed(tmp_path):
             for c in range(2):
                 yield np.full((16, 16) if c == 0 else (16, 4), r * 10 + c, np.float32)
 
-    write_tiff_tiles(
-        tmp_path / "b.tif", tiles(), shape=(48, 20), dtype=np.float32, tile=(16, 16), bigtiff=True
-    )
+    write_tiff_tiles(tmp_path / "b.tif", tiles(), shape=(48, 20), dtype=np.float32, tile=(16, 16), bigtiff=True)
     b, meta = read_image(tmp_path / "b.tif")
     assert meta["bigtiff"] is True and b.shape == (48, 20)
     assert b[17, 0] == 10 and b[47, 19] == 21 and "pixel_m" not in meta

@@ -22,8 +22,6 @@ def strict_loads(text: str):
     return json.loads(text, parse_constant=reject)
 
 
-
-
 @pytest.fixture(scope="module")
 def reduced_run(tmp_path_factory, reduced_scene_toml):
     d = tmp_path_factory.mktemp("run")

@@ -108,13 +108,9 @@ def test_giqe5_hand_computation():
 
 def test_giqe4_hand_computation_both_branches():
     # RER < 0.9: 10.251 - 3.16 log10(10) + 2.817 log10(0.5) - 0.656 * 0.9 - 0.344 / 50 = 5.64571
-    assert q.giqe4(gsd_in=10.0, rer=0.5, overshoot=0.9, noise_gain=1.0, snr=50.0) == pytest.approx(
-        5.64571, abs=1e-5
-    )
+    assert q.giqe4(gsd_in=10.0, rer=0.5, overshoot=0.9, noise_gain=1.0, snr=50.0) == pytest.approx(5.64571, abs=1e-5)
     # RER >= 0.9: 10.251 - 3.32 + 1.559 * 0 - 0.656 - 0.344 * 2 / 100 = 6.26812
-    assert q.giqe4(gsd_in=10.0, rer=1.0, overshoot=1.0, noise_gain=2.0, snr=100.0) == pytest.approx(
-        6.26812, abs=1e-5
-    )
+    assert q.giqe4(gsd_in=10.0, rer=1.0, overshoot=1.0, noise_gain=2.0, snr=100.0) == pytest.approx(6.26812, abs=1e-5)
 
 
 def test_giqe4_noise_coefficient_is_0_344():
@@ -125,9 +121,7 @@ def test_giqe4_noise_coefficient_is_0_344():
 
 def test_giqe3_hand_computation():
     # 11.81 + 3.32 log10(1 / 10) - 1.48 - 1 / 100 = 7.0
-    assert q.giqe3(gsd_in=10.0, rer=1.0, overshoot=1.0, noise_gain=1.0, snr=100.0) == pytest.approx(
-        7.0, abs=1e-12
-    )
+    assert q.giqe3(gsd_in=10.0, rer=1.0, overshoot=1.0, noise_gain=1.0, snr=100.0) == pytest.approx(7.0, abs=1e-12)
 
 
 def test_off_nadir_gsd_projection():
@@ -180,9 +174,7 @@ def test_predict_quality_axes_and_geometric_means(ankarasat3):
     assert r.overshoot_act == pytest.approx(float(_gauss_er(1.25, 0.4)), abs=1e-5)
     assert r.gsd_in == pytest.approx(s.gsd_m / 0.0254)
     assert r.noise_gain == 1.0 and r.otf_kind == "signed_otf"
-    assert r.giqe5 == pytest.approx(
-        q.giqe5(gsd_in=r.gsd_in, rer=q.giqe5_rer(rer_act, rer_alt), snr=r.snr), abs=1e-4
-    )
+    assert r.giqe5 == pytest.approx(q.giqe5(gsd_in=r.gsd_in, rer=q.giqe5_rer(rer_act, rer_alt), snr=r.snr), abs=1e-4)
 
 
 def test_predict_quality_reference_system(ankarasat3):

@@ -63,9 +63,7 @@ def test_planck_sun_total_at_1_au():
     nominal = np.trapezoid(rad.planck_solar_irradiance(lam, temperature_k=5772.0), lam)
     assert nominal == pytest.approx(1361.0, abs=0.5)  # IAU 2015 nominal T_eff and total solar irradiance
     _, e_far = rad.solar_spectrum("planck_5778k", [5e-7])
-    assert e_far[0] == pytest.approx(
-        math.pi * rad.planck_spectral_radiance(5e-7, 5778.0)[()] * (R_SUN / AU) ** 2
-    )
+    assert e_far[0] == pytest.approx(math.pi * rad.planck_spectral_radiance(5e-7, 5778.0)[()] * (R_SUN / AU) ** 2)
 
 
 def test_shipped_spectrum_integral_and_source():
@@ -131,9 +129,7 @@ def test_paper_figure2_reading_surface_and_toa():
     both = radiometry_of()
     down = radiometry_of(atmosphere_path="down")
     up = radiometry_of(atmosphere_path="up")
-    assert both.radiance_surface_band_w_per_m2_sr == pytest.approx(
-        0.77 * clear.radiance_surface_band_w_per_m2_sr
-    )
+    assert both.radiance_surface_band_w_per_m2_sr == pytest.approx(0.77 * clear.radiance_surface_band_w_per_m2_sr)
     assert both.radiance_toa_band_w_per_m2_sr == pytest.approx(0.77**2 * clear.radiance_toa_band_w_per_m2_sr)
     assert down.radiance_toa_band_w_per_m2_sr == pytest.approx(up.radiance_toa_band_w_per_m2_sr)
     assert up.radiance_surface_band_w_per_m2_sr == pytest.approx(clear.radiance_surface_band_w_per_m2_sr)
@@ -267,9 +263,7 @@ def test_full_well_saturation_flag():
     sat = rad.radiometric_budget(_system(detector={"tdi_stages": 32, "full_well_e": 0.9 * n}))
     assert sat.saturated
     # digital (CMOS) TDI: each stage's charge must fit, not the sum
-    cmos = rad.radiometric_budget(
-        _system(detector={"tdi_stages": 32, "full_well_e": 0.9 * n, "readout": "cmos"})
-    )
+    cmos = rad.radiometric_budget(_system(detector={"tdi_stages": 32, "full_well_e": 0.9 * n, "readout": "cmos"}))
     assert not cmos.saturated and cmos.well_fill == pytest.approx(1 / (0.9 * 32))
 
 

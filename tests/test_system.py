@@ -65,9 +65,7 @@ def test_focal_length_or_f_number():
 
 
 def test_rectangular_pixels_and_fill_factor():
-    s = make(
-        detector__pitch_m=None, detector__pitch_x_m=4e-6, detector__pitch_y_m=8e-6, detector__fill_factor=0.64
-    )
+    s = make(detector__pitch_m=None, detector__pitch_x_m=4e-6, detector__pitch_y_m=8e-6, detector__fill_factor=0.64)
     assert s.gsd_act_m == pytest.approx(4e-6 * 500e3 / 5.0)
     assert s.gsd_alt_m == pytest.approx(2 * s.gsd_act_m)
     assert s.gsd_m == pytest.approx(math.sqrt(s.gsd_act_m * s.gsd_alt_m))
@@ -148,9 +146,7 @@ def test_bad_files(tmp_path):
 
 
 def test_replace_validates_and_keeps_fill(ankarasat3):
-    s = ankarasat3.replace(
-        {"optics.obscuration_ratio": 0.1, "detector.pitch_m": 4e-6, "optics.wavelength_m": 5e-7}
-    )
+    s = ankarasat3.replace({"optics.obscuration_ratio": 0.1, "detector.pitch_m": 4e-6, "optics.wavelength_m": 5e-7})
     assert s.optics.obscuration_ratio == 0.1
     assert s.detector.pitch_x_m == 4e-6 and s.detector.fill_factor == pytest.approx(1.0)
     assert s.optics.wavelengths_m == (5e-7,)

@@ -26,9 +26,7 @@ def test_reference_system_scales():
 @given(f=pos, focal=st.floats(0.01, 50), rng=st.floats(1e3, 1e8))
 def test_focal_ground_round_trip(f, focal, rng):
     g = units.focal_to_ground_cy_per_m(f, focal_length_m=focal, range_m=rng)
-    assert units.ground_to_focal_cy_per_mm(g, focal_length_m=focal, range_m=rng) == pytest.approx(
-        f, rel=1e-12
-    )
+    assert units.ground_to_focal_cy_per_mm(g, focal_length_m=focal, range_m=rng) == pytest.approx(f, rel=1e-12)
 
 
 @given(f=pos, pitch=st.floats(1e-7, 1e-4))

@@ -215,7 +215,11 @@ def _write_images(result: RunResult, out: Path) -> None:
     d = out / "images"
     meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
     io.write_simulated(
-        d / "simulated.tif", sim.image, units=c.units, bit_depth=sim.sensor.bit_depth, pixel_m=s.gsd_act_m,
+        d / "simulated.tif",
+        sim.image,
+        units=c.units,
+        bit_depth=sim.sensor.bit_depth,
+        pixel_m=s.gsd_act_m,
         metadata=meta,
     )
     io.write_tiff(

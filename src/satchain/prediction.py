@@ -283,7 +283,12 @@ def _predict_wedges(
             continue
         try:
             out[str(it["id"])] = predict_wedge(
-                otf2d, it, gsd_m=gsd_m, truth_pixel_m=truth_px, background=background, threshold=threshold,
+                otf2d,
+                it,
+                gsd_m=gsd_m,
+                truth_pixel_m=truth_px,
+                background=background,
+                threshold=threshold,
                 noise_sigma=noise,
             )
         except InputError as exc:

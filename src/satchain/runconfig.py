@@ -205,9 +205,7 @@ def _merge_system(design: ImagingSystem, sections: dict[str, dict[str, Any]]) ->
         allowed = set(model.model_fields) | set(_SHORTHANDS.get(section, ()))
         for key, value in values.items():
             if key not in allowed:
-                raise ConfigError(
-                    f"as_built.{section}.{key}: unknown key; {section} has {', '.join(sorted(allowed))}"
-                )
+                raise ConfigError(f"as_built.{section}.{key}: unknown key; {section} has {', '.join(sorted(allowed))}")
             old = current[section].get(key)
             nested = isinstance(value, dict) and isinstance(old, dict)
             flat[f"{section}.{key}"] = _deep_merge(old, value) if nested else value

@@ -95,9 +95,7 @@ class _WedgeModel(TargetImageModel):
     :meth:`image` then samples it for any placement (:class:`satchain.target_image.TargetImageModel`)."""
 
     def __init__(self, otf2d: OTF2D, item: Mapping[str, Any], gsd_m: float, truth_pixel_m: float, background: float):
-        super().__init__(
-            otf2d, item_from_truth(item), gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background
-        )
+        super().__init__(otf2d, item_from_truth(item), gsd_m=gsd_m, truth_pixel_m=truth_pixel_m, background=background)
 
 
 def wedge_model_image(
@@ -202,8 +200,15 @@ def predict_wedge(
     first = runs[0]
     sd_noise = None
     if noise_sigma is not None:
-        sd_noise = _noise_std(model.image(placements_px[0]), item, (ox + placements_px[0][0] * gsd_m,
-                              oy + placements_px[0][1] * gsd_m), gsd_m, threshold, noise_sigma, res[0])
+        sd_noise = _noise_std(
+            model.image(placements_px[0]),
+            item,
+            (ox + placements_px[0][0] * gsd_m, oy + placements_px[0][1] * gsd_m),
+            gsd_m,
+            threshold,
+            noise_sigma,
+            res[0],
+        )
     return WedgePrediction(
         id=str(item["id"]),
         axis=WEDGE_AXES[str(item["orientation"]).lower()],

@@ -87,9 +87,7 @@ def test_house_area_and_ridge():
     p = 0.05
     img = _render(house, (400, 400), p)
     assert img.sum() * p * p == pytest.approx(15.2 * 10.4, rel=1e-9)
-    shaded = _render(
-        House("h", origin_m=(10.0, 8.0), roof_lit=0.0, roof_shaded=1.0, ridge=0.0), (400, 400), p
-    )
+    shaded = _render(House("h", origin_m=(10.0, 8.0), roof_lit=0.0, roof_shaded=1.0, ridge=0.0), (400, 400), p)
     assert shaded.sum() * p * p == pytest.approx(15.2 * (10.4 / 2 - 0.15), rel=1e-9)
 
 

@@ -70,9 +70,7 @@ def _bar_edges_1d(profile, p):
 @pytest.mark.parametrize("orientation", ["act", "alt"])
 def test_bar_periods_recovered(orientation):
     periods = (2.0, 1.3, 0.9)
-    bars = BarTarget(
-        "b", origin_m=(1.07, 0.93), periods_m=periods, orientation=orientation, bright=1.0, dark=0.0
-    )
+    bars = BarTarget("b", origin_m=(1.07, 0.93), periods_m=periods, orientation=orientation, bright=1.0, dark=0.0)
     p = 0.1
     img = _render(bars, 20.0, 20.0, p)
     if orientation == "alt":

@@ -47,9 +47,7 @@ def test_optional_components_appear_only_when_present(ankarasat3):
         "tdi_sync",
     }
     b = mtf_budget(s, [40.0, 85.0])
-    prod = np.prod(
-        [b.alt[k] for k in ("diffraction", "detector", "jitter", "charge_diffusion", "tdi_sync")], axis=0
-    )
+    prod = np.prod([b.alt[k] for k in ("diffraction", "detector", "jitter", "charge_diffusion", "tdi_sync")], axis=0)
     np.testing.assert_allclose(b.alt["system"], prod)
     # tdi sync acts along-track only
     np.testing.assert_allclose(b.act["tdi_sync"], 1.0)

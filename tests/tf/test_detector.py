@@ -35,9 +35,9 @@ def test_pixel_otf_zeros_and_axes():
     v = pixel_otf(0.0, 100.0, active_width_x_m=5.88e-6, active_width_y_m=2e-6)
     assert v == pytest.approx(np.sinc(100 * 2e-3))
     # at Nyquist of a 100 % fill pixel the MTF is 2/pi
-    assert pixel_otf(
-        1 / (2 * 5.88e-3), 0.0, active_width_x_m=5.88e-6, active_width_y_m=5.88e-6
-    ) == pytest.approx(2 / np.pi)
+    assert pixel_otf(1 / (2 * 5.88e-3), 0.0, active_width_x_m=5.88e-6, active_width_y_m=5.88e-6) == pytest.approx(
+        2 / np.pi
+    )
     # signed beyond the first zero
     assert pixel_otf(1.5 / 5.88e-3, 0.0, active_width_x_m=5.88e-6, active_width_y_m=5.88e-6) < 0
 
@@ -47,9 +47,7 @@ def test_charge_diffusion_is_hankel_transform_of_exponential_psf():
     for f in (0.0, 20.0, 80.0, 200.0):
         # 2-D isotropic PSF exp(-r/L)/(2 pi L^2): OTF = 2 pi int_0^inf psf(r) J0(2 pi f r) r dr
         val, _ = integrate.quad(
-            lambda r, f=f: (
-                np.exp(-r / L_mm) / (2 * np.pi * L_mm**2) * special.j0(2 * np.pi * f * r) * 2 * np.pi * r
-            ),
+            lambda r, f=f: np.exp(-r / L_mm) / (2 * np.pi * L_mm**2) * special.j0(2 * np.pi * f * r) * 2 * np.pi * r,
             0,
             60 * L_mm,
             limit=400,

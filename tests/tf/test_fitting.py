@@ -39,9 +39,7 @@ def test_fit_of_paper_table_gives_preset_values(ankarasat3):
     assert r.success
     assert r.max_abs_residual < 0.005
     assert r.values["optics.wavelength_m"] == pytest.approx(ankarasat3.optics.wavelengths_m[0], rel=1e-3)
-    assert r.values["optics.obscuration_ratio"] == pytest.approx(
-        ankarasat3.optics.obscuration_ratio, abs=2e-3
-    )
+    assert r.values["optics.obscuration_ratio"] == pytest.approx(ankarasat3.optics.obscuration_ratio, abs=2e-3)
     assert r.values["motion.smear_px"] == pytest.approx(ankarasat3.motion.smear_px, abs=3e-3)
     assert set(r.stderr) == set(FITTED_PARAMETERS)
     assert all(0 < e < np.inf for e in r.stderr.values())

@@ -79,9 +79,7 @@ def hopkins_defocus_otf(v: float, c_rms_waves: float) -> float:
 # -------------------------------------------------------------------------- closed form (O'Neill)
 def test_annular_eps0_is_circular_formula_and_known_values():
     f = np.linspace(0, FC, 501)
-    np.testing.assert_allclose(
-        annular_mtf(f, wavelength_m=LAM_M, f_number=FNO), circular_mtf(f / FC), atol=1e-14
-    )
+    np.testing.assert_allclose(annular_mtf(f, wavelength_m=LAM_M, f_number=FNO), circular_mtf(f / FC), atol=1e-14)
     # textbook values of the circular-pupil MTF: v = 0.25, 0.5, 0.75
     got = annular_mtf(np.array([0.25, 0.5, 0.75]) * FC, wavelength_m=LAM_M, f_number=FNO)
     np.testing.assert_allclose(got, [0.685038, 0.391002, 0.144294], atol=2e-6)
@@ -147,10 +145,7 @@ def test_pupil_fft_grid_matches_oneill(clear_otf):
     assert np.max(np.abs(otf.grid[n, n::4] - ref)) < 1e-3
     # and everywhere on the 2-D lag grid vs the closed form
     assert (
-        np.max(
-            np.abs(otf.grid - annular_mtf(v * FC, wavelength_m=LAM_M, f_number=FNO, obscuration_ratio=eps))
-        )
-        < 1e-3
+        np.max(np.abs(otf.grid - annular_mtf(v * FC, wavelength_m=LAM_M, f_number=FNO, obscuration_ratio=eps))) < 1e-3
     )
 
 

@@ -149,11 +149,42 @@ def _group_roi(group: dict, frame: Frame, orientation: str):
 
 def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     """Bar target: one ROI per group; groups beyond Nyquist or too small are skipped (listed)."""
-    refl, frame, calibrated = ctx.refl, ctx.frame, ctx.calibrated
-    p = frame.pixel_m
+    frame, calibrated = ctx.frame, ctx.calibrated
     orientation = str(it["orientation"]).lower()
     if int(it["n_bars"]) < 2:
         raise Skip("a single bar per group has no period to measure a CTF on")
+    keep, rois, skipped = _measurable_groups(it, frame, orientation)
+    if not keep:
+        raise Skip(f"no bar group is measurable at {frame.pixel_m:g} m pixels (see the bar_group entries)")
+    levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
+    direction = "ACT" if orientation == "act" else "ALT"
+    r = _measure_kept(ctx, it, keep, rois, (direction, levels), skipped)
+    groups = [it["groups"][k] for k in keep]
+    periods_px = [float(g["period_m"]) / frame.pixel_m for g in groups]
+    summary = {
+        "id": it["id"],
+        "direction": direction,
+        "periods_m": [float(g["period_m"]) for g in groups],
+        "periods_px": periods_px,
+        "f_cy_per_px": r.f_cy_per_px,
+        "f_cy_per_m_ground": r.f_cy_per_m_ground,
+        "ctf": r.ctf,
+        "ctf_std": r.ctf_std,
+        "ctf_correction": r.ctf_correction,
+        "mtf": r.mtf,
+        "mtf_std": r.mtf_std,
+        "large_area_contrast": r.large_area_contrast,
+        "levels_from": "truth" if levels is not None else r.levels_from,
+        "flags": list(r.flags),
+        "groups": _group_rows(r, keep, groups, periods_px, rois),
+    }
+    return AutoItem(str(it["id"]), BarTarget.kind, r, to_jsonable(summary)), skipped
+
+
+def _measurable_groups(it: dict, frame: Frame, orientation: str) -> tuple[list, list, list]:
+    """The groups resolvable and inside the image at the frame's pixel size: (their indices, their ROIs, the
+    skip entries of the others)."""
+    p = frame.pixel_m
     keep, rois, skipped = [], [], []
     for k, g in enumerate(it["groups"]):
         gid = f"{it['id']}/group_{k}"
@@ -173,16 +204,20 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
             continue
         keep.append(k)
         rois.append(roi)
-    if not keep:
-        raise Skip(f"no bar group is measurable at {p:g} m pixels (see the bar_group entries)")
-    levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
-    direction = "ACT" if orientation == "act" else "ALT"
-    while True:  # a group refused (no bars at its period, ...) is listed and the others measured
-        groups = [it["groups"][k] for k in keep]
-        periods_px = [float(g["period_m"]) / p for g in groups]
+    return keep, rois, skipped
+
+
+def _measure_kept(ctx: AutoContext, it: dict, keep: list, rois: list, opts: tuple, skipped: list):
+    """:func:`measure_bars` on the kept groups; a group refused (no bars at its period, ...) is listed in
+    ``skipped``, dropped from ``keep`` and ``rois`` (in place), and the others are measured again.
+    ``opts = (direction, levels)``."""
+    direction, levels = opts
+    p = ctx.frame.pixel_m
+    while True:
+        periods_px = [float(it["groups"][k]["period_m"]) / p for k in keep]
         try:
             r = measure_bars(
-                refl,
+                ctx.refl,
                 periods_px=periods_px,
                 group_rois=rois,
                 direction=direction,
@@ -200,11 +235,15 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
             del keep[j], rois[j]
             continue
         if not r.refused:
-            break
+            return r
         for j, why in sorted(r.refused, reverse=True):  # refused alone by measure_bars: listed, the rest remeasured
             skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {why}"))
             del keep[j], rois[j]
-    rows = [
+
+
+def _group_rows(r, keep: list, groups: list, periods_px: list, rois: list) -> list[dict]:
+    """One summary row per measured group."""
+    return [
         {
             "group": k,
             "period_m": float(g["period_m"]),
@@ -221,21 +260,3 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
             zip(keep, groups, periods_px, rois, r.ctf, r.ctf_std, r.mtf, r.phase_px, strict=True)
         )
     ]
-    summary = {
-        "id": it["id"],
-        "direction": direction,
-        "periods_m": [float(g["period_m"]) for g in groups],
-        "periods_px": periods_px,
-        "f_cy_per_px": r.f_cy_per_px,
-        "f_cy_per_m_ground": r.f_cy_per_m_ground,
-        "ctf": r.ctf,
-        "ctf_std": r.ctf_std,
-        "ctf_correction": r.ctf_correction,
-        "mtf": r.mtf,
-        "mtf_std": r.mtf_std,
-        "large_area_contrast": r.large_area_contrast,
-        "levels_from": "truth" if levels is not None else r.levels_from,
-        "flags": list(r.flags),
-        "groups": rows,
-    }
-    return AutoItem(str(it["id"]), BarTarget.kind, r, to_jsonable(summary)), skipped

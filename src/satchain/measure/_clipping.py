@@ -133,6 +133,22 @@ def find_clipping(data, *, full_scale: float | None = None, noise_std: float | N
     >>> find_clipping(np.array([[10, 200, 255]], dtype=np.uint8)).message
     'clipping: 1 pixel(s) (33.3 %) at the full scale 255'
     """
+    d, full_scale, noise_std = _check_args(data, full_scale, noise_std)
+    lo, hi = float(d.min()), float(d.max())
+    span = hi - lo
+    if full_scale is not None:
+        n = int(np.count_nonzero(d >= full_scale - _TIE_REL * max(abs(full_scale), span)))
+        if n:
+            frac = n / d.size
+            msg = f"clipping: {n} pixel(s) ({100 * frac:.1f} %) at the full scale {full_scale:g}"
+            return Clipping("maximum", full_scale, n, frac, "full_scale", msg)
+    if span <= 0:
+        return None
+    return _plateau_evidence(d, lo, hi, noise_std)
+
+
+def _check_args(data, full_scale, noise_std):
+    """The checked inputs of :func:`find_clipping`: (2-D float data, full scale or None, noise or None)."""
     d = np.atleast_2d(np.asarray(data, dtype=float))
     if d.ndim != 2 or d.size == 0:
         raise InputError(f"data: need a 1-D or 2-D array of values, got shape {np.shape(data)}")
@@ -144,16 +160,13 @@ def find_clipping(data, *, full_scale: float | None = None, noise_std: float | N
         full_scale = check_range("full_scale", full_scale, None, None, error=InputError)
     if noise_std is not None:
         noise_std = check_range("noise_std", noise_std, 0.0, None, error=InputError)
-    lo, hi = float(d.min()), float(d.max())
+    return d, full_scale, noise_std
+
+
+def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | None) -> Clipping | None:
+    """A flat run at the region's maximum (minimum) that shows clipping: where noise is expected, or met with
+    a kink while the other extreme is reached smoothly (see the module docstring)."""
     span = hi - lo
-    if full_scale is not None:
-        n = int(np.count_nonzero(d >= full_scale - _TIE_REL * max(abs(full_scale), span)))
-        if n:
-            frac = n / d.size
-            msg = f"clipping: {n} pixel(s) ({100 * frac:.1f} %) at the full scale {full_scale:g}"
-            return Clipping("maximum", full_scale, n, frac, "full_scale", msg)
-    if span <= 0:
-        return None
     tol = _TIE_REL * span
     quantum = _quantum(d)
     step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly

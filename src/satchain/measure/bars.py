@@ -270,19 +270,7 @@ def measure_bars(
     >>> round(float(r.ctf[0]), 3), round(float(r.phase_px[0]), 3)
     (0.5, 1.3)
     """
-    check_choice("direction", direction, ("ACT", "ALT"))
-    if bars_per_group is not None and (
-        isinstance(bars_per_group, bool) or int(bars_per_group) != bars_per_group or bars_per_group < 2
-    ):
-        raise InputError(
-            f"bars_per_group = {bars_per_group!r}: need a whole number >= 2 (bright bars per group), or None for a "
-            "long grating"
-        )
-    periods = np.array([check_positive("periods_px", p) for p in periods_px], dtype=float)
-    if len(group_rois) != periods.size or periods.size == 0:
-        raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
-    if np.any(periods < 2.0):
-        raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
+    periods = _check_args(periods_px, group_rois, direction, bars_per_group)
     groups = measure_groups(image, periods, group_rois, direction, resolve_full_scale(image, full_scale))
     kept = [i for i in range(periods.size) if i not in groups.refused]
     t = _target_ctf(groups, kept, periods, levels, bars_per_group)
@@ -317,6 +305,24 @@ def measure_bars(
         ctf_correction=None if t.corr is None else np.where(keep, scatter(t.corr, kept, periods.size), np.nan),
         refused=tuple(sorted(groups.refused.items())),
     )
+
+
+def _check_args(periods_px, group_rois, direction, bars_per_group) -> np.ndarray:
+    """The checked options of :func:`measure_bars`: the periods (px)."""
+    check_choice("direction", direction, ("ACT", "ALT"))
+    if bars_per_group is not None and (
+        isinstance(bars_per_group, bool) or int(bars_per_group) != bars_per_group or bars_per_group < 2
+    ):
+        raise InputError(
+            f"bars_per_group = {bars_per_group!r}: need a whole number >= 2 (bright bars per group), or None for a "
+            "long grating"
+        )
+    periods = np.array([check_positive("periods_px", p) for p in periods_px], dtype=float)
+    if len(group_rois) != periods.size or periods.size == 0:
+        raise InputError(f"group_rois: {len(group_rois)} regions for {periods.size} periods; need one per group")
+    if np.any(periods < 2.0):
+        raise InputError(f"periods_px = {periods.tolist()}: every period must be >= 2 px (Nyquist)")
+    return periods
 
 
 @dataclass

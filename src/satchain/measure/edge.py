@@ -69,6 +69,7 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
+from satchain.measure._edge_locate import MIN_ROWS, curvature, locate_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
 
@@ -76,13 +77,10 @@ __all__ = ["EdgeResult", "measure_edge", "DEGENERATE_ANGLES_DEG"]
 
 #: Edge tilts (from the nearest axis) where the per-row phases repeat after 1, 4, 3, 2 or 1 rows.
 DEGENERATE_ANGLES_DEG = tuple(sorted(CRITICAL_TILTS_DEG))
-_MIN_ROWS = 8
-_SHORT_ROWS = 20
 _NU_STEP = 0.005
+_I_NYQ = int(round(0.5 / _NU_STEP))  # index of Nyquist on the output frequencies
 _MTF_MAX = 1.2  # an MTF above this up to Nyquist is not a measurement
 _LOW_CNR = 25.0  # contrast-to-noise below which the result is flagged
-_F_DEGREE = 30.0  # F statistic a higher fit degree must beat ...
-_SAGITTA_PX = 0.1  # ... while moving the edge by more than this (px)
 _CURVE_MTF_SHIFT = 0.01  # an edge curvature left by the fit moving the MTF (up to Nyquist) by more: flagged
 _CURVE_SCREEN = 0.3  # ... computed exactly where the estimate from the positions' spread exceeds this x it
 
@@ -211,13 +209,9 @@ def measure_edge(
     >>> r.direction, round(r.angle_deg, 2), r.flags
     ('ACT', 5.73, ())
     """
-    os_ = int(check_range("oversampling", oversampling, 4, 32))
-    f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.5, os_ / 4.0)
-    check_positive("noise_target", noise_target)
-    deg = _check_degree(fit_degree)
-    if saturation_level is not None:
-        warn_renamed("measure_edge", "saturation_level", "full_scale")
-    full_scale = resolve_full_scale(image, full_scale, saturation_level)
+    os_, f_max, deg, full_scale = _check_args(
+        image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
+    )
     data = crop_roi(image, roi, min_size=12)
     flags = check_saturation(data, full_scale)
     work, direction, transposed, sign = _orient(data)
@@ -226,23 +220,12 @@ def measure_edge(
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
-    check_model(work, _project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
-    f = np.arange(0.0, min(f_max, 0.5 / w) + _NU_STEP / 2, _NU_STEP)
-    if f[-1] < f_max - _NU_STEP / 2:
-        flags.append(
-            ("band_limited", f"the edge phases sample the ESF every {w:.3f} px: MTF given to {f[-1]:.2f} cy/px")
-        )
-    mtf, mtf_sig, half_w, lsf, _ = adaptive_mtf(x, esf_n, counts, sigma / contrast, f, noise_target)
-    if debias:
-        mtf = np.sqrt(np.maximum(mtf**2 - mtf_sig**2, 0.0))
-        mtf[0] = 1.0
-    f, mtf, mtf_sig = _check_mtf(f, mtf, mtf_sig, flags)
+    check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
+    f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_max, w, noise_target, debias), flags)
     flags += _curvature_flags(work, (rows, coef, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None)
     flags += critical_angle_flags(slope, len(rows), mode, w)
-    if sigma > 0 and contrast / sigma < _LOW_CNR:
-        flags.append(("low_cnr", f"low contrast-to-noise {contrast / sigma:.1f} (< {_LOW_CNR:g}): MTF noise is large"))
+    flags += _cnr_flags(contrast, sigma)
     rer, overshoot = _edge_metrics(x, esf_n)
-    i_nyq = int(round(0.5 / _NU_STEP))
     return EdgeResult(
         f_cy_per_px=f,
         mtf=mtf,
@@ -251,7 +234,7 @@ def measure_edge(
         lsf=np.gradient(esf_n, x),
         angle_deg=_angle_deg(slope, transposed),
         direction=direction,
-        mtf_at_nyquist=float(mtf[i_nyq]),
+        mtf_at_nyquist=float(mtf[_I_NYQ]),
         mtf50_cy_per_px=first_crossing(f, mtf, 0.5),
         rer=rer,
         overshoot=overshoot,
@@ -263,21 +246,56 @@ def measure_edge(
         f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
         f_cy_per_mm=None if pitch_m is None else cy_per_px_to_cy_per_mm(f, pitch_m=pitch_m),
         mtf_sigma=mtf_sig,
-        mtf_at_nyquist_sigma=float(mtf_sig[i_nyq]),
+        mtf_at_nyquist_sigma=float(mtf_sig[_I_NYQ]),
         flags=tuple(c for c, _ in flags),
         fit_degree=len(coef) - 1,
-        curvature_per_px=_curvature(coef, rows),
+        curvature_per_px=curvature(coef, rows),
         cnr=float(contrast / sigma) if sigma > 0 else float("inf"),
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
     )
 
 
+def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):
+    """The checked options of :func:`measure_edge`: (oversampling, f_max, fit degree or None, full scale)."""
+    os_ = int(check_range("oversampling", oversampling, 4, 32))
+    f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.5, os_ / 4.0)
+    check_positive("noise_target", noise_target)
+    deg = _check_degree(fit_degree)
+    if saturation_level is not None:
+        warn_renamed("measure_edge", "saturation_level", "full_scale")
+    return os_, f_max, deg, resolve_full_scale(image, full_scale, saturation_level)
+
+
+def _cnr_flags(contrast: float, sigma: float) -> list:
+    """``low_cnr`` below a contrast-to-noise of :data:`_LOW_CNR`."""
+    if sigma > 0 and contrast / sigma < _LOW_CNR:
+        return [("low_cnr", f"low contrast-to-noise {contrast / sigma:.1f} (< {_LOW_CNR:g}): MTF noise is large")]
+    return []
+
+
+def _mtf(x, esf_n, counts, rel_sigma, opts, flags):
+    """The MTF, its 1-sigma and the window half-width on the output band (cut where the ESF lattice or the
+    checked range stops it, flagged ``band_limited``); ``opts = (f_max, bin width, noise target, debias)``."""
+    f_max, w, noise_target, debias = opts
+    f = np.arange(0.0, min(f_max, 0.5 / w) + _NU_STEP / 2, _NU_STEP)
+    if f[-1] < f_max - _NU_STEP / 2:
+        flags.append(
+            ("band_limited", f"the edge phases sample the ESF every {w:.3f} px: MTF given to {f[-1]:.2f} cy/px")
+        )
+    mtf, mtf_sig, half_w, _, _ = adaptive_mtf(x, esf_n, counts, rel_sigma, f, noise_target)
+    if debias:
+        mtf = np.sqrt(np.maximum(mtf**2 - mtf_sig**2, 0.0))
+        mtf[0] = 1.0
+    f, mtf, mtf_sig = _check_mtf(f, mtf, mtf_sig, flags)
+    return f, mtf, mtf_sig, half_w
+
+
 def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None):
     """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags,
     (lines, edge positions) of the ridge)."""
-    coef, rows, flags, ridge = _locate_edge(work, deg)
-    d, v, slope, phase = _project(work[rows], rows, coef)
+    coef, rows, flags, ridge = locate_edge(work, deg)
+    d, v, slope, phase = project(work[rows], rows, coef)
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
         raise InputError(
@@ -320,7 +338,7 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool):
         slope = np.polyval(np.polyder(coef), rr) if len(coef) > 1 else np.zeros(rr.size)
         # a sample's true distance is its projected one minus the edge's departure along the normal
         r = -(np.polyval(coef_k, rr) - np.polyval(coef, rr)) / np.sqrt(1.0 + slope**2)
-        d = _project(work[rows], rows, coef)[0]
+        d = project(work[rows], rows, coef)[0]
         shift, f_at = curvature_shift(d, np.repeat(r, work.shape[1]), x, esf, half_w, f)
     if shift <= _CURVE_MTF_SHIFT:
         return []
@@ -411,7 +429,7 @@ def _flatten_rows(d, v, n_rows: int, x, esf):
     see, sev = (e * e).sum(axis=1), (e * vv).sum(axis=1)
     det = n * see - se * se
     ok = det > 1e-6 * n * n
-    if np.count_nonzero(ok) < _MIN_ROWS:
+    if np.count_nonzero(ok) < MIN_ROWS:
         return v, []
     beta = (n * sev - se * sv)[ok] / det[ok]
     alpha = (sv[ok] - beta * se[ok]) / n
@@ -461,135 +479,6 @@ def _orient(data: np.ndarray):
     q = max(2, work.shape[1] // 4)
     sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
     return work * sign, ("ALT" if transposed else "ACT"), transposed, sign
-
-
-def _robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
-    """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights)."""
-    w = np.ones_like(y)
-    coef = np.polyfit(t, y, deg)
-    for _ in range(10):
-        r = y - np.polyval(coef, t)
-        s = max(robust_sigma(r), scale_floor)
-        u = r / (4.685 * s)
-        w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
-        if np.count_nonzero(w) <= deg + 2:
-            raise InputError("image: no straight edge found (edge positions do not line up)")
-        coef = np.polyfit(t, y, deg, w=np.sqrt(w))
-    return coef, w
-
-
-def _pick_degree(t, y, w):
-    """Degree 1-3 for the edge positions: a higher one must beat F > 30 and move the edge by > 0.1 px."""
-    use = w > 0
-    t, y = t[use], y[use]
-    tc = (t - t.mean()) / max(np.ptp(t), 1.0)
-    best = 1
-    fits = {k: np.polyfit(tc, y, k) for k in (1, 2, 3)}
-    rss = {k: float(np.sum((y - np.polyval(fits[k], tc)) ** 2)) for k in (1, 2, 3)}
-    for k in (2, 3):
-        dof = t.size - k - 1
-        if dof < 4:
-            break
-        f_stat = (rss[best] - rss[k]) / max(rss[k] / dof, 1e-30)
-        move = float(np.max(np.abs(np.polyval(fits[k], tc) - np.polyval(fits[best], tc))))
-        if f_stat > _F_DEGREE and move > _SAGITTA_PX:
-            best = k
-    return best
-
-
-def _ridge_centroids(work, g, coef, half):
-    """Windowed derivative centroids along the fitted ridge; returns (rows used, centroids, per-row steps)."""
-    ny, nx = work.shape
-    rows = np.arange(ny, dtype=float)
-    cols = np.arange(nx, dtype=float)
-    centre = np.polyval(coef, rows)
-    keep = (centre - half >= 1) & (centre + half <= nx - 2)
-    if np.count_nonzero(keep) < _MIN_ROWS:
-        raise InputError(
-            f"image: the edge crosses fewer than {_MIN_ROWS} lines inside the region "
-            f"(found {int(np.count_nonzero(keep))}); use a longer edge or a larger ROI"
-        )
-    win = np.abs(cols[None, :] - centre[:, None]) <= half
-    gw = np.where(win, g, 0.0)[keep]
-    tot = gw.sum(axis=1)
-    good = tot > 0
-    if np.count_nonzero(good) < _MIN_ROWS:
-        raise InputError("image: no edge found (the derivative has no consistent ridge)")
-    cen = (gw * cols).sum(axis=1)[good] / tot[good]
-    return rows[keep][good], cen, tot[good], int(np.count_nonzero(keep))
-
-
-def _locate_edge(work: np.ndarray, deg: int | None):
-    """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated.
-
-    ``deg`` None chooses the degree from the positions (:func:`_pick_degree`).  Refuses regions where the
-    positions of many lines do not line up or their steps differ (a corner, a second edge); returns
-    (coef, rows used, flags, (rows used, their edge positions)).
-    """
-    ny, nx = work.shape
-    g = np.zeros_like(work)
-    g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
-    gs = uniform_filter(g, size=(min(5, ny), 3), mode="nearest")
-    rows = np.arange(ny, dtype=float)
-    coef, _ = _robust_polyfit(rows, np.argmax(gs, axis=1).astype(float), 1, scale_floor=1.0)
-    half = max(4, min(12, nx // 6))
-    cur = deg or 1
-    for it in range(4):
-        if cur > 1 and len(coef) < cur + 1:
-            coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
-        r_used, cen, step, n_keep = _ridge_centroids(work, g, coef, half)
-        coef, w = _robust_polyfit(r_used, cen, cur)
-        if deg is None and it < 3:
-            cur = _pick_degree(r_used, cen, w)
-    inl = w > 0
-    med = float(np.median(step[inl]))
-    odd = inl & (np.abs(step - med) > 0.3 * abs(med))
-    bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
-    if bad > 0.2 * n_keep:
-        raise InputError(
-            f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
-            "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
-        )
-    good = inl & ~odd
-    used = r_used[good].astype(int)
-    flags = []
-    if used.size < _SHORT_ROWS:
-        flags.append(
-            ("short_edge", f"short edge: {used.size} lines (< {_SHORT_ROWS}); MTF noise and angle error are large")
-        )
-    if len(coef) > 2:
-        k = _curvature(coef, used)
-        flags.append(
-            (
-                "curved_edge",
-                f"curved edge: radius about {1 / max(abs(k), 1e-12):.0f} px; positions fitted with a degree-"
-                f"{len(coef) - 1} polynomial",
-            )
-        )
-    return coef, used, flags, (r_used[good], cen[good])
-
-
-def _curvature(coef, rows) -> float:
-    """Curvature (1/px) of x(r) = polyval(coef, r) at the middle row."""
-    if len(coef) < 3:
-        return 0.0
-    r = float(np.mean(rows))
-    d1 = np.polyval(np.polyder(coef), r)
-    d2 = np.polyval(np.polyder(coef, 2), r)
-    return float(d2 / (1 + d1 * d1) ** 1.5)
-
-
-def _project(work: np.ndarray, rows: np.ndarray, coef):
-    """Signed distance of every pixel centre to the fitted edge along its local normal.
-
-    Returns (distances, values, slope at the middle row, each row's sub-pixel phase frac(-x_e))."""
-    nx = work.shape[1]
-    xe = np.polyval(coef, rows.astype(float))
-    slope_r = np.polyval(np.polyder(coef), rows.astype(float)) if len(coef) > 1 else np.zeros(rows.size)
-    cos_t = 1.0 / np.sqrt(1.0 + slope_r**2)
-    d = (np.arange(nx)[None, :] - xe[:, None]) * cos_t[:, None]
-    slope = float(np.polyval(np.polyder(coef), rows.mean())) if len(coef) > 1 else 0.0
-    return d.ravel(), work.ravel(), slope, np.mod(-xe, 1.0)
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:

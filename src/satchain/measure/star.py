@@ -276,46 +276,20 @@ def measure_star(
     >>> round(float(r.mtf["ACT"][0]), 3), round(r.input_modulation, 6), np.round(r.center_xy_px, 3).tolist()
     (1.0, 0.5, [60.3, 60.3])
     """
-    n = int(check_range("cycles", cycles, 4, 10000))
-    check_positive("annulus_px", annulus_px)
-    f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.0, 2.0, lo_open=True)
-    if input_modulation is not None:  # (max - min) / (max + min) of a non-negative star: in (0, 1]
-        if isinstance(input_modulation, bool):
-            raise ConfigError(f"input_modulation = {input_modulation!r}: must be a number in (0, 1], not a bool")
-        input_modulation = check_range("input_modulation", input_modulation, 0.0, 1.0, lo_open=True)
+    n, f_max, input_modulation = _check_args(cycles, annulus_px, f_max_cy_per_px, input_modulation)
     full_scale = resolve_full_scale(image, full_scale)
     data = crop_roi(image, roi, min_size=16)
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
-    xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max)
-    _check_extent(n, r_in, r_out, annulus_px, f_max)
-    (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
-    ny, nx = data.shape
-    r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
-    r_out = r_fit if radius_px is None else min(r_out, r_fit)
-    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    (xc, yc), r_in, r_out, c_std, c_from = _centre_and_radii(
+        data, n, center, radius_px, annulus_px, f_max, refine_center
+    )
     radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
     f = n / (2 * np.pi * radii)
-    if input_modulation is None:
-        m0, m0_std = _extrapolated_modulation(f, mods["all"], sigs["all"])
-        m0_from = "extrapolated from the outer radii"
-        if not m0_std <= 0.25 * m0:
-            raise InputError(
-                f"input_modulation: cannot be extrapolated from the outer radii ({m0:.3g} +- {m0_std:.2g}; the "
-                "MTF there is far below 1): give the star's own modulation"
-            )
-    else:
-        m0 = input_modulation
-        m0_std, m0_from = 0.0, "given"
-    if not m0 > 1e-4:
-        raise InputError("image: no star modulation found at the outer radii (flat region or wrong cycles?)")
+    m0, m0_std, m0_from = _input_modulation(f, mods, sigs, input_modulation)
     order = np.argsort(f)
     f = f[order]
-    rel = m0_std / m0 if np.isfinite(m0_std) else 0.0
-    mtf, std = {}, {}
-    for k in [*STAR_DIRECTIONS, "all"]:
-        mtf[k] = mods[k][order] / m0
-        std[k] = np.sqrt((sigs[k][order] / m0) ** 2 + (mtf[k] * rel) ** 2)
+    mtf, std = _normalised(mods, sigs, order, m0, m0_std)
     _check_range_of_mtf(mtf, f, m0, m0_from)
     nyq = {k: (float(np.interp(0.5, f, mtf[k])) if f[0] <= 0.5 <= f[-1] else None) for k in STAR_DIRECTIONS}
     nyq_std = {k: (float(np.interp(0.5, f, std[k])) if nyq[k] is not None else None) for k in STAR_DIRECTIONS}
@@ -344,6 +318,60 @@ def measure_star(
         contrast_to_noise=cnr,
         flags=tuple(flags),
     )
+
+
+def _check_args(cycles, annulus_px, f_max_cy_per_px, input_modulation):
+    """The checked options of :func:`measure_star`: (cycles, f_max, input modulation or None)."""
+    n = int(check_range("cycles", cycles, 4, 10000))
+    check_positive("annulus_px", annulus_px)
+    f_max = check_range("f_max_cy_per_px", f_max_cy_per_px, 0.0, 2.0, lo_open=True)
+    if input_modulation is not None:  # (max - min) / (max + min) of a non-negative star: in (0, 1]
+        if isinstance(input_modulation, bool):
+            raise ConfigError(f"input_modulation = {input_modulation!r}: must be a number in (0, 1], not a bool")
+        input_modulation = check_range("input_modulation", input_modulation, 0.0, 1.0, lo_open=True)
+    return n, f_max, input_modulation
+
+
+def _centre_and_radii(data, n, center, radius_px, annulus_px, f_max, refine_center):
+    """The centre used, the inner and outer radius (checked against the centre found), the centre's 1-sigma and
+    how it was obtained."""
+    xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max)
+    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
+    ny, nx = data.shape
+    r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
+    r_out = r_fit if radius_px is None else min(r_out, r_fit)
+    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    return (xc, yc), r_in, r_out, c_std, c_from
+
+
+def _input_modulation(f, mods, sigs, given):
+    """The star's own modulation, its 1-sigma and where it comes from (given, or extrapolated to zero
+    frequency from the outer radii: refused where that is too uncertain)."""
+    if given is None:
+        m0, m0_std = _extrapolated_modulation(f, mods["all"], sigs["all"])
+        m0_from = "extrapolated from the outer radii"
+        if not m0_std <= 0.25 * m0:
+            raise InputError(
+                f"input_modulation: cannot be extrapolated from the outer radii ({m0:.3g} +- {m0_std:.2g}; the "
+                "MTF there is far below 1): give the star's own modulation"
+            )
+    else:
+        m0 = given
+        m0_std, m0_from = 0.0, "given"
+    if not m0 > 1e-4:
+        raise InputError("image: no star modulation found at the outer radii (flat region or wrong cycles?)")
+    return m0, m0_std, m0_from
+
+
+def _normalised(mods, sigs, order, m0, m0_std):
+    """MTF and its 1-sigma per direction (and ``all``), by ascending frequency: modulation / ``m0``."""
+    rel = m0_std / m0 if np.isfinite(m0_std) else 0.0
+    mtf, std = {}, {}
+    for k in [*STAR_DIRECTIONS, "all"]:
+        mtf[k] = mods[k][order] / m0
+        std[k] = np.sqrt((sigs[k][order] / m0) ** 2 + (mtf[k] * rel) ** 2)
+    return mtf, std
 
 
 def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):

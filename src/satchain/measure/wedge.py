@@ -128,21 +128,11 @@ def measure_wedge(
     >>> round(r.resolved_position_px, 1), round(r.resolved_line_width_px, 3)
     (42.5, 3.875)
     """
-    check_choice("direction", direction, ("ALT", "ACT"))
-    thr = check_range("threshold", threshold, 0.0, 1.0, lo_open=True, hi_open=True)
-    avg = int(check_range("average_px", average_px, 1, 1000))
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed = {seed!r}: must be a non-negative integer")
+    thr, avg = _check_args(direction, threshold, average_px, seed)
     full_scale = resolve_full_scale(image, full_scale)
     data = crop_roi(image, roi, min_size=4)
     work = data if direction == "ALT" else data.T  # profiles are columns of `work`
-    pos = np.arange(work.shape[1], dtype=float)
-    lw = np.asarray(line_width_px(pos) if callable(line_width_px) else line_width_px, dtype=float)
-    if lw.shape != pos.shape or not np.all(np.isfinite(lw)) or np.any(lw <= 0):
-        raise InputError(
-            f"line_width_px: need {pos.size} finite positive widths (one per position along the wedge), "
-            f"got shape {lw.shape}"
-        )
+    pos, lw = _widths(work, line_width_px)
     keep = _valid_mask(valid, np.shape(image), roi, direction)
     # pixel noise from second differences along the axis where the stripes are flat (see _noise_std)
     noise = _noise_std(work, keep)
@@ -153,31 +143,14 @@ def measure_wedge(
         raise InputError("image: contrast needs positive levels (max + min > 0) in every profile")
     contrast = ((hi - lo) / (hi + lo))[order]
     pos, lw = pos[order], lw[order]
-    idx = np.arange(pos.size, dtype=float)
     boot = _Bootstrap.run(work, avg, noise, order, thr, np.random.default_rng(seed))
     c_std = boot.contrast_std
-    s_eff = noise / np.sqrt(avg)
-    c_noise = 2 * s_eff * np.sqrt(2 * np.log(max(work.shape[0], 2))) / float(np.median(hi + lo))
+    c_noise = _noise_contrast(noise, avg, work.shape[0], hi + lo)
     _check_wide_end(contrast, c_std, c_noise, thr, flags)
-    p_raw = first_crossing(idx, contrast, thr)
-    res_pos = res_lw = res_f = None
-    sd_pos = sd_lw = bias_lw = smp_lw = None
-    if p_raw is not None:
-        p_res, sd_idx, bias_idx = boot.crossing(p_raw, idx[-1], flags)
-        res_pos = float(np.interp(p_res, idx, pos))
-        res_lw = float(np.interp(p_res, idx, lw))
-        res_f = 1.0 / (2.0 * res_lw)
-        step = np.abs(np.interp(p_res, idx, np.gradient(pos))), np.abs(np.interp(p_res, idx, np.gradient(lw)))
-        sd_pos, sd_lw = float(sd_idx * step[0]), float(sd_idx * step[1])
-        bias_lw = float(np.interp(p_raw, idx, lw) - res_lw)
-        smp_lw = float(_sampling_std(idx, contrast, c_std, p_raw) * step[1])
-        after = contrast[int(np.ceil(p_raw)) + 2 :]
-        if after.size and np.max(after - 2 * c_std[int(np.ceil(p_raw)) + 2 :]) > thr:
-            flags.append("the contrast climbs back above the threshold after the crossing (spurious resolution)")
-    else:
-        flags.append("the contrast never falls to the threshold in this region")
+    cross = _resolved(boot, pos, lw, contrast, thr, flags)
     if c_noise > 0.5 * thr:
         flags.append(f"noise floor: pure noise alone gives a contrast of ~{c_noise:.3f} (threshold {thr:g})")
+    res_pos, res_lw, res_f, sd_pos, sd_lw, bias_lw, smp_lw = cross
     return WedgeResult(
         position_px=pos,
         line_width_px=lw,
@@ -200,6 +173,58 @@ def measure_wedge(
         noise_std=noise,
         flags=tuple(flags),
     )
+
+
+def _check_args(direction, threshold, average_px, seed) -> tuple[float, int]:
+    """The checked options of :func:`measure_wedge`: (threshold, average_px)."""
+    check_choice("direction", direction, ("ALT", "ACT"))
+    thr = check_range("threshold", threshold, 0.0, 1.0, lo_open=True, hi_open=True)
+    avg = int(check_range("average_px", average_px, 1, 1000))
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed = {seed!r}: must be a non-negative integer")
+    return thr, avg
+
+
+def _widths(work: np.ndarray, line_width_px) -> tuple[np.ndarray, np.ndarray]:
+    """Positions along the wedge axis and the stripe width (px) at each (checked)."""
+    pos = np.arange(work.shape[1], dtype=float)
+    lw = np.asarray(line_width_px(pos) if callable(line_width_px) else line_width_px, dtype=float)
+    if lw.shape != pos.shape or not np.all(np.isfinite(lw)) or np.any(lw <= 0):
+        raise InputError(
+            f"line_width_px: need {pos.size} finite positive widths (one per position along the wedge), "
+            f"got shape {lw.shape}"
+        )
+    return pos, lw
+
+
+def _noise_contrast(noise: float, avg: int, n_rows: int, level_sum: np.ndarray) -> float:
+    """The contrast pure noise gives: the expected range of ``n_rows`` noisy values over the median max + min."""
+    s_eff = noise / np.sqrt(avg)
+    return 2 * s_eff * np.sqrt(2 * np.log(max(n_rows, 2))) / float(np.median(level_sum))
+
+
+def _resolved(boot, pos, lw, contrast, thr: float, flags: list) -> tuple:
+    """Where the contrast (ordered from the widest stripes) first falls to ``thr``: (position, line width,
+    frequency, their 1-sigma in position and line width, the noise bias removed from the line width, the
+    sampling wobble of the line width), all None where it never does (flagged)."""
+    c_std = boot.contrast_std
+    idx = np.arange(pos.size, dtype=float)
+    p_raw = first_crossing(idx, contrast, thr)
+    if p_raw is None:
+        flags.append("the contrast never falls to the threshold in this region")
+        return (None,) * 7
+    p_res, sd_idx, bias_idx = boot.crossing(p_raw, idx[-1], flags)
+    res_pos = float(np.interp(p_res, idx, pos))
+    res_lw = float(np.interp(p_res, idx, lw))
+    res_f = 1.0 / (2.0 * res_lw)
+    step = np.abs(np.interp(p_res, idx, np.gradient(pos))), np.abs(np.interp(p_res, idx, np.gradient(lw)))
+    sd_pos, sd_lw = float(sd_idx * step[0]), float(sd_idx * step[1])
+    bias_lw = float(np.interp(p_raw, idx, lw) - res_lw)
+    smp_lw = float(_sampling_std(idx, contrast, c_std, p_raw) * step[1])
+    after = contrast[int(np.ceil(p_raw)) + 2 :]
+    if after.size and np.max(after - 2 * c_std[int(np.ceil(p_raw)) + 2 :]) > thr:
+        flags.append("the contrast climbs back above the threshold after the crossing (spurious resolution)")
+    return res_pos, res_lw, res_f, sd_pos, sd_lw, bias_lw, smp_lw
 
 
 def _check_wide_end(contrast, c_std, c_noise: float, thr: float, flags: list) -> None:

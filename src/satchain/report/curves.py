@@ -235,8 +235,15 @@ def write_curves(curves: dict[str, Any], out_dir: str | Path) -> list[Path]:
     cols["star_mtf.csv"] = _star_columns(curves["stars"])
     cols["bars_ctf.csv"] = _bars_columns(curves["bars"])
     cols["wedge_contrast.csv"] = (
-        ["wedge_id", "axis", "position_m", "line_width_m", "contrast_measured", "contrast_predicted",
-         "ctf_coltman_predicted"],
+        [
+            "wedge_id",
+            "axis",
+            "position_m",
+            "line_width_m",
+            "contrast_measured",
+            "contrast_predicted",
+            "ctf_coltman_predicted",
+        ],
         _stack(
             curves["wedges"],
             ["id", "axis"],

@@ -1,0 +1,147 @@
+"""Slanted-edge location (used by :mod:`satchain.measure.edge`): the edge position per line from windowed
+derivative centroids and a robust (Tukey bisquare) polynomial fit whose degree (1-3) is chosen from the data,
+and the projection of every pixel onto the fitted edge's local normal."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import uniform_filter
+
+from satchain.errors import InputError
+from satchain.measure._common import robust_sigma
+
+__all__ = ["MIN_ROWS", "curvature", "locate_edge", "project"]
+
+MIN_ROWS = 8
+SHORT_ROWS = 20
+F_DEGREE = 30.0  # F statistic a higher fit degree must beat ...
+SAGITTA_PX = 0.1  # ... while moving the edge by more than this (px)
+
+
+def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
+    """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights)."""
+    w = np.ones_like(y)
+    coef = np.polyfit(t, y, deg)
+    for _ in range(10):
+        r = y - np.polyval(coef, t)
+        s = max(robust_sigma(r), scale_floor)
+        u = r / (4.685 * s)
+        w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
+        if np.count_nonzero(w) <= deg + 2:
+            raise InputError("image: no straight edge found (edge positions do not line up)")
+        coef = np.polyfit(t, y, deg, w=np.sqrt(w))
+    return coef, w
+
+
+def pick_degree(t, y, w):
+    """Degree 1-3 for the edge positions: a higher one must beat F > 30 and move the edge by > 0.1 px."""
+    use = w > 0
+    t, y = t[use], y[use]
+    tc = (t - t.mean()) / max(np.ptp(t), 1.0)
+    best = 1
+    fits = {k: np.polyfit(tc, y, k) for k in (1, 2, 3)}
+    rss = {k: float(np.sum((y - np.polyval(fits[k], tc)) ** 2)) for k in (1, 2, 3)}
+    for k in (2, 3):
+        dof = t.size - k - 1
+        if dof < 4:
+            break
+        f_stat = (rss[best] - rss[k]) / max(rss[k] / dof, 1e-30)
+        move = float(np.max(np.abs(np.polyval(fits[k], tc) - np.polyval(fits[best], tc))))
+        if f_stat > F_DEGREE and move > SAGITTA_PX:
+            best = k
+    return best
+
+
+def ridge_centroids(work, g, coef, half):
+    """Windowed derivative centroids along the fitted ridge; returns (rows used, centroids, per-row steps)."""
+    ny, nx = work.shape
+    rows = np.arange(ny, dtype=float)
+    cols = np.arange(nx, dtype=float)
+    centre = np.polyval(coef, rows)
+    keep = (centre - half >= 1) & (centre + half <= nx - 2)
+    if np.count_nonzero(keep) < MIN_ROWS:
+        raise InputError(
+            f"image: the edge crosses fewer than {MIN_ROWS} lines inside the region "
+            f"(found {int(np.count_nonzero(keep))}); use a longer edge or a larger ROI"
+        )
+    win = np.abs(cols[None, :] - centre[:, None]) <= half
+    gw = np.where(win, g, 0.0)[keep]
+    tot = gw.sum(axis=1)
+    good = tot > 0
+    if np.count_nonzero(good) < MIN_ROWS:
+        raise InputError("image: no edge found (the derivative has no consistent ridge)")
+    cen = (gw * cols).sum(axis=1)[good] / tot[good]
+    return rows[keep][good], cen, tot[good], int(np.count_nonzero(keep))
+
+
+def locate_edge(work: np.ndarray, deg: int | None):
+    """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated.
+
+    ``deg`` None chooses the degree from the positions (:func:`pick_degree`).  Refuses regions where the
+    positions of many lines do not line up or their steps differ (a corner, a second edge); returns
+    (coef, rows used, flags, (rows used, their edge positions)).
+    """
+    ny, nx = work.shape
+    g = np.zeros_like(work)
+    g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
+    gs = uniform_filter(g, size=(min(5, ny), 3), mode="nearest")
+    rows = np.arange(ny, dtype=float)
+    coef, _ = robust_polyfit(rows, np.argmax(gs, axis=1).astype(float), 1, scale_floor=1.0)
+    half = max(4, min(12, nx // 6))
+    cur = deg or 1
+    for it in range(4):
+        if cur > 1 and len(coef) < cur + 1:
+            coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
+        r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half)
+        coef, w = robust_polyfit(r_used, cen, cur)
+        if deg is None and it < 3:
+            cur = pick_degree(r_used, cen, w)
+    inl = w > 0
+    med = float(np.median(step[inl]))
+    odd = inl & (np.abs(step - med) > 0.3 * abs(med))
+    bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
+    if bad > 0.2 * n_keep:
+        raise InputError(
+            f"image: no edge found along {bad} of {n_keep} lines (their edge positions or steps do not match "
+            "one straight edge: no edge, a corner or a second edge); give an ROI around one straight edge"
+        )
+    good = inl & ~odd
+    used = r_used[good].astype(int)
+    flags = []
+    if used.size < SHORT_ROWS:
+        flags.append(
+            ("short_edge", f"short edge: {used.size} lines (< {SHORT_ROWS}); MTF noise and angle error are large")
+        )
+    if len(coef) > 2:
+        k = curvature(coef, used)
+        flags.append(
+            (
+                "curved_edge",
+                f"curved edge: radius about {1 / max(abs(k), 1e-12):.0f} px; positions fitted with a degree-"
+                f"{len(coef) - 1} polynomial",
+            )
+        )
+    return coef, used, flags, (r_used[good], cen[good])
+
+
+def curvature(coef, rows) -> float:
+    """Curvature (1/px) of x(r) = polyval(coef, r) at the middle row."""
+    if len(coef) < 3:
+        return 0.0
+    r = float(np.mean(rows))
+    d1 = np.polyval(np.polyder(coef), r)
+    d2 = np.polyval(np.polyder(coef, 2), r)
+    return float(d2 / (1 + d1 * d1) ** 1.5)
+
+
+def project(work: np.ndarray, rows: np.ndarray, coef):
+    """Signed distance of every pixel centre to the fitted edge along its local normal.
+
+    Returns (distances, values, slope at the middle row, each row's sub-pixel phase frac(-x_e))."""
+    nx = work.shape[1]
+    xe = np.polyval(coef, rows.astype(float))
+    slope_r = np.polyval(np.polyder(coef), rows.astype(float)) if len(coef) > 1 else np.zeros(rows.size)
+    cos_t = 1.0 / np.sqrt(1.0 + slope_r**2)
+    d = (np.arange(nx)[None, :] - xe[:, None]) * cos_t[:, None]
+    slope = float(np.polyval(np.polyder(coef), rows.mean())) if len(coef) > 1 else 0.0
+    return d.ravel(), work.ravel(), slope, np.mod(-xe, 1.0)
