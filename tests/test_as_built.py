@@ -223,6 +223,7 @@ def test_as_built_at_another_altitude_draws_the_image_at_its_own_gsd(tmp_path_fa
     truth = {it["id"]: it for it in r.scene.truth_dict["items"]}
     edge = next(e for e in r.measurements.to_dict()["slanted_edges"] if e["id"] == "edge_act")
     box = truth["edge_act"]["bbox_m"]
+
     def roi_centre(gsd):
         svg = overlay_svg(truth["edge_act"], edge, box, gsd_m=gsd, display_px=200.0)
         x, y, w, h = (float(re.search(f' {k}="([-0-9.]+)"', svg.split("<rect")[1]).group(1))
