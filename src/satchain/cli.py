@@ -423,6 +423,11 @@ def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
     import signal
 
     signum = getattr(exc, "signum", signal.SIGINT)
+    # CPython sets an "unhandled KeyboardInterrupt" flag whenever one escapes an exec() of a string (scipy's
+    # array_api_compat runs one while it is imported), even though this one was handled; under `python -m` the
+    # flag then makes the interpreter kill itself with SIGINT (exit -2) instead of exiting 128 + signum.  Any
+    # exec() of a string that completes resets it.
+    exec("pass")  # noqa: S102 (a constant: resets the flag, see above)
     kept = (
         f"the previous results in {str(out)!r} were kept unchanged"
         if previous
