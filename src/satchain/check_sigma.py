@@ -1,7 +1,7 @@
 """The 1-sigma of the errors that :mod:`satchain.comparison` checks, where a measurement does not report
 one directly: the slanted edge's angle, an edge's RER and the GIQE 5 NIIRS measured from the edges and the
-image SNR. Pure functions of numbers and lists; the prediction is exact for the simulated model, so every
-sigma here is the measurement's.
+image SNR (with the SNR's measured sigma). Pure functions of numbers and lists; the prediction is exact
+for the simulated model, so every sigma here is the measurement's.
 """
 
 from __future__ import annotations
@@ -14,9 +14,11 @@ import numpy as np
 
 __all__ = ["SNR_REL_SIGMA", "edge_angle_sigma", "edge_angle_sigma_deg", "niirs_sigma", "rer_sigma_bound"]
 
-#: Relative 1-sigma taken for the measured contrast SNR (measure_snr gives none): the sampling error of a
-#: MAD-based noise sigma from one 16 x 16 px background patch (~240 pixel differences, 37 % efficiency:
-#: 1 / sqrt(2 * 0.37 * 240) ~ 0.075, rounded down to 0.05 because the noise is the median over many patches).
+#: Fallback relative 1-sigma of the measured contrast SNR, used only when the measurement gives no
+#: ``snr_sigma`` of its own (:func:`satchain.measure.snr.measure_snr` measures one by a bootstrap unless it
+#: has fewer than 8 background patches; an SNR from elsewhere may carry none): the sampling error of the
+#: noise sigma from one 16 x 16 px background patch (~240 pixel differences: ~1 / sqrt(2 * 240) ~ 0.05).
+#: The NIIRS row then says it used it.
 SNR_REL_SIGMA = 0.05
 
 
@@ -90,17 +92,17 @@ def rer_sigma_bound(f_cy_per_px: Sequence[float] | None, mtf_sigma: Sequence[flo
 
 
 def niirs_sigma(rer_act: float, rer_alt: float, snr: float, *, rer_act_sigma: float, rer_alt_sigma: float,
-                gsd_in: float, elevation_deg: float) -> float:  # fmt: skip
-    """1-sigma of a GIQE 5 NIIRS measured from per-axis RERs and a contrast SNR: their sigmas (the SNR's is
-    :data:`SNR_REL_SIGMA` of it) through GIQE 5 (with :func:`satchain.quality.giqe5_rer`) by central
-    differences, in quadrature (independent errors)."""
+                gsd_in: float, elevation_deg: float, snr_sigma: float | None = None) -> float:  # fmt: skip
+    """1-sigma of a GIQE 5 NIIRS measured from per-axis RERs and a contrast SNR: their sigmas (the SNR's
+    ``snr_sigma``, measured; :data:`SNR_REL_SIGMA` of it when None) through GIQE 5 (with
+    :func:`satchain.quality.giqe5_rer`) by central differences, in quadrature (independent errors)."""
     from satchain.quality import giqe5, giqe5_rer
 
     def niirs(a: float, b: float, s: float) -> float:
         return giqe5(gsd_in=gsd_in, rer=giqe5_rer(a, b), snr=s, elevation_deg=elevation_deg)
 
     x = np.array([rer_act, rer_alt, snr], float)
-    sx = np.array([rer_act_sigma, rer_alt_sigma, SNR_REL_SIGMA * snr])
+    sx = np.array([rer_act_sigma, rer_alt_sigma, SNR_REL_SIGMA * snr if snr_sigma is None else snr_sigma])
     var = 0.0
     for k in range(3):
         h = np.zeros(3)

@@ -28,7 +28,8 @@ prediction is exact for the simulated system model, so sigma is the measurement'
 ``mtf_at_nyquist_sigma`` and the angle's from its per-line position noise; the star's, that of the largest of
 its compared errors from their measured 1-sigma (:func:`~satchain.comparison.star.max_error_sigma`); the bars'
 ``ctf_std`` at the group of the largest error; the NIIRS's RER (bounded from each edge's MTF 1-sigma) and SNR
-(:data:`SNR_REL_SIGMA`) sigmas through GIQE 5 (the formulas in :mod:`satchain.check_sigma`).
+(its measured ``snr_sigma``; :data:`SNR_REL_SIGMA` of it only when it has none, and the row's ``note`` says
+so) sigmas through GIQE 5 (the formulas in :mod:`satchain.check_sigma`).
 ``z = error / sigma``; a row whose tolerance is below :data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise``
 (it can fail on noise alone). For bars the error is a maximum over many points, so its z is biased high (a
 maximum of noise); the star's sigma is that of its maximum.

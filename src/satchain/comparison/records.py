@@ -240,7 +240,8 @@ class WedgeCheck(_Detail):
 @dataclass(frozen=True)
 class NiirsCheck(_Detail):
     """GIQE 5 NIIRS predicted and measured, with the RER and contrast SNR each comes from;
-    ``giqe5_measured_sigma``: the measured NIIRS's 1-sigma (RER and SNR sigmas through GIQE 5)."""
+    ``giqe5_measured_sigma``: the measured NIIRS's 1-sigma (RER and SNR sigmas through GIQE 5);
+    ``snr_measured_sigma``: the measured SNR's own 1-sigma (None: it has none, the row's note says what was used)."""
 
     giqe5_predicted: float | None = None
     giqe5_measured: float | None = None
@@ -251,6 +252,7 @@ class NiirsCheck(_Detail):
     passed: bool | None = None
     reason: str | None = None
     giqe5_measured_sigma: float | None = None
+    snr_measured_sigma: float | None = None
 
 
 @dataclass(frozen=True)

@@ -121,7 +121,8 @@ def key_figures(res: dict, budget: dict) -> list[dict]:
         {
             "label": "contrast SNR (GIQE)",
             "predicted": fmt(niirs.get("snr_predicted"), 1),
-            "measured": fmt(niirs.get("snr_measured"), 1),
+            "measured": fmt(niirs.get("snr_measured"), 1)
+            + (f" ± {fmt(niirs['snr_measured_sigma'], 2)}" if niirs.get("snr_measured_sigma") is not None else ""),
         },
         {
             "label": "NIIRS (GIQE 5)",
