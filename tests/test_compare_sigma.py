@@ -160,6 +160,27 @@ def test_niirs_sigma_propagates_rer_and_snr_sigmas_through_giqe5():
     assert r.sigma == pytest.approx(math.sqrt(var), rel=2e-3)
 
 
+def test_niirs_sigma_takes_the_measured_snr_sigma_and_notes_the_fallback():
+    """With the SNR's own sigma, GIQE 5's SNR term carries it (no note); without, the assumed 5 % and a note."""
+    q = {"giqe5": 4.0, "rer_giqe5": 0.5, "snr": 40.0}
+    p = predict_from_mtf(gauss, {"items": []}, gsd_m=0.5, quality=q, gsd_los_m=0.55)
+    f = np.linspace(0, 1, 201)
+    edges = [{"id": eid, "direction": d, "mtf_at_nyquist": 0.3, "rer": 0.5, "f_cy_per_px": f.tolist(),
+              "mtf": np.ones_like(f).tolist(), "mtf_sigma": np.full(f.size, 1e-9).tolist()}
+             for eid, d in (("a", "ACT"), ("l", "ALT"))]  # fmt: skip
+    d_snr = giqe5_derivatives(0.5, 10.0)[1]
+    for s_snr in (0.2, 1.5):
+        c = compare({"slanted_edges": edges, "snr": {"snr": 10.0, "snr_sigma": s_snr}}, p, TOL)
+        r = c.rows[-1]
+        assert r.sigma == pytest.approx(abs(d_snr) * s_snr, rel=1e-3) and r.note is None
+        assert c.niirs.snr_measured_sigma == s_snr
+    why = "only 3 target-free background patch(es)"
+    c = compare({"slanted_edges": edges, "snr": {"snr": 10.0, "snr_sigma": None, "snr_sigma_null_means": why}}, p, TOL)
+    r = c.rows[-1]
+    assert r.sigma == pytest.approx(abs(d_snr) * SNR_REL_SIGMA * 10.0, rel=1e-3)
+    assert "assumed 5%" in r.note and why in r.note and c.niirs.snr_measured_sigma is None
+
+
 def test_every_row_has_a_sigma_or_says_why():
     """A skipped target, an n/a check and a measurement without its uncertainty all say why sigma is null."""
     p = predict_from_mtf(gauss, {"items": []}, gsd_m=0.5)

@@ -5,10 +5,12 @@ reflectance 0.15 (as :func:`satchain.radiometry.contrast_snr` predicts it).
 
 * gain (image units per unit reflectance): the step between each slanted edge's plateaus (medians >= 4 px
   from the edge) over its truth reflectance step; the median over the edges.
-* noise of a flat region: the standard deviation of horizontal pixel differences over sqrt 2 (scene shading
-  cancels), clipped at 3.5 sigma (iterated from the MAD's sigma) and corrected for the clipping. Not the MAD's
-  sigma itself: on integer (DN) data the MAD moves in whole DN, steps of 10-25 % of a 4-8 DN noise, and it
-  uses the data at 37 % efficiency. The background's is the median over all target-free 16 x 16 px patches
+* noise of a flat region: the standard deviation of pixel differences over sqrt 2 (scene shading cancels),
+  clipped at 3.5 sigma (iterated from the MAD's sigma) and corrected for the clip. The differences are
+  horizontal, but down the columns on an ACT edge's plateaus (along the edge: across it, the blurred edge's
+  residual slope 4+ px out adds ~5 % to a dark plateau's noise in the default run). Not the MAD's sigma
+  itself: on integer (DN) data the MAD moves in whole DN, steps of 10-25 % of a 4-8 DN noise, and it uses
+  the data at 37 % efficiency. The background's is the median over all target-free 16 x 16 px patches
   (their minimum, used before, is biased low by ~15 % with ~15 patches).
 * noise at 0.15: a straight line fitted to variance against level through the background and the edge
   plateaus (shot noise grows linearly with the signal, read and quantisation noise are constant), evaluated
@@ -121,6 +123,8 @@ def _edge_plateaus(image: np.ndarray, it: Mapping[str, Any], pixel_m: float) -> 
     far = _PLATEAU_PX * pixel_m
     if (d > far).sum() <= _MIN_PLATEAU_SAMPLES or (d < -far).sum() <= _MIN_PLATEAU_SAMPLES:
         return None
+    if abs(nx) > abs(ny):  # an ACT edge: take differences down its columns, along the edge, not across it
+        block, d = block.T, d.T
     return _Flat(block, d > far), _Flat(block, d < -far)
 
 
