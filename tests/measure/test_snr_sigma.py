@@ -118,3 +118,25 @@ def test_a_blurred_edge_profile_does_not_enter_the_noise():
     noise = [measure_snr(gain * refl + np.random.default_rng(s).normal(0, 1, refl.shape) * sd, truth,
                          pixel_m=PIXEL_M).noise_dn for s in range(4)]  # fmt: skip
     assert np.mean(noise) == pytest.approx(math.sqrt(read**2 + shot * gain * GIQE_REFLECTANCE), rel=0.02)
+
+
+def test_a_known_gain_replaces_the_plateau_gain():
+    """Plateaus pulled toward their surroundings (a wide, low scatter halo: 6 % of the light spread over the
+    scene) read the gain low; given the true gain (as the run passes measure_auto's tail-modelled calibration),
+    the SNR is the true one within its sigma, and the plateau-only estimate is biased low."""
+    from scipy.ndimage import uniform_filter
+
+    gain, read = 1000.0, 4.0
+    refl = reflectance()
+    halo = 0.94 * refl + 0.06 * uniform_filter(refl, size=61, mode="reflect")
+    truth = {"items": ITEMS, "background": BACKGROUND}
+    rng = np.random.default_rng(7)
+    img = 50.0 + gain * halo + rng.normal(0.0, read, refl.shape)
+    plain = measure_snr(img, truth, pixel_m=PIXEL_M)
+    given = measure_snr(img, truth, pixel_m=PIXEL_M, gain=gain)
+    expected = true_snr(gain, read, 0.0)
+    assert given.gain_dn_per_reflectance == gain
+    assert abs(given.snr - expected) < 2.5 * given.snr_sigma
+    assert plain.gain_dn_per_reflectance < 0.97 * gain and plain.snr < expected - 2 * plain.snr_sigma
+    with pytest.raises(ValueError, match="gain"):
+        measure_snr(img, truth, pixel_m=PIXEL_M, gain=-1.0)

@@ -159,7 +159,7 @@ def _noise_at(level: float, background: tuple[float, float], plateaus: list[tupl
     return float(math.sqrt(var)) if slope >= 0 and var > 0 else background[1]
 
 
-def _estimate(edges, patches, r_bg: float, rng: np.random.Generator | None = None):
+def _estimate(edges, patches, r_bg: float, rng: np.random.Generator | None = None, gain_given: float | None = None):
     """(snr, noise, gain) from the edges' plateaus and the background patches; with ``rng``, from one
     bootstrap resample of the plateaus' rows and of the patches."""
 
@@ -175,12 +175,13 @@ def _estimate(edges, patches, r_bg: float, rng: np.random.Generator | None = Non
     if rng is not None:
         pick = rng.integers(0, len(levels), len(levels))
         levels, sigmas = levels[pick], sigmas[pick]
-    gain, bg = float(np.median(gains)), (float(np.median(levels)), float(np.median(sigmas)))
+    gain = float(np.median(gains)) if gain_given is None else gain_given
+    bg = (float(np.median(levels)), float(np.median(sigmas)))
     noise = _noise_at(bg[0] + gain * (GIQE_REFLECTANCE - r_bg), bg, plateaus)
     return gain * GIQE_CONTRAST / noise, noise, gain, bg[1]
 
 
-def _snr_sigma(edges, patches, r_bg: float) -> tuple[float | None, str | None]:
+def _snr_sigma(edges, patches, r_bg: float, gain_given: float | None = None) -> tuple[float | None, str | None]:
     """The bootstrap standard deviation of the SNR (see the module docstring), or None and why."""
     if len(patches[0]) < MIN_SIGMA_PATCHES:
         return None, (
@@ -189,14 +190,14 @@ def _snr_sigma(edges, patches, r_bg: float) -> tuple[float | None, str | None]:
         )
     rng = np.random.default_rng(_BOOTSTRAP_SEED)
     with np.errstate(divide="ignore", invalid="ignore"):
-        snr = np.array([_estimate(edges, patches, r_bg, rng)[0] for _ in range(BOOTSTRAP_N)])
+        snr = np.array([_estimate(edges, patches, r_bg, rng, gain_given)[0] for _ in range(BOOTSTRAP_N)])
     ok = np.isfinite(snr)
     if ok.sum() < 0.9 * BOOTSTRAP_N:
         return None, f"{BOOTSTRAP_N - ok.sum()} of {BOOTSTRAP_N} bootstrap resamples gave no SNR (noise of 0?)"
     return float(np.std(snr[ok], ddof=1)), None
 
 
-def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> SnrResult:
+def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float, gain: float | None = None) -> SnrResult:
     """GIQE contrast SNR of ``image`` (see the module docstring).
 
     Parameters
@@ -208,6 +209,11 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> S
         ``normal_to_bright``, ``bright``, ``dark``).
     pixel_m : float
         Ground size of the image's pixels, m.
+    gain : float, optional
+        The image's units per unit reflectance when known better than from the edges' plateau medians, e.g.
+        ``measure_auto(...).calibration["gain"]``, which models the optics' diffraction tail (the plateaus'
+        medians are pulled toward their surroundings by it: the straight line through them reads the gain
+        ~1.5 % low for an obscured aperture).  Default: the median over the edges of (bright - dark) / step.
 
     Examples
     --------
@@ -222,6 +228,7 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> S
     """
     a = as_float_array("image", image, ndim=2)
     pixel_m = check_positive("pixel_m", pixel_m)
+    gain_given = None if gain is None else check_positive("gain", gain)
     truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     items = list(truth.get("items", []))
     edges = []  # (bright plateau, dark plateau, reflectance step) of each edge with a nonzero step
@@ -241,8 +248,8 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float) -> S
         reason = "the background has no measurable noise (noise-free image?)"
     else:
         r_bg = float(truth.get("background", GIQE_REFLECTANCE))
-        snr, noise, gain, _ = _estimate(edges, patches, r_bg)
-        return SnrResult(snr, noise, gain, len(edges), None, *_snr_sigma(edges, patches, r_bg))
+        snr, noise, gain, _ = _estimate(edges, patches, r_bg, gain_given=gain_given)
+        return SnrResult(snr, noise, gain, len(edges), None, *_snr_sigma(edges, patches, r_bg, gain_given))
     if edges:
         gain = float(np.median([(bright.level - dark.level) / step for bright, dark, step in edges]))
     return SnrResult(float("nan"), bg_sigma, gain, len(edges), reason, None, "the SNR is not measured: " + reason)
