@@ -139,7 +139,8 @@ def test_in_memory_run_writes_nothing_and_matches_the_run_directory(reduced_run,
     assert result.measurements.auto.pixel_m == pytest.approx(0.49)
     typed = result.scene.truth  # the typed truth gives the same predictions and SNR as the dict
     assert satchain.predict(result.system, typed).edges == result.predictions.edges
-    assert satchain.measure_snr(result.simulation.image, typed, pixel_m=0.49) == result.measurements.snr
+    gain = result.measurements.auto.calibration["gain"]  # the run passes measure_auto's tail-modelled gain
+    assert satchain.measure_snr(result.simulation.image, typed, pixel_m=0.49, gain=gain) == result.measurements.snr
 
 
 def test_rerun_replaces_and_refuses_foreign_dirs(reduced_run, tmp_path):
