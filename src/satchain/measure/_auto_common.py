@@ -5,9 +5,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # the per-kind results (typing only: measurers import this module)
+    from satchain.measure.bars import BarsResult
+    from satchain.measure.edge import EdgeResult
+    from satchain.measure.star import StarResult
+    from satchain.measure.wedge import WedgeResult
 
 __all__ = ["AutoContext", "AutoItem", "Frame", "Skip", "skip_entry"]
 
@@ -18,7 +24,7 @@ class AutoItem:
 
     id: str
     kind: str
-    result: Any
+    result: EdgeResult | StarResult | BarsResult | WedgeResult
     summary: dict
 
 
