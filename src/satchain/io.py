@@ -47,13 +47,15 @@ from satchain._imagemeta import (  # the checks of what a file says of itself
     _MODEL_TIEPOINT,
     PLAUSIBLE_PIXEL_M,
     _checked_meta,
-    _tiff_meta,
-    _to_grey,
+    _gdal_meta,
+    _grey_mode,
+    _read_grey,
     _warn,
 )
 from satchain._safety import check_memory, clean_stale_temp_files
 from satchain._validate import check_positive
-from satchain.errors import InputError, SatchainIOError
+from satchain.errors import ConfigError, InputError, SatchainIOError
+from satchain.raster import RasterReader, open_raster
 
 __all__ = [
     "BIGTIFF_THRESHOLD_BYTES",
@@ -285,21 +287,28 @@ def write_npy(path: str | os.PathLike, image: np.ndarray) -> None:
         raise SatchainIOError(f"cannot write NPY {str(path)!r}: {exc}") from exc
 
 
-def _read_tiff(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
-    with tifffile.TiffFile(path) as tf:
-        page = _first_page(tf, path)
-        check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(path)!r}")
-        return _to_grey(page.asarray(), page, path), _tiff_meta(tf, page, path)
-
-
-def _first_page(tf, path: Path):
-    if len(tf.pages) == 0 or tf.pages.first is None:
-        raise SatchainIOError(f"image = {str(path)!r}: no image in this TIFF (damaged or truncated?)")
-    return tf.pages.first
-
-
 def _nbytes(shape, dtype) -> int:
     return int(np.prod([int(v) for v in shape], dtype=np.float64) * max(np.dtype(dtype).itemsize, 4))
+
+
+#: suffixes read through GDAL (rasterio); PNG keeps its own reader (its text chunk and pHYs), NPY a memory map
+GDAL_SUFFIXES = (".tif", ".tiff", ".jp2", ".j2k", ".ntf", ".nitf", ".vrt", ".img")
+SUFFIXES = (*GDAL_SUFFIXES, ".png", ".npy")
+
+
+def _read_gdal(path: Path, band: int | None, mask: bool) -> tuple[np.ndarray, np.ndarray | None, dict[str, Any]]:
+    with open_raster(path, band=band) as r:
+        meta = _gdal_meta(r)
+        rows, cols = r.shape
+        check_memory(2 * _nbytes(r.shape, r.dtype), f"image = {str(path)!r} ({rows} x {cols} px)")
+        image = _read_grey(r, _grey_mode(r), 0, 0, rows, cols)
+        valid = r.read_mask() if r.has_mask else None
+        if valid is not None and not valid.any():
+            raise InputError(f"image = {str(path)!r}: every pixel is nodata or masked (nodata = {r.nodata!r}); "
+                             "nothing to use")  # fmt: skip
+        if valid is not None:
+            meta["valid_fraction"] = float(valid.mean())
+    return image, (valid if mask else None), meta
 
 
 def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
@@ -333,43 +342,53 @@ def _read_png(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     return arr, _checked_meta(meta, path)
 
 
-def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
-    """Read a TIFF/GeoTIFF, PNG or NPY image: ``(array, metadata)``.
-
-    ``metadata["pixel_m"]`` is present when the file states a pixel size (GeoTIFF scale tag, satchain
-    description, PNG text chunk or pHYs). Colour images are converted to grayscale (luma), with a
-    :class:`~satchain.errors.SatchainWarning`, as are the other surprises listed in the module docstring.
-    """
-    p = Path(path)
+def _check_path(p: Path) -> None:
     if not p.is_file():
         what = "is a directory, not an image file" if p.is_dir() else "no such file"
         raise SatchainIOError(f"image = {str(p)!r}: {what}")
+    if p.suffix.lower() not in SUFFIXES:
+        raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {p.suffix!r}; use {', '.join(SUFFIXES)}")
+
+
+def read_image(path: str | os.PathLike, *, band: int | None = None, mask: bool = False):
+    """Read an image whole: ``(array, metadata)``, or ``(array, valid, metadata)`` with ``mask=True``.
+
+    Every GDAL raster (GeoTIFF, COG, JP2, NITF, VRT ...) is read through :mod:`satchain.raster`; PNG and NPY by
+    their own readers. ``band`` (1-based) picks one band of a multiband raster; without it band 1 is used (an
+    RGB image is converted to grey by luma), with a :class:`~satchain.errors.SatchainWarning`. ``valid`` is a
+    boolean array (True = valid pixel: not nodata, not masked, alpha > 0), or None when every pixel is valid.
+    ``metadata["pixel_m"]`` is present when the file states a metric pixel size (a projected CRS, satchain's
+    local pixel scale, its description, PNG text chunk or pHYs); a geographic CRS gives ``invalid_pixel_m``.
+    The georeference comes as ``crs``, ``transform`` (GDAL order), ``nodata``, ``band``, ``count``.
+    """
+    p = Path(path)
+    _check_path(p)
     suffix = p.suffix.lower()
+    valid = None
     try:
-        if suffix in (".tif", ".tiff", ".png", ".npy"):
-            if suffix == ".png":
-                image, meta = _read_png(p)
-            elif suffix == ".npy":
-                image, meta = np.load(p, allow_pickle=False), {"format": "npy"}
-            else:
-                image, meta = _read_tiff(p)
-            if image.dtype.kind not in "biuf":
-                raise InputError(f"image = {str(p)!r}: values must be real numbers, got dtype {image.dtype}")
-            return image, meta
-    except (OSError, ValueError, tifffile.TiffFileError, Image.DecompressionBombError) as exc:
-        if isinstance(exc, (SatchainIOError, InputError)):
+        if suffix == ".png":
+            image, meta = _read_png(p)
+        elif suffix == ".npy":
+            image, meta = np.load(p, allow_pickle=False), {"format": "npy"}
+        else:
+            image, valid, meta = _read_gdal(p, band, mask)
+        if image.dtype.kind not in "biuf":
+            raise InputError(f"image = {str(p)!r}: values must be real numbers, got dtype {image.dtype}")
+    except (OSError, ValueError, Image.DecompressionBombError) as exc:
+        if isinstance(exc, (SatchainIOError, InputError, ConfigError)):
             raise
         raise SatchainIOError(f"image = {str(p)!r}: cannot read: {exc}") from exc
-    raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {suffix!r}; use .tif, .tiff, .png or .npy")
+    return (image, valid, meta) if mask else (image, meta)
 
 
 # ---------------------------------------------------------------------------------------------- windowed reading
 class ImageReader:
     """Window access to a 2-D image file without reading it whole where the format allows it.
 
-    Tiled or stripped TIFF / GeoTIFF / BigTIFF (any compression) is read segment by segment, contiguous
-    uncompressed TIFF and NPY through a memory map; PNG and colour TIFF are read whole (after a memory check).
-    ``read(row0, col0, height, width)`` returns the stored values (the file's dtype) of a window inside the image.
+    Every GDAL raster (tiled or stripped GeoTIFF / COG / BigTIFF, JP2, NITF, VRT) is read block by block
+    through :class:`satchain.raster.RasterReader`, NPY through a memory map; PNG is read whole (after a memory
+    check). ``read(row0, col0, height, width)`` returns the stored values (the file's dtype) of a window of the
+    chosen band (``band``, default 1; an RGB image without a band named: its luma), ``read_mask`` its validity.
 
     Examples
     --------
@@ -381,19 +400,24 @@ class ImageReader:
     ((30, 40), [[700, 701, 702], [740, 741, 742]])
     """
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, *, band: int | None = None):
         self.path = path
-        self._tf = None
+        self.band = band
+        self.raster: RasterReader | None = None
         self._array = None
-        self.segments_read = 0  # decoded TIFF segments (tiles or strips), for tests and benchmarks
+        self.segments_read = 0  # blocks (tiles or strips) the window reads touched: what GDAL decodes
         suffix = path.suffix.lower()
-        if suffix in (".tif", ".tiff"):
-            self._open_tiff()
-        elif suffix == ".npy":
+        if suffix == ".npy":
             self._array = np.load(path, mmap_mode="r", allow_pickle=False)
             self.meta: dict[str, Any] = {"format": "npy"}
-        else:
+        elif suffix == ".png":
             self._array, self.meta = read_image(path)
+        else:
+            self.raster = r = open_raster(path, band=band)
+            self.meta = _gdal_meta(r)
+            self._mode = _grey_mode(r)
+            rgb_float = self._mode == "rgb" and r.dtype.kind == "f"
+            self.shape, self.dtype = r.shape, (np.dtype(np.float32) if rgb_float else r.dtype)
         if self._array is not None:
             if self._array.dtype.kind not in "biuf":
                 raise InputError(f"image = {str(path)!r}: values must be real numbers, got dtype {self._array.dtype}")
@@ -401,59 +425,35 @@ class ImageReader:
                 raise InputError(f"image = {str(path)!r}: must be 2-D (one band), got shape {self._array.shape}")
             self.shape, self.dtype = tuple(int(v) for v in self._array.shape), self._array.dtype
 
-    def _open_tiff(self) -> None:
-        self._tf = tf = tifffile.TiffFile(self.path)
-        page = _first_page(tf, self.path)
-        self.meta = _tiff_meta(tf, page, self.path)
-        self._page = page
-        if page.samplesperpixel != 1 or len(page.shape) != 2 or getattr(page, "imagedepth", 1) > 1:
-            check_memory(2 * _nbytes(page.shape, page.dtype), f"image = {str(self.path)!r}")
-            arr, _ = read_image(self.path)  # colour: converted to grayscale whole
-            self._array = np.asarray(arr)[..., 0] if np.asarray(arr).ndim == 3 else arr
-            return
-        if page.is_memmappable:
-            self._array = tifffile.memmap(self.path, mode="r")
-            return
-        self.shape, self.dtype = (int(page.shape[0]), int(page.shape[1])), np.dtype(page.dtype)
-        if self.dtype.kind not in "biuf":
-            raise InputError(f"image = {str(self.path)!r}: values must be real numbers, got dtype {self.dtype}")
-        self._seg = (page.tilelength, page.tilewidth) if page.is_tiled else (page.rowsperstrip, self.shape[1])
-        self._seg = (min(int(self._seg[0]) or self.shape[0], self.shape[0]), int(self._seg[1]))
-        self._per_row = -(-self.shape[1] // self._seg[1])
-
-    def read(self, row0: int, col0: int, height: int, width: int) -> np.ndarray:
+    def _check(self, row0, col0, height, width) -> None:
         rows, cols = self.shape
         if row0 < 0 or col0 < 0 or height < 1 or width < 1 or row0 + height > rows or col0 + width > cols:
             raise InputError(f"window = {(row0, col0, height, width)!r}: outside the image of shape {self.shape}")
+
+    def read(self, row0: int, col0: int, height: int, width: int) -> np.ndarray:
+        self._check(row0, col0, height, width)
         if self._array is not None:
             return np.array(self._array[row0 : row0 + height, col0 : col0 + width])
-        out = np.empty((height, width), self.dtype)
-        sh, sw = self._seg
-        fh, page = self._tf.filehandle, self._page
-        for i in range(row0 // sh, (row0 + height - 1) // sh + 1):
-            for j in range(col0 // sw, (col0 + width - 1) // sw + 1):
-                index = i * self._per_row + j
-                fh.seek(page.dataoffsets[index])
-                data = fh.read(page.databytecounts[index])
-                seg = page.decode(data, index, jpegtables=page.jpegtables)[0]
-                self.segments_read += 1
-                seg = np.asarray(seg).reshape(seg.shape[-3], seg.shape[-2])
-                r0, c0 = i * sh, j * sw
-                a0, a1 = max(row0, r0), min(row0 + height, r0 + seg.shape[0])
-                b0, b1 = max(col0, c0), min(col0 + width, c0 + seg.shape[1])
-                out[a0 - row0 : a1 - row0, b0 - col0 : b1 - col0] = seg[a0 - r0 : a1 - r0, b0 - c0 : b1 - c0]
-        return out
+        self.segments_read += self.raster.blocks_touched(row0, col0, height, width)
+        return _read_grey(self.raster, self._mode, row0, col0, height, width)
+
+    def read_mask(self, row0: int, col0: int, height: int, width: int) -> np.ndarray | None:
+        """Validity of a window (True = valid), or None when the file has no nodata, mask or alpha."""
+        self._check(row0, col0, height, width)
+        if self.raster is None or not self.raster.has_mask:
+            return None
+        return self.raster.read_mask(row0, col0, height, width)
 
     def __getstate__(self) -> dict:  # picklable (Dask workers): reopened from the path
-        return {"path": self.path}
+        return {"path": self.path, "band": self.band}
 
     def __setstate__(self, state: dict) -> None:
-        self.__init__(state["path"])
+        self.__init__(state["path"], band=state.get("band"))
 
     def close(self) -> None:
-        if self._tf is not None:
-            self._tf.close()
-            self._tf = None
+        if self.raster is not None:
+            self.raster.close()
+            self.raster = None
 
     def __enter__(self) -> ImageReader:
         return self
@@ -462,18 +462,14 @@ class ImageReader:
         self.close()
 
 
-def open_image(path: str | os.PathLike) -> ImageReader:
-    """Open a TIFF/GeoTIFF/BigTIFF, PNG or NPY image for window reads (see :class:`ImageReader`)."""
+def open_image(path: str | os.PathLike, *, band: int | None = None) -> ImageReader:
+    """Open any GDAL raster, PNG or NPY image for window reads (see :class:`ImageReader`)."""
     p = Path(path)
-    if not p.is_file():
-        what = "is a directory, not an image file" if p.is_dir() else "no such file"
-        raise SatchainIOError(f"image = {str(p)!r}: {what}")
-    if p.suffix.lower() not in (".tif", ".tiff", ".png", ".npy"):
-        raise SatchainIOError(f"image = {str(p)!r}: unsupported suffix {p.suffix!r}; use .tif, .tiff, .png or .npy")
+    _check_path(p)
     try:
-        return ImageReader(p)
-    except (OSError, ValueError, tifffile.TiffFileError, IndexError, KeyError) as exc:
-        if isinstance(exc, (SatchainIOError, InputError)):
+        return ImageReader(p, band=band)
+    except (OSError, ValueError, IndexError, KeyError) as exc:
+        if isinstance(exc, (SatchainIOError, InputError, ConfigError)):
             raise
         raise SatchainIOError(f"image = {str(p)!r}: cannot read: {exc}") from exc
 
