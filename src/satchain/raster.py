@@ -311,16 +311,18 @@ def _check_plausible_size(ds, path: Path, dtype: np.dtype) -> None:
         return
     import tifffile
 
-    with contextlib.suppress(Exception), tifffile.TiffFile(path) as tf:
-        page = tf.pages.first
-        per_plane = n_blocks * (ds.count if page.planarconfig == 2 else 1)
-        stored = len(page.dataoffsets)
-        if stored < per_plane:
-            raise SatchainIOError(
-                f"image = {str(path)!r}: its header claims {rows} x {cols} px ({claimed / 2**30:.3g} GiB) in "
-                f"{per_plane} blocks but lists {stored}: a damaged or forged header"
-            )
-    return
+    try:
+        with tifffile.TiffFile(path) as tf:
+            page = tf.pages.first
+            per_plane = n_blocks * (ds.count if page.planarconfig == 2 else 1)
+            stored = len(page.dataoffsets)
+    except Exception:  # tifffile cannot tell: GDAL opened it, so let the reads speak
+        return
+    if stored < per_plane:
+        raise SatchainIOError(
+            f"image = {str(path)!r}: its header claims {rows} x {cols} px ({claimed / 2**30:.3g} GiB) in "
+            f"{per_plane} blocks but lists {stored}: a damaged or forged header"
+        )
 
 
 def raster_meta(reader: RasterReader) -> dict[str, Any]:

@@ -80,7 +80,7 @@ class ImageScene:
             pixel_m = meta.get("pixel_m")
             if "invalid_pixel_m" in meta:
                 raise ConfigError(
-                    f"pixel_m: the image's metadata gives {meta['invalid_pixel_m']!r}, not a ground pixel size in "
+                    f"pixel_m: the image {self.name!r} gives {meta['invalid_pixel_m']!r}, not a ground pixel size in "
                     "(0, 1e6] m; pass pixel_m in m (--scene-pixel-m on the CLI)"
                 )
             if pixel_m is None:
