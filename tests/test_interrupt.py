@@ -54,7 +54,7 @@ def test_signal_during_run_removes_staging_and_keeps_previous_results(tmp_path, 
     finally:
         if p.poll() is None:
             p.kill()
-    assert p.returncode == 128 + sig  # 143 for SIGTERM, 130 for SIGINT
+    assert p.returncode == 128 + sig, (p.returncode, err[-800:])  # 143 for SIGTERM, 130 for SIGINT
     assert not list(tmp_path.glob(".res.*")), "staging folder left behind"
     assert {q.name: q.read_bytes() for q in out.iterdir()} == before
     assert f"interrupted ({signal.Signals(sig).name})" in err
