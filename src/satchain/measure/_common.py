@@ -10,7 +10,7 @@ import numpy as np
 from satchain._validate import as_float_array
 from satchain.errors import InputError
 
-__all__ = ["crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing", "clipping_flag"]
+__all__ = ["valid_mask", "fill_invalid", "crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing", "clipping_flag"]
 
 
 def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarray:
@@ -45,6 +45,54 @@ def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarra
     if min(a.shape) < min_size:
         raise InputError(f"{name}: region of shape {a.shape} is too small; both sides must be >= {min_size} px")
     return np.array(a, dtype=np.float64)
+
+
+def valid_mask(image, valid=None, nodata=None, *, name: str = "image") -> np.ndarray | None:
+    """The boolean mask of the pixels to measure, or None when every pixel counts.
+
+    ``valid`` (True = measure) and ``nodata`` (pixels equal to it are excluded; NaN: NaN pixels) combine.
+    Excluded pixels (outside an area of interest, nodata) are left out of a measurement: never clipping,
+    never in the noise estimate.
+
+    Examples
+    --------
+    >>> valid_mask(np.array([[0, 5], [7, 0]]), nodata=0).tolist()
+    [[False, True], [True, False]]
+    >>> valid_mask(np.ones((2, 2))) is None
+    True
+    """
+    shape = np.shape(image)
+    out = None
+    if valid is not None:
+        v = np.asarray(valid)
+        if v.dtype != bool or v.shape != shape:
+            raise InputError(
+                f"valid: must be a boolean array of the {name}'s shape {shape}, got {v.dtype} of shape {v.shape}"
+            )
+        out = v.copy()
+    if nodata is not None:
+        try:
+            nd = float(nodata)
+        except (TypeError, ValueError):
+            raise InputError(f"nodata = {nodata!r}: must be a number (or NaN)") from None
+        a = np.asarray(image)
+        m = ~np.isnan(a) if math.isnan(nd) else a != nd
+        out = m if out is None else out & m
+    if out is not None and not np.any(out):
+        raise InputError(f"{name}: every pixel is excluded (nodata / valid mask); nothing to measure")
+    return out
+
+
+def fill_invalid(a: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    """``a`` (float64) with each excluded pixel replaced by its nearest valid pixel's value, so that filters
+    see no step at the mask's border (their response there is not used: callers keep to valid pixels)."""
+    a = np.asarray(a, dtype=np.float64)
+    if mask is None or mask.all():
+        return a
+    from scipy.ndimage import distance_transform_edt
+
+    idx = distance_transform_edt(~mask, return_distances=False, return_indices=True)
+    return a[tuple(idx)]
 
 
 def robust_sigma(values) -> float:
