@@ -33,7 +33,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, first_crossing
+from satchain.measure._common import ResultMixin, first_crossing, valid_mask
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
@@ -131,11 +131,12 @@ def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
     return np.maximum(_nyquist_sigma(r) * shape, SIGMA_FLOOR)
 
 
-def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None):
+def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None, ok=None):
     """(EdgeResult, None) or (None, reason detail)."""
     try:
         x0, y0, x1, y1 = c.roi  # crop first: measure_edge would convert the whole image to float64 per call
-        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale)
+        v = None if ok is None else ok[y0:y1, x0:x1]
+        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale, valid=v)
     except InputError as exc:
         return None, str(exc)
     if r.direction != c.direction:
@@ -229,11 +230,13 @@ def measure_found_edges(
     image,
     *,
     pixel_m: float | None = None,
-    min_length_px: float = 32.0,
+    min_length_px: float = 25.0,
     max_edges: int | None = None,
     min_cnr: float = 10.0,
     search: EdgeSearch | None = None,
     full_scale: float | None = None,
+    valid=None,
+    nodata: float | None = None,
 ) -> FindResult:
     """Find every usable slanted edge of ``image``, measure each, and combine them into ACT and ALT MTFs.
 
@@ -250,6 +253,11 @@ def measure_found_edges(
     full_scale : float, optional
         The sensor's full scale in the image's units, passed to the edge measurement (an edge with more than
         1 % of its pixels there is refused as clipped); integer images default to their dtype maximum.
+    valid : array_like of bool, optional
+        Pixels to use (True), e.g. the area-of-interest mask; excluded pixels are left out of the search,
+        the noise and every edge's ESF, and are never clipping.
+    nodata : float, optional
+        Pixels equal to this value are excluded as well (0 for the zero-filled crops cal/val tools write).
 
     Returns
     -------
@@ -270,12 +278,13 @@ def measure_found_edges(
     >>> sorted(res.combined), res.edges[0].direction
     (['ACT'], 'ACT')
     """
+    ok = valid_mask(image, valid, nodata)
     if search is None:
-        search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr)
+        search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr, valid=ok)
     rejected = list(search.rejected)
     edges, results = [], []
     for c in search.candidates:
-        r, why = _measure_one(image, c, pixel_m, full_scale)
+        r, why = _measure_one(image, c, pixel_m, full_scale, ok)
         if r is None:
             rejected.append(Rejection(c.center_xy, c.angle_deg, c.length_px, "measurement refused", why))
             continue
