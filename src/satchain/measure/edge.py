@@ -98,6 +98,8 @@ class EdgeResult(ResultMixin):
     ``fit_degree`` is the degree of the edge-position polynomial used, ``curvature_per_px`` the edge curvature
     at the centre of the region (1 / radius, 0 for a straight fit), ``bin_width_px`` the ESF sample spacing,
     ``illumination_gradient_per_px`` the relative change of the step per px along the normal (removed).
+    ``edge_point_xy`` is a point (x = column, y = row, px, in the image, ``roi`` offset included) on the fitted
+    edge at its middle line: with ``angle_deg`` it places the edge line (to join collinear halves).
     """
 
     f_cy_per_px: np.ndarray
@@ -126,6 +128,7 @@ class EdgeResult(ResultMixin):
     cnr: float = float("nan")
     bin_width_px: float = 0.25
     illumination_gradient_per_px: float = 0.0
+    edge_point_xy: tuple[float, float] | None = None
 
     @property
     def edge_angle_deg(self) -> float:
@@ -266,7 +269,20 @@ def measure_edge(
         cnr=float(contrast / sigma) if sigma > 0 else float("inf"),
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
+        edge_point_xy=_edge_point(coef, rows, transposed, roi),
     )
+
+
+def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
+    """(x, y) in the image of the fitted edge at the middle line used."""
+    r = float(np.mean(rows))
+    c = float(np.polyval(coef, r))
+    x, y = (r, c) if transposed else (c, r)
+    if hasattr(roi, "to_roi"):
+        roi = roi.to_roi()
+    if roi is not None:
+        x, y = x + int(roi[0]), y + int(roi[1])
+    return (x, y)
 
 
 def _region(image, roi, valid, nodata):

@@ -52,6 +52,9 @@ class FoundEdge(ResultMixin):
 
     ``mtf_at_nyquist_sigma`` = the edge's noise sigma and :data:`SIGMA_FLOOR` in quadrature; ``warnings`` and
     ``flags`` are those of the edge measurement (``flags`` empty where the edge module has none).
+    Two collinear halves of one target edge (a checkerboard's cross: opposite polarities, the junction
+    between them) are joined: ``angle_deg`` is then the angle of the one line fitted to both (a longer
+    baseline), ``own_angle_deg`` the half's own and ``joined_with`` the other half's index in ``edges``.
     """
 
     candidate: EdgeCandidate
@@ -64,6 +67,8 @@ class FoundEdge(ResultMixin):
     noise_sigma: float
     warnings: tuple[str, ...]
     flags: tuple[str, ...] = ()
+    own_angle_deg: float | None = None
+    joined_with: int | None = None
 
 
 @dataclass(frozen=True)
@@ -143,10 +148,53 @@ def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None, ok=None):
         return None, f"measure_edge saw an {r.direction} edge where an {c.direction} edge was found"
     if abs(r.angle_deg - c.angle_deg) > 1.0:
         return None, f"angle {r.angle_deg:.2f} deg measured vs {c.angle_deg:.2f} deg found"
+    if r.edge_point_xy is not None:  # in the image, not the crop
+        r = dataclasses.replace(r, edge_point_xy=(r.edge_point_xy[0] + x0, r.edge_point_xy[1] + y0))
     m = np.asarray(r.mtf)
     if not np.all(np.isfinite(m)) or m.min() < 0 or r.mtf_at_nyquist > MTF_VALID_MAX:
         return None, "MTF outside [0, 1.2]"
     return r, None
+
+
+def _line(r: EdgeResult):
+    """(a, c, slope dc/da) of a measured edge: a along it (y for ACT, x for ALT), c across it."""
+    x, y = r.edge_point_xy
+    t = np.deg2rad(r.angle_deg)
+    if r.direction == "ACT":
+        return y, x, float(np.tan(t))
+    return x, y, float(np.cos(t) / np.sin(t))
+
+
+def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]) -> list[FoundEdge]:
+    """Join pairs of collinear edges (same direction, angles within 1 deg, each centre within 1.5 px of the
+    other's line): one straight line ``c = c0 + s a`` fitted by least squares to both halves' centre
+    positions (variance ``sigma^2 / n``) and slopes (variance ``12 sigma^2 / n^3``), ``n`` lines each."""
+    out = list(edges)
+    used: set[int] = set()
+    for i, j in ((i, j) for i in range(len(edges)) for j in range(i + 1, len(edges))):
+        ri, rj = results[i], results[j]
+        if i in used or j in used or ri.direction != rj.direction or ri.edge_point_xy is None:
+            continue
+        if abs(ri.angle_deg - rj.angle_deg) > 1.0:
+            continue
+        (ai, ci, si), (aj, cj, sj) = _line(ri), _line(rj)
+        if abs(cj - ci - si * (aj - ai)) > 1.5 or abs(ci - cj - sj * (ai - aj)) > 1.5 or abs(aj - ai) < 10:
+            continue
+        ni, nj = float(ri.n_lines), float(rj.n_lines)
+        a0 = 0.5 * (ai + aj)
+        # rows: [1, a - a0] for positions (weight n), [0, 1] for slopes (weight n^3 / 12)
+        design = np.array([[1.0, ai - a0], [1.0, aj - a0], [0.0, 1.0], [0.0, 1.0]])
+        obs = np.array([ci, cj, si, sj])
+        w = np.array([ni, nj, ni**3 / 12.0, nj**3 / 12.0])
+        sol = np.linalg.solve(design.T @ (w[:, None] * design), design.T @ (w * obs))
+        s = float(sol[1])
+        ang = float(np.degrees(np.arctan(s))) if ri.direction == "ACT" else float(np.degrees(np.arctan2(1.0, s)))
+        if ang > 90.0:
+            ang -= 180.0
+        for k, other in ((i, j), (j, i)):
+            out[k] = dataclasses.replace(out[k], angle_deg=ang, own_angle_deg=out[k].angle_deg, joined_with=other)
+        used |= {i, j}
+    return out
 
 
 def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
@@ -307,6 +355,7 @@ def measure_found_edges(
         results.append(r)
     if not edges:
         raise _refusal(search, rejected)
+    edges = _join_collinear(edges, results)
     combined = {}
     for d in ("ACT", "ALT"):
         rs = [r for r in results if r.direction == d]
