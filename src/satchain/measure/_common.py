@@ -10,7 +10,16 @@ import numpy as np
 from satchain._validate import as_float_array
 from satchain.errors import InputError
 
-__all__ = ["valid_mask", "fill_invalid", "crop_roi", "robust_sigma", "to_jsonable", "ResultMixin", "first_crossing", "clipping_flag"]
+__all__ = [
+    "valid_mask",
+    "fill_invalid",
+    "crop_roi",
+    "robust_sigma",
+    "to_jsonable",
+    "ResultMixin",
+    "first_crossing",
+    "clipping_flag",
+]
 
 
 def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarray:

@@ -26,6 +26,7 @@ the noise grows; ``f_max`` = 1.0 extends the table where wanted.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -171,7 +172,7 @@ def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]) -> list[F
     positions (variance ``sigma^2 / n``) and slopes (variance ``12 sigma^2 / n^3``), ``n`` lines each."""
     out = list(edges)
     used: set[int] = set()
-    for i, j in ((i, j) for i in range(len(edges)) for j in range(i + 1, len(edges))):
+    for i, j in itertools.combinations(range(len(edges)), 2):
         ri, rj = results[i], results[j]
         if i in used or j in used or ri.direction != rj.direction or ri.edge_point_xy is None:
             continue
