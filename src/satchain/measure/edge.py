@@ -225,8 +225,7 @@ def measure_edge(
     )
     data, ok = _region(image, roi, valid, nodata)
     flags = check_saturation(data, full_scale, ok)
-    work, direction, transposed, sign = _orient(data)
-    okw = None if ok is None else (ok.T if transposed else ok)
+    work, okw, direction, transposed, sign = _orient(data, ok)
     q_step = quantisation_step(data if ok is None else data[ok])
     coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
         work, deg, os_, q_step, okw
@@ -519,15 +518,17 @@ def _check_mtf(f, mtf, sig, flags):
     return f, mtf, sig
 
 
-def _orient(data: np.ndarray):
-    """Return (work array whose rows cross the edge, direction, transposed, sign making the ESF rise)."""
+def _orient(data: np.ndarray, ok=None):
+    """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
+    the ESF rise)."""
     gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
     gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
     transposed = gy > gx
     work = data.T if transposed else data
     q = max(2, work.shape[1] // 4)
     sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
-    return work * sign, ("ALT" if transposed else "ACT"), transposed, sign
+    okw = None if ok is None else (ok.T if transposed else ok)
+    return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:
