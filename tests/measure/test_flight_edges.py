@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from satchain.errors import InputError
 from satchain.measure._clipping import find_clipping
+from satchain.measure._common import zero_fill_mask
 from satchain.measure.edge import measure_edge
 from satchain.measure.find import estimate_noise, find_edges
 from satchain.measure.find_mtf import measure_found_edges
@@ -37,7 +38,10 @@ def test_find_on_baotou_crop_with_defaults(angle, phase, seed):
         assert abs(e.angle_deg - true) < 0.2
     truth = truth_mtf(0.5, angle)
     for d in ("ACT", "ALT"):
-        assert abs(res.combined[d].mtf_at_nyquist - truth) < 0.02
+        c = res.combined[d]
+        # unbiased within its noise (1 sigma ~0.008: 0.02 is 2.5 sigma; benchmarks/bench_flight_baotou.py)
+        assert c.mtf_at_nyquist_sigma < 0.015  # Birge-inflated where two edges disagree
+        assert abs(c.mtf_at_nyquist - truth) < 4 * c.mtf_at_nyquist_sigma
     # the noise is that of the target (40-66 DN), not pulled down by the zeros
     assert 38.0 < res.noise_sigma < 66.0
 
@@ -45,11 +49,12 @@ def test_find_on_baotou_crop_with_defaults(angle, phase, seed):
 def test_zeros_outside_the_aoi_are_not_clipping():
     img, valid = render_baotou(seed=1, sub=8)
     roi = (35, 5, 70, 42)  # the upper half of the near-vertical edge, with the AOI border in it
-    with pytest.raises(InputError, match="clipped"):
-        measure_edge(img, roi=roi)
-    for kw in ({"nodata": 0}, {"valid": valid}):
+    with pytest.raises(InputError, match="clipped"):  # float zeros: no evidence they are a fill
+        measure_edge(img.astype(float), roi=roi)
+    for kw in ({"nodata": 0}, {"valid": valid}, {}):
         r = measure_edge(img, roi=roi, **kw)
         assert r.direction == "ACT" and "clipping" not in r.flags
+        assert ("nodata_fill" in r.flags) == (not kw)  # uint16 zeros far below the data: a fill, flagged
         assert 40.0 < r.noise_sigma < 66.0
         assert abs(r.mtf_at_nyquist - truth_mtf(0.5, 16.8)) < 3 * r.mtf_at_nyquist_sigma + 0.02
 
@@ -66,6 +71,19 @@ def test_noise_free_edge_in_a_small_region_is_not_clipped():
     r = measure_edge(img, roi=(40, 10, 64, 40), valid=valid)
     assert "clipping" not in r.flags
     assert abs(r.mtf_at_nyquist - truth_mtf(0.5, 16.8)) < 0.03
+
+
+def test_zero_fill_taken_as_nodata_only_on_evidence():
+    img, valid = render_baotou(seed=6, sub=8)
+    res = measure_found_edges(img)  # defaults: the uint16 zero fill is found and excluded
+    assert any("taken as nodata" in f for f in res.flags)
+    assert 38.0 < res.noise_sigma < 66.0
+    mask, note = zero_fill_mask(img)
+    assert note and np.array_equal(mask, valid)
+    # a dark plateau clipped at 0 (values reach 0 smoothly) and a float image are data, not a fill
+    ramp = np.clip(np.round(np.linspace(-200, 3000, 80)[None, :] + np.zeros((80, 1))), 0, None).astype(np.uint16)
+    assert zero_fill_mask(ramp) == (None, None)
+    assert zero_fill_mask(img.astype(float)) == (None, None)
 
 
 def test_mask_border_is_no_edge():

@@ -55,7 +55,15 @@ from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, crop_roi, fill_invalid, first_crossing, robust_sigma, valid_mask
+from satchain.measure._common import (
+    ResultMixin,
+    crop_roi,
+    fill_invalid,
+    first_crossing,
+    robust_sigma,
+    valid_mask,
+    zero_fill_mask,
+)
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
     check_model,
@@ -197,7 +205,8 @@ def measure_edge(
     valid : array_like of bool, optional
         Pixels to measure (the image's shape; True = measure), e.g. an area-of-interest mask.  Excluded
         pixels are left out of the edge location, the ESF bins and the noise estimate, and are never
-        clipping; a line whose edge window touches one is not used.
+        clipping; a line whose edge window touches one is not used.  Without ``valid`` and ``nodata`` the
+        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``).
     nodata : float, optional
         Pixels equal to this value are excluded as well (NaN: NaN pixels).
 
@@ -223,8 +232,8 @@ def measure_edge(
     os_, f_max, deg, full_scale = _check_args(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
-    data, ok = _region(image, roi, valid, nodata)
-    flags = check_saturation(data, full_scale, ok)
+    data, ok, flags = _region(image, roi, valid, nodata)
+    flags += check_saturation(data, full_scale, ok)
     work, okw, direction, transposed, sign = _orient(data, ok)
     q_step = quantisation_step(data if ok is None else data[ok])
     coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
@@ -285,15 +294,19 @@ def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
 
 
 def _region(image, roi, valid, nodata):
-    """(float64 region, its valid mask or None): excluded pixels filled from their nearest valid ones."""
-    mask = valid_mask(image, valid, nodata)
+    """(float64 region, its valid mask or None, flags): excluded pixels filled from their nearest valid ones;
+    without ``valid`` and ``nodata``, an integer image's evident zero fill is excluded (flagged)."""
+    mask, flags = valid_mask(image, valid, nodata), []
+    if mask is None and valid is None and nodata is None:
+        mask, note = zero_fill_mask(image)
+        flags = [("nodata_fill", note)] if note else []
     if mask is None:
-        return crop_roi(image, roi, min_size=12), None
+        return crop_roi(image, roi, min_size=12), None, flags
     data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
     ok = crop_roi(mask.astype(np.float64), roi, name="valid", min_size=12) > 0.5
     if np.count_nonzero(ok) < 64:
         raise InputError(f"image: the region holds {np.count_nonzero(ok)} valid pixel(s) (< 64); nothing to measure")
-    return data, ok
+    return data, ok, flags
 
 
 def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):

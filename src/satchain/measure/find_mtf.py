@@ -34,7 +34,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, first_crossing, valid_mask
+from satchain.measure._common import ResultMixin, first_crossing, valid_mask, zero_fill_mask
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
@@ -307,6 +307,8 @@ def measure_found_edges(
         the noise and every edge's ESF, and are never clipping.
     nodata : float, optional
         Pixels equal to this value are excluded as well (0 for the zero-filled crops cal/val tools write).
+        Without ``valid`` and ``nodata``, the zeros of an integer image are excluded where they are evidently a
+        fill (:func:`~satchain.measure._common.zero_fill_mask`; flagged).
 
     Returns
     -------
@@ -327,7 +329,9 @@ def measure_found_edges(
     >>> sorted(res.combined), res.edges[0].direction
     (['ACT'], 'ACT')
     """
-    ok = valid_mask(image, valid, nodata)
+    ok, fill_note = valid_mask(image, valid, nodata), None
+    if ok is None and valid is None and nodata is None:
+        ok, fill_note = zero_fill_mask(image)
     if search is None:
         search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr, valid=ok)
     rejected = list(search.rejected)
@@ -363,7 +367,7 @@ def measure_found_edges(
         if rs:
             combined[d] = _combine(d, rs)
     combined = _add_tilt_systematic(combined, edges)
-    flags = list(search.warnings)
+    flags = list(search.warnings) + ([fill_note] if fill_note else [])
     for d in ("ACT", "ALT"):
         if d not in combined:
             flags.append(f"no usable {d} edge: only the {'ALT' if d == 'ACT' else 'ACT'} MTF is measured")
