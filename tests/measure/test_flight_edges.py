@@ -39,8 +39,9 @@ def test_find_on_baotou_crop_with_defaults(angle, phase, seed):
     truth = truth_mtf(0.5, angle)
     for d in ("ACT", "ALT"):
         c = res.combined[d]
-        # unbiased within its noise (1 sigma ~0.008: 0.02 is 2.5 sigma; benchmarks/bench_flight_baotou.py)
-        assert c.mtf_at_nyquist_sigma < 0.015  # Birge-inflated where two edges disagree
+        # unbiased within its noise (1 sigma ~0.008, more where the Birge ratio inflates it after two edges
+        # disagree by chance; 30 renders: rms error 0.008, max 0.017 -- benchmarks/bench_flight_baotou.py)
+        assert c.mtf_at_nyquist_sigma < 0.025
         assert abs(c.mtf_at_nyquist - truth) < 4 * c.mtf_at_nyquist_sigma
     # the noise is that of the target (40-66 DN), not pulled down by the zeros
     assert 38.0 < res.noise_sigma < 66.0

@@ -341,29 +341,35 @@ def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px, inner_ok=None
 def _trimmed_roi(a, line, direction, hw, p, levels):
     """(roi, contrast, detail) of the segment's ROI: first its whole length (1 px off each end); where other
     structure intrudes (a corner, a neighbouring side) the ROI ends just before it, on the side it lies, and
-    is checked again.  ``roi`` None when too few lines are left (``detail`` says why)."""
+    is checked again.  ``roi`` None when the segment itself is too short; where the trimming would leave too
+    few lines (a structure alongside the edge, not at its ends) the untrimmed ROI and its detail are returned,
+    so that a narrower ROI is tried."""
     cx, cy, ux, uy, length = line
     noise, threshold, inner = levels
     roi = _roi_for(cx, cy, ux, uy, length, direction, hw, a.shape, trim=1.0)
     ax, ca = (1, cy) if direction == "ACT" else (0, cx)  # the ROI's along-edge bounds: roi[ax], roi[ax + 2]
+
+    def too_short(r):
+        return r[ax + 2] - r[ax] < max(p["min_length_px"] * 0.75, 12)
+
+    if roi is None or too_short(roi):
+        n = 0 if roi is None else roi[ax + 2] - roi[ax]
+        return None, 0.0, f"ROI holds {n} lines once trimmed"
     for _ in range(6):
-        if roi is None:
-            return None, 0.0, "too short once the corners are trimmed"
-        n_along = roi[ax + 2] - roi[ax]
-        if n_along < p["min_length_px"] * 0.75 or n_along < 12:
-            return None, 0.0, f"ROI holds {n_along} lines once trimmed"
         stray: list = []
         contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"], inner, stray)
         if not stray or not why.endswith(f"{p['guard_px']:g} px"):
             return roi, contrast, why
-        pos = np.array([xy[1 - ax] for xy in stray], dtype=float)
+        pos = np.array([xy[ax] for xy in stray], dtype=float)  # along the edge
         lo, hi = pos[pos < ca], pos[pos >= ca]
         r = list(roi)
         if lo.size:
             r[ax] = max(r[ax], int(lo.max()) + 2)
         if hi.size:
             r[ax + 2] = min(r[ax + 2], int(hi.min()) - 1)
-        roi = tuple(r) if r[ax + 2] > r[ax] else None
+        if too_short(r):
+            return roi, contrast, why
+        roi = tuple(r)
     return roi, contrast, why
 
 
