@@ -15,7 +15,17 @@ import typer
 from rich.table import Table
 
 from satchain._cli_common import handle_errors
-from satchain.cli_options import FullScaleOpt, ImageArg, JsonOpt, OutOpt, PixelOpt, load_image, parse_full_scale
+from satchain.cli_options import (
+    FullScaleOpt,
+    ImageArg,
+    JsonOpt,
+    NodataOpt,
+    OutOpt,
+    PixelOpt,
+    load_image,
+    parse_full_scale,
+    parse_valid,
+)
 from satchain.cli_output import emit, fmt, wide_console
 
 __all__ = ["find"]
@@ -84,7 +94,7 @@ def _ceos_rich(tab: dict) -> Table:
 def find(
     image: ImageArg,
     pixel_m: PixelOpt = None,
-    min_length: Annotated[float, typer.Option("--min-length", help="shortest usable edge (px)")] = 32.0,
+    min_length: Annotated[float, typer.Option("--min-length", help="shortest usable edge (px)")] = 25.0,
     max_edges: Annotated[
         int, typer.Option("--max-edges", help="measure at most N edges (the longest, ACT and ALT in turn)")
     ] = 200,
@@ -96,6 +106,7 @@ def find(
     as_json: JsonOpt = False,
     out: OutOpt = None,
     full_scale: FullScaleOpt = None,
+    nodata: NodataOpt = None,
 ) -> None:
     """ACT and ALT MTF (with 1-sigma) from every usable slanted edge found automatically (no truth file)."""
     from satchain._validate import check_positive, check_range
@@ -109,7 +120,13 @@ def find(
     data, p, meta = load_image(image, pixel_m)
     fs = parse_full_scale(full_scale, data, meta)
     res = measure_found_edges(
-        data, pixel_m=p, min_length_px=min_length, max_edges=max_edges, min_cnr=min_cnr, full_scale=fs
+        data,
+        pixel_m=p,
+        min_length_px=min_length,
+        max_edges=max_edges,
+        min_cnr=min_cnr,
+        full_scale=fs,
+        valid=parse_valid(data, nodata, meta),
     )
     csv_text = ceos_csv(res, f_max=f_max, pixel_m=p)
     payload = {"image": str(image), "pixel_m": p, **res.to_dict(), "ceos_csv": csv_text}

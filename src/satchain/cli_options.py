@@ -30,6 +30,7 @@ __all__ = [
     "FullScaleOpt",
     "ImageArg",
     "JsonOpt",
+    "NodataOpt",
     "OriginOpt",
     "OutOpt",
     "PixelOpt",
@@ -40,6 +41,7 @@ __all__ = [
     "load_image",
     "parse_fit_degree",
     "parse_full_scale",
+    "parse_valid",
     "parse_origin",
     "parse_roi",
     "read_truth",
@@ -83,6 +85,15 @@ FullScaleOpt = Annotated[
     ),
 ]
 
+NodataOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--nodata",
+        help="pixels equal to this value are excluded (e.g. 0 outside an area of interest): never edges, "
+        "clipping or noise; default: the file's nodata value or mask, if any",
+    ),
+]
+
 #: Every shared option, by its long name (``--truth`` has two forms: required and optional).
 SHARED_OPTIONS: dict[str, tuple] = {
     "--roi": (RoiOpt,),
@@ -94,6 +105,7 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--threshold": (ThresholdOpt,),
     "--fit-degree": (FitDegreeOpt,),
     "--full-scale": (FullScaleOpt,),
+    "--nodata": (NodataOpt,),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing
@@ -164,6 +176,23 @@ def read_truth(path: Path) -> dict:
         raise SatchainIOError(f"--truth = {str(path)!r}: cannot read: {exc}") from None
     except json.JSONDecodeError as exc:
         raise ConfigError(f"--truth = {str(path)!r}: not JSON: {exc}") from None
+
+
+def parse_valid(image, nodata: float | None, meta: dict) -> np.ndarray | None:
+    """The mask of the pixels to measure (None: all): ``--nodata`` (else the file's ``nodata``) and the
+    file's own mask (``meta["valid"]``, a boolean array of the image's shape, where the reader gives one).
+
+    Examples
+    --------
+    >>> parse_valid(np.array([[0, 3]]), 0.0, {}).tolist()
+    [[False, True]]
+    >>> parse_valid(np.array([[0, 3]]), None, {}) is None
+    True
+    """
+    from satchain.measure._common import valid_mask
+
+    nd = nodata if nodata is not None else meta.get("nodata")
+    return valid_mask(image, meta.get("valid"), nd, name="IMAGE")
 
 
 def load_image(path: Path, pixel_m: float | None):

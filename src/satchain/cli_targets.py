@@ -20,6 +20,7 @@ from satchain.cli_options import (
     FullScaleOpt,
     ImageArg,
     JsonOpt,
+    NodataOpt,
     OriginOpt,
     OutOpt,
     PixelOpt,
@@ -31,6 +32,7 @@ from satchain.cli_options import (
     parse_full_scale,
     parse_origin,
     parse_roi,
+    parse_valid,
     read_truth,
 )
 from satchain.cli_output import curve_table, emit, kv_table, one_plot, pm, print_flags, wide_console
@@ -77,6 +79,7 @@ def edge(
     out: OutOpt = None,
     fit_degree: FitDegreeOpt = "auto",
     full_scale: FullScaleOpt = None,
+    nodata: NodataOpt = None,
 ) -> None:
     """Slanted-edge MTF (ISO 12233 e-SFR, improved): MTF +- 1 sigma, MTF at Nyquist, MTF50, RER, overshoot.
 
@@ -91,7 +94,10 @@ def edge(
     data, p, meta = load_image(image, pixel_m)
     region = parse_roi("--roi", roi)
     fs = parse_full_scale(full_scale, data, meta)
-    r = measure_edge(data, roi=region, pixel_m=p, fit_degree=parse_fit_degree(fit_degree), full_scale=fs)
+    r = measure_edge(
+        data, roi=region, pixel_m=p, fit_degree=parse_fit_degree(fit_degree), full_scale=fs,
+        valid=parse_valid(data, nodata, meta),
+    )  # fmt: skip
     payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
     emit(
         payload, as_json, out, "edge", lambda d: one_plot(plot_edge, r, d / "edge.png"),

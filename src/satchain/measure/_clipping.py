@@ -109,7 +109,9 @@ def resolve_full_scale(image, full_scale=None, saturation_level=None) -> float |
     return check_range("full_scale", fs, None, None, error=InputError)
 
 
-def find_clipping(data, *, full_scale: float | None = None, noise_std: float | None = None) -> Clipping | None:
+def find_clipping(
+    data, *, full_scale: float | None = None, noise_std: float | None = None, valid=None
+) -> Clipping | None:
     """Evidence that ``data`` is clipped (see the module docstring for the criterion), or None.
 
     Parameters
@@ -121,6 +123,9 @@ def find_clipping(data, *, full_scale: float | None = None, noise_std: float | N
         clipped.  Integer data default to their dtype maximum.
     noise_std : float, optional
         Pixel noise of the data (1 sigma) when the caller knows it; estimated from the data otherwise.
+    valid : array_like of bool, optional
+        Pixels to consider (the shape of ``data``); excluded pixels (nodata, outside an area of interest)
+        are never clipping, never a plateau's neighbour and never enter the noise estimate.
 
     Examples
     --------
@@ -133,26 +138,40 @@ def find_clipping(data, *, full_scale: float | None = None, noise_std: float | N
     >>> find_clipping(np.array([[10, 200, 255]], dtype=np.uint8)).message
     'clipping: 1 pixel(s) (33.3 %) at the full scale 255'
     """
-    d, full_scale, noise_std = _check_args(data, full_scale, noise_std)
-    lo, hi = float(d.min()), float(d.max())
+    d, full_scale, noise_std, ok = _check_args(data, full_scale, noise_std, valid)
+    if not np.any(ok):
+        return None
+    lo, hi = float(d[ok].min()), float(d[ok].max())
     span = hi - lo
+    n_ok = int(np.count_nonzero(ok))
     if full_scale is not None:
-        n = int(np.count_nonzero(d >= full_scale - _TIE_REL * max(abs(full_scale), span)))
+        n = int(np.count_nonzero(ok & (d >= full_scale - _TIE_REL * max(abs(full_scale), span))))
         if n:
-            frac = n / d.size
+            frac = n / n_ok
             msg = f"clipping: {n} pixel(s) ({100 * frac:.1f} %) at the full scale {full_scale:g}"
             return Clipping("maximum", full_scale, n, frac, "full_scale", msg)
     if span <= 0:
         return None
-    return _plateau_evidence(d, lo, hi, noise_std)
+    return _plateau_evidence(d, lo, hi, noise_std, ok)
 
 
-def _check_args(data, full_scale, noise_std):
-    """The checked inputs of :func:`find_clipping`: (2-D float data, full scale or None, noise or None)."""
+def _check_valid(valid, shape) -> np.ndarray:
+    """The boolean mask of the pixels to consider (all of them without ``valid``)."""
+    if valid is None:
+        return np.ones(shape, dtype=bool)
+    v = np.atleast_2d(np.asarray(valid))
+    if v.shape != shape or v.dtype != bool:
+        raise InputError(f"valid: must be a boolean array of the data's shape {shape}, got {v.dtype} {v.shape}")
+    return v
+
+
+def _check_args(data, full_scale, noise_std, valid=None):
+    """The checked inputs of :func:`find_clipping`: (2-D float data, full scale or None, noise or None, mask)."""
     d = np.atleast_2d(np.asarray(data, dtype=float))
     if d.ndim != 2 or d.size == 0:
         raise InputError(f"data: need a 1-D or 2-D array of values, got shape {np.shape(data)}")
-    if not np.all(np.isfinite(d)):
+    ok = _check_valid(valid, d.shape)
+    if not np.all(np.isfinite(d[ok])):
         raise InputError("data: contains NaN/inf; all values must be finite")
     if full_scale is None:
         full_scale = integer_full_scale(data)
@@ -160,19 +179,19 @@ def _check_args(data, full_scale, noise_std):
         full_scale = check_range("full_scale", full_scale, None, None, error=InputError)
     if noise_std is not None:
         noise_std = check_range("noise_std", noise_std, 0.0, None, error=InputError)
-    return d, full_scale, noise_std
+    return d, full_scale, noise_std, ok
 
 
-def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | None) -> Clipping | None:
+def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | None, ok: np.ndarray):
     """A flat run at the region's maximum (minimum) that shows clipping: where noise is expected, or met with
     a kink while the other extreme is reached smoothly (see the module docstring)."""
     span = hi - lo
     tol = _TIE_REL * span
-    quantum = _quantum(d)
+    quantum = _quantum(d[ok])
     step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
-    plateaus = {side: _plateau(d, v, tol) for side, v in (("maximum", hi), ("minimum", lo))}
+    plateaus = {side: _plateau(d, v, tol, ok) for side, v in (("maximum", hi), ("minimum", lo))}
     if noise_std is None:  # estimated: trusted where the other extreme is no exact plateau (noise-free there)
-        sigma = _pixel_noise(d, lo, hi, tol)
+        sigma = _pixel_noise(d, lo, hi, tol, ok)
         trusted = {"maximum": plateaus["minimum"] is None, "minimum": plateaus["maximum"] is None}
     else:
         sigma, trusted = noise_std, {"maximum": True, "minimum": True}
@@ -182,7 +201,7 @@ def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | No
         if p is None:
             continue
         n, g_near, g1, _ = p
-        v, frac = (hi if side == "maximum" else lo), n / d.size
+        v, frac = (hi if side == "maximum" else lo), n / np.count_nonzero(ok)
         head = f"clipping: {n} pixel(s) ({100 * frac:.1f} %) exactly at the region {side} {v:g}"
         if noisy and trusted[side] and g_near > max(NOISY_STEP * sigma, 2 * quantum):
             msg = f"{head} while the noise elsewhere is {sigma:.3g} (a flat run where noise is expected)"
@@ -213,7 +232,7 @@ def _quantum(d: np.ndarray) -> float:
     return float(np.min(np.diff(u))) if u.size > 1 else 0.0
 
 
-def _plateau(d: np.ndarray, v: float, tol: float):
+def _plateau(d: np.ndarray, v: float, tol: float, ok: np.ndarray):
     """``(n, g_near, g1, phases)`` of the pixels equal to ``v``, None when too few for a plateau.
 
     ``g_near``: median gap to ``v`` of the plateau's off-plateau 4-neighbours.  ``g1``: median gap of the
@@ -246,21 +265,22 @@ def _plateau(d: np.ndarray, v: float, tol: float):
     return n, float(np.median(g_near)), float(np.median(g1)), int(phases)
 
 
-def _pixel_noise(d: np.ndarray, lo: float, hi: float, tol: float) -> float:
+def _pixel_noise(d: np.ndarray, lo: float, hi: float, tol: float, ok: np.ndarray) -> float:
     """Pixel noise off both extremes (0: none, or cannot tell), the smallest of four estimates.
 
     Along each axis the robust sigma of the second and of the fourth differences (white noise: variances
     ``6 sigma**2`` and ``70 sigma**2``; a smooth signal leaves far less in the fourth than in the second, so
     the blur of an edge is not taken for noise), over the pixels off both extremes; the smaller axis wins
     (structure across one axis is not noise).  Needs 20 % of the pixels off the extremes: a noise-free render
-    is mostly exact plateaus."""
+    is mostly exact plateaus.  Stencils that touch an excluded (not ``ok``) pixel are left out."""
     out = []
-    for a in (d, d.T):
+    for a, o in ((d, ok), (d.T, ok.T)):
         if a.shape[1] < 5:
             continue
         c = a[:, 2:-2]
-        keep = (np.abs(c - lo) > tol) & (np.abs(c - hi) > tol)
-        if np.count_nonzero(keep) < max(0.2 * c.size, 20):
+        inside = o[:, :-4] & o[:, 1:-3] & o[:, 2:-2] & o[:, 3:-1] & o[:, 4:]
+        keep = (np.abs(c - lo) > tol) & (np.abs(c - hi) > tol) & inside
+        if np.count_nonzero(keep) < max(0.2 * np.count_nonzero(inside), 20):
             return 0.0
         d2 = (a[:, 3:-1] - 2 * c + a[:, 1:-3])[keep]
         d4 = (a[:, 4:] - 4 * a[:, 3:-1] + 6 * c - 4 * a[:, 1:-3] + a[:, :-4])[keep]

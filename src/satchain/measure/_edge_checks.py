@@ -38,7 +38,7 @@ _QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the qua
 _CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
-def check_saturation(data: np.ndarray, full_scale: float | None) -> list[tuple[str, str]]:
+def check_saturation(data: np.ndarray, full_scale: float | None, valid=None) -> list[tuple[str, str]]:
     """Refuse a clipped edge; flag a few pixels touching the full scale.
 
     Clipping is named only on evidence (:func:`satchain.measure._clipping.find_clipping`): pixels at the
@@ -48,10 +48,11 @@ def check_saturation(data: np.ndarray, full_scale: float | None) -> list[tuple[s
     MTF (+0.045 at Nyquist for a 0.05-0.8 edge cut at 0.7): refused.  An edge's own smooth plateau, exactly
     constant in a noise-free render, is not clipping.
     """
-    lo, hi = float(data.min()), float(data.max())
+    vals = data if valid is None else data[valid]
+    lo, hi = float(vals.min()), float(vals.max())
     if hi == lo:
         raise InputError(f"image: the region is flat (every pixel = {lo:g}); no edge to measure")
-    clip = find_clipping(data, full_scale=full_scale)
+    clip = find_clipping(data, full_scale=full_scale, valid=valid)
     if clip is None:
         return []
     if clip.evidence == "full_scale":
@@ -156,7 +157,7 @@ def critical_angle_flags(slope: float, n_lines: int, mode: str, width: float) ->
     return out
 
 
-def check_model(work, d_all, x, esf, model, sigma) -> None:
+def check_model(work, d_all, x, esf, model, sigma, valid=None) -> None:
     """Refuse when the fitted edge model misses many pixels of the whole region (a corner, another target).
 
     ``d_all`` are the distances of every pixel of ``work`` to the fitted edge (extended to every line),
@@ -165,6 +166,8 @@ def check_model(work, d_all, x, esf, model, sigma) -> None:
     a, b, c, e = model
     pred = a + b * d_all + (c + e * d_all) * np.interp(d_all, x, esf)
     miss = np.abs(work.ravel() - pred) > 0.25 * abs(c) + 5 * sigma
+    if valid is not None:
+        miss = miss[valid.ravel()]
     frac = np.count_nonzero(miss) / miss.size
     if frac > _MODEL_MISS_FRACTION:
         raise InputError(

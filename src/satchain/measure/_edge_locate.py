@@ -52,13 +52,18 @@ def pick_degree(t, y, w):
     return best
 
 
-def ridge_centroids(work, g, coef, half):
+def ridge_centroids(work, g, coef, half, valid=None):
     """Windowed derivative centroids along the fitted ridge; returns (rows used, centroids, per-row steps)."""
     ny, nx = work.shape
     rows = np.arange(ny, dtype=float)
     cols = np.arange(nx, dtype=float)
     centre = np.polyval(coef, rows)
     keep = (centre - half >= 1) & (centre + half <= nx - 2)
+    if valid is not None:  # lines whose window (and its derivative's reach) touches an excluded pixel: unused
+        lo = np.clip(np.floor(centre - half).astype(int) - 1, 0, nx - 1)
+        hi = np.clip(np.ceil(centre + half).astype(int) + 1, 0, nx - 1)
+        cbad = np.concatenate([np.zeros((ny, 1), int), np.cumsum(~valid, axis=1)], axis=1)
+        keep &= (cbad[np.arange(ny), hi + 1] - cbad[np.arange(ny), lo]) == 0  # no excluded pixel in lo..hi
     if np.count_nonzero(keep) < MIN_ROWS:
         raise InputError(
             f"image: the edge crosses fewer than {MIN_ROWS} lines inside the region "
@@ -74,25 +79,31 @@ def ridge_centroids(work, g, coef, half):
     return rows[keep][good], cen, tot[good], int(np.count_nonzero(keep))
 
 
-def locate_edge(work: np.ndarray, deg: int | None):
+def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated.
 
     ``deg`` None chooses the degree from the positions (:func:`pick_degree`).  Refuses regions where the
     positions of many lines do not line up or their steps differ (a corner, a second edge); returns
-    (coef, rows used, flags, (rows used, their edge positions)).
+    (coef, rows used, flags, (rows used, their edge positions)).  Lines whose edge window touches a pixel
+    outside ``valid`` are not used.
     """
     ny, nx = work.shape
     g = np.zeros_like(work)
     g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
+    if valid is not None:
+        g[:, 1:-1] *= valid[:, 2:] & valid[:, :-2]
     gs = uniform_filter(g, size=(min(5, ny), 3), mode="nearest")
     rows = np.arange(ny, dtype=float)
-    coef, _ = robust_polyfit(rows, np.argmax(gs, axis=1).astype(float), 1, scale_floor=1.0)
+    seen = np.ones(ny, dtype=bool) if valid is None else np.any(gs != 0, axis=1)
+    if np.count_nonzero(seen) < MIN_ROWS:
+        raise InputError(f"image: fewer than {MIN_ROWS} lines hold valid pixels across the edge")
+    coef, _ = robust_polyfit(rows[seen], np.argmax(gs, axis=1)[seen].astype(float), 1, scale_floor=1.0)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
     for it in range(4):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
-        r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half)
+        r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half, valid)
         coef, w = robust_polyfit(r_used, cen, cur)
         if deg is None and it < 3:
             cur = pick_degree(r_used, cen, w)

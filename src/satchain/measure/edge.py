@@ -55,7 +55,15 @@ from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, crop_roi, first_crossing, robust_sigma
+from satchain.measure._common import (
+    ResultMixin,
+    crop_roi,
+    fill_invalid,
+    first_crossing,
+    robust_sigma,
+    valid_mask,
+    zero_fill_mask,
+)
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
     check_model,
@@ -98,6 +106,8 @@ class EdgeResult(ResultMixin):
     ``fit_degree`` is the degree of the edge-position polynomial used, ``curvature_per_px`` the edge curvature
     at the centre of the region (1 / radius, 0 for a straight fit), ``bin_width_px`` the ESF sample spacing,
     ``illumination_gradient_per_px`` the relative change of the step per px along the normal (removed).
+    ``edge_point_xy`` is a point (x = column, y = row, px, in the image, ``roi`` offset included) on the fitted
+    edge at its middle line: with ``angle_deg`` it places the edge line (to join collinear halves).
     """
 
     f_cy_per_px: np.ndarray
@@ -126,6 +136,7 @@ class EdgeResult(ResultMixin):
     cnr: float = float("nan")
     bin_width_px: float = 0.25
     illumination_gradient_per_px: float = 0.0
+    edge_point_xy: tuple[float, float] | None = None
 
     @property
     def edge_angle_deg(self) -> float:
@@ -153,6 +164,8 @@ def measure_edge(
     full_scale: float | None = None,
     saturation_level: float | None = None,
     debias: bool = False,
+    valid=None,
+    nodata: float | None = None,
 ) -> EdgeResult:
     """Measure the MTF (with its noise), ESF, LSF, RER and overshoot from a slanted edge.
 
@@ -189,6 +202,13 @@ def measure_edge(
         ``SatchainDeprecationWarning``), removed in 0.2.
     debias : bool
         Subtract the predicted noise power from the squared MTF (removes the upward bias of noisy low MTF).
+    valid : array_like of bool, optional
+        Pixels to measure (the image's shape; True = measure), e.g. an area-of-interest mask.  Excluded
+        pixels are left out of the edge location, the ESF bins and the noise estimate, and are never
+        clipping; a line whose edge window touches one is not used.  Without ``valid`` and ``nodata`` the
+        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``).
+    nodata : float, optional
+        Pixels equal to this value are excluded as well (NaN: NaN pixels).
 
     Returns
     -------
@@ -212,17 +232,21 @@ def measure_edge(
     os_, f_max, deg, full_scale = _check_args(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
-    data = crop_roi(image, roi, min_size=12)
-    flags = check_saturation(data, full_scale)
-    work, direction, transposed, sign = _orient(data)
-    q_step = quantisation_step(data)
-    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step)
+    data, ok, flags = _region(image, roi, valid, nodata)
+    flags += check_saturation(data, full_scale, ok)
+    work, okw, direction, transposed, sign = _orient(data, ok)
+    q_step = quantisation_step(data if ok is None else data[ok])
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
+        work, deg, os_, q_step, okw
+    )
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
-    check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma)
+    check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma, okw)
     f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_max, w, noise_target, debias), flags)
-    flags += _curvature_flags(work, (rows, coef, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None)
+    flags += _curvature_flags(
+        work, (rows, coef, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw
+    )
     flags += critical_angle_flags(slope, len(rows), mode, w)
     flags += _cnr_flags(contrast, sigma)
     rer, overshoot = _edge_metrics(x, esf_n)
@@ -253,7 +277,36 @@ def measure_edge(
         cnr=float(contrast / sigma) if sigma > 0 else float("inf"),
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
+        edge_point_xy=_edge_point(coef, rows, transposed, roi),
     )
+
+
+def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
+    """(x, y) in the image of the fitted edge at the middle line used."""
+    r = float(np.mean(rows))
+    c = float(np.polyval(coef, r))
+    x, y = (r, c) if transposed else (c, r)
+    if hasattr(roi, "to_roi"):
+        roi = roi.to_roi()
+    if roi is not None:
+        x, y = x + int(roi[0]), y + int(roi[1])
+    return (x, y)
+
+
+def _region(image, roi, valid, nodata):
+    """(float64 region, its valid mask or None, flags): excluded pixels filled from their nearest valid ones;
+    without ``valid`` and ``nodata``, an integer image's evident zero fill is excluded (flagged)."""
+    mask, flags = valid_mask(image, valid, nodata), []
+    if mask is None and valid is None and nodata is None:
+        mask, note = zero_fill_mask(image)
+        flags = [("nodata_fill", note)] if note else []
+    if mask is None:
+        return crop_roi(image, roi, min_size=12), None, flags
+    data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
+    ok = crop_roi(mask.astype(np.float64), roi, name="valid", min_size=12) > 0.5
+    if np.count_nonzero(ok) < 64:
+        raise InputError(f"image: the region holds {np.count_nonzero(ok)} valid pixel(s) (< 64); nothing to measure")
+    return data, ok, flags
 
 
 def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):
@@ -291,30 +344,33 @@ def _mtf(x, esf_n, counts, rel_sigma, opts, flags):
     return f, mtf, mtf_sig, half_w
 
 
-def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None):
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None, valid=None):
     """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags,
-    (lines, edge positions) of the ridge)."""
-    coef, rows, flags, ridge = locate_edge(work, deg)
+    (lines, edge positions) of the ridge).  Pixels outside ``valid`` are left out."""
+    coef, rows, flags, ridge = locate_edge(work, deg, valid)
     d, v, slope, phase = project(work[rows], rows, coef)
+    ok = None if valid is None else valid[rows].ravel()
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
         raise InputError(
             f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
             f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
         )
-    x, esf_raw, counts = bin_esf(d, v, w, origin)
-    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw)
+    if ok is None:
+        ok = np.ones(d.size, dtype=bool)
+    x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
+    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw, ok)
     if r_flags:
         flags += r_flags
-        x, esf_raw, counts = bin_esf(d, v, w, origin)
-    resid = v - np.interp(d, x, esf_raw)
+        x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
+    resid = (v - np.interp(d, x, esf_raw))[ok]
     sigma = robust_sigma(resid)
     if q_step is not None:
         flags += quantisation_flags(q_step, x, esf_raw, resid)
     return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
 
 
-def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool):
+def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
     """Flag ``curvature_bias`` when an edge curvature the fit leaves moves the MTF by more than 0.01.
 
     ``fit = (rows, coef, (lines, edge positions))``, ``opts = (oversampling, noise sigma, window half-width)``.
@@ -329,7 +385,7 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool):
         return []
     _, _, spread, k = found
     try:
-        coef_k, _, _, _, _, (x, esf, counts, _), _, _ = _binned_esf(work, k, os_)
+        coef_k, _, _, _, _, (x, esf, counts, _), _, _ = _binned_esf(work, k, os_, None, valid)
         esf = _normalise(x, esf, counts, sigma, rows.size)[0]
     except InputError:  # the better edge is refused: keep the estimate from the spread
         shift, f_at = found[0], found[1]
@@ -339,7 +395,10 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool):
         # a sample's true distance is its projected one minus the edge's departure along the normal
         r = -(np.polyval(coef_k, rr) - np.polyval(coef, rr)) / np.sqrt(1.0 + slope**2)
         d = project(work[rows], rows, coef)[0]
-        shift, f_at = curvature_shift(d, np.repeat(r, work.shape[1]), x, esf, half_w, f)
+        r = np.repeat(r, work.shape[1])
+        if valid is not None:
+            d, r = d[valid[rows].ravel()], r[valid[rows].ravel()]
+        shift, f_at = curvature_shift(d, r, x, esf, half_w, f)
     if shift <= _CURVE_MTF_SHIFT:
         return []
     return [curvature_bias_flag(len(coef) - 1, shift, f_at, spread, k, forced=forced)]
@@ -411,12 +470,13 @@ def _normalise(x, esf, counts, sigma, n_lines):
     return (esf - a - b * x) / denom, float(c), float(e / c), flags, (a, b, c, e)
 
 
-def _flatten_rows(d, v, n_rows: int, x, esf):
+def _flatten_rows(d, v, n_rows: int, x, esf, ok=None):
     """Remove illumination changes along the edge, line by line.
 
     Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
     ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
-    on a uniformly lit edge, whatever its tails or the region's shape).  Returns (values, flags).
+    on a uniformly lit edge, whatever its tails or the region's shape).  Only ``ok`` samples enter the fits.
+    Returns (values, flags).
     """
     q = max(2, esf.size // 8)
     lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
@@ -424,15 +484,16 @@ def _flatten_rows(d, v, n_rows: int, x, esf):
         return v, []
     e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
     vv = v.reshape(n_rows, -1)
-    n = e.shape[1]
-    se, sv = e.sum(axis=1), vv.sum(axis=1)
-    see, sev = (e * e).sum(axis=1), (e * vv).sum(axis=1)
+    m = np.ones(e.shape) if ok is None else ok.reshape(n_rows, -1).astype(float)
+    n = m.sum(axis=1)
+    se, sv = (m * e).sum(axis=1), (m * vv).sum(axis=1)
+    see, sev = (m * e * e).sum(axis=1), (m * e * vv).sum(axis=1)
     det = n * see - se * se
-    ok = det > 1e-6 * n * n
+    ok = det > 1e-6 * np.maximum(n, 1) ** 2
     if np.count_nonzero(ok) < MIN_ROWS:
         return v, []
     beta = (n * sev - se * sv)[ok] / det[ok]
-    alpha = (sv[ok] - beta * se[ok]) / n
+    alpha = (sv[ok] - beta * se[ok]) / n[ok]
     r = np.arange(n_rows, dtype=float)
     alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
     beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
@@ -470,15 +531,17 @@ def _check_mtf(f, mtf, sig, flags):
     return f, mtf, sig
 
 
-def _orient(data: np.ndarray):
-    """Return (work array whose rows cross the edge, direction, transposed, sign making the ESF rise)."""
+def _orient(data: np.ndarray, ok=None):
+    """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
+    the ESF rise)."""
     gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
     gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
     transposed = gy > gx
     work = data.T if transposed else data
     q = max(2, work.shape[1] // 4)
     sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
-    return work * sign, ("ALT" if transposed else "ACT"), transposed, sign
+    okw = None if ok is None else (ok.T if transposed else ok)
+    return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:

@@ -35,7 +35,7 @@ from scipy import ndimage as ndi
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin
+from satchain.measure._common import ResultMixin, fill_invalid, valid_mask
 
 __all__ = ["EdgeCandidate", "EdgeSearch", "Rejection", "estimate_noise", "find_edges"]
 
@@ -104,11 +104,12 @@ class EdgeSearch(ResultMixin):
         return out
 
 
-def estimate_noise(image, *, band_rows: int = 512) -> float:
+def estimate_noise(image, *, band_rows: int = 512, valid=None) -> float:
     """Pixel noise standard deviation (image units) from Immerkaer's Laplacian-difference mask, robust (MAD).
 
     Plateaus and linear ramps give zero response; edges are a small fraction of the pixels and do not move the
-    median.  Computed over bands of rows, so the memory stays O(band).
+    median.  Computed over bands of rows, so the memory stays O(band).  With ``valid`` (bool, the image's
+    shape) only masks whose 3 x 3 pixels are all valid count.
 
     Examples
     --------
@@ -124,6 +125,11 @@ def estimate_noise(image, *, band_rows: int = 512) -> float:
         if band.shape[0] < 3 or band.shape[1] < 3:
             continue
         r = ndi.correlate(band, mask, mode="nearest")[1:-1, 1:-1]
+        if valid is not None:
+            vb = np.asarray(valid[y0 : y0 + band_rows + 2])
+            r = r[ndi.binary_erosion(vb, np.ones((3, 3), bool))[1:-1, 1:-1]]
+            if r.size == 0:
+                continue
         meds.append((np.median(np.abs(r)), r.size))
     if not meds:
         return 0.0
@@ -132,9 +138,11 @@ def estimate_noise(image, *, band_rows: int = 512) -> float:
     return 1.482602218505602 * med / 6.0  # ||mask||_2 = 6
 
 
-def _robust_range(a: np.ndarray) -> float:
+def _robust_range(a: np.ndarray, valid=None) -> float:
     step = max(1, int(np.sqrt(a.size / 250_000)))
     sub = np.asarray(a[::step, ::step], dtype=np.float32)
+    if valid is not None:
+        sub = sub[valid[::step, ::step]]
     lo, hi = np.percentile(sub, [0.5, 99.5])
     return float(hi - lo)
 
@@ -146,8 +154,9 @@ def _gradient(band: np.ndarray):
     return gx, gy
 
 
-def _edge_mask(a: np.ndarray, threshold: float, band_rows: int) -> np.ndarray:
-    """Boolean mask of coherent strong-gradient pixels, computed band by band in float32."""
+def _edge_mask(a: np.ndarray, threshold: float, band_rows: int, inner=None) -> np.ndarray:
+    """Boolean mask of coherent strong-gradient pixels, computed band by band in float32 (only ``inner``
+    pixels, when given: those whose filters see no excluded pixel)."""
     ny = a.shape[0]
     mask = np.zeros(a.shape, dtype=bool)
     for y0 in range(0, ny, band_rows):
@@ -161,6 +170,8 @@ def _edge_mask(a: np.ndarray, threshold: float, band_rows: int) -> np.ndarray:
         coh = np.sqrt((jxx - jyy) ** 2 + 4 * jxy**2) / np.maximum(tr, np.float32(1e-30))
         strong = (gx * gx + gy * gy > np.float32(threshold**2)) & (coh > _COHERENCE_MIN)
         mask[y0 : min(ny, y0 + band_rows)] = strong[y0 - lo : y0 - lo + min(band_rows, ny - y0)]
+    if inner is not None:
+        mask &= inner
     return mask
 
 
@@ -274,13 +285,15 @@ def _angle_from_y(ux: float, uy: float) -> float:
     return ang - 180.0 if ang > 90.0 else (ang + 180.0 if ang <= -90.0 else ang)
 
 
-def _roi_for(cx, cy, ux, uy, length, direction, half_w, shape):
-    """Axis-aligned ROI straddling the segment: trimmed central part along it, ``half_w`` across it."""
+def _roi_for(cx, cy, ux, uy, length, direction, half_w, shape, trim=None):
+    """Axis-aligned ROI straddling the segment: its central part along it (``trim`` px off each end, by
+    default enough to keep a side leaving a corner outside), ``half_w`` across it."""
     ny, nx = shape
     # along-axis (a) and across-axis (c) unit components; ACT: along = y, across = x
     ua, uc, ca, cc, n_a, n_c = (uy, ux, cy, cx, ny, nx) if direction == "ACT" else (ux, uy, cx, cy, nx, ny)
     slope = uc / ua
-    trim = half_w * abs(slope) + 4.0
+    if trim is None:
+        trim = half_w * abs(slope) + 4.0
     half_len_a = 0.5 * (length - 1.0) * abs(ua) - trim
     if half_len_a < 4:
         return None
@@ -292,10 +305,14 @@ def _roi_for(cx, cy, ux, uy, length, direction, half_w, shape):
     return (c0, a0, c1, a1) if direction == "ACT" else (a0, c0, a1, c1)
 
 
-def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px):
-    """(contrast, detail): detail '' when the ROI holds only this edge on flat plateaus."""
+def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px, inner_ok=None, stray_at=None):
+    """(contrast, detail): detail '' when the ROI holds only this edge on flat plateaus.
+
+    ``inner_ok``: pixels whose gradient sees no excluded pixel (others are neither structure nor plateau);
+    ``stray_at``: a list that receives the (x, y) of the stray structure found."""
     x0, y0, x1, y1 = roi
     crop = np.asarray(a[y0:y1, x0:x1], dtype=np.float32)
+    ok = np.ones(crop.shape, dtype=bool) if inner_ok is None else inner_ok[y0:y1, x0:x1]
     yy, xx = np.mgrid[y0:y1, x0:x1]
     d = (xx - cx) * uy - (yy - cy) * ux  # signed distance from the edge line (px)
     gx, gy = _gradient(crop)
@@ -305,10 +322,12 @@ def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px):
     # ignore the outermost pixel ring, where the 'nearest' border mode bends the gradient
     inner = np.zeros(crop.shape, dtype=bool)
     inner[2:-2, 2:-2] = True
-    stray = far & inner & (mag > max(threshold, 0.1 * peak))
+    stray = far & inner & ok & (mag > max(threshold, 0.1 * peak))
+    if stray_at is not None:
+        stray_at.extend(zip(xx[stray].tolist(), yy[stray].tolist(), strict=True))
     if np.count_nonzero(stray) > max(2, 0.002 * crop.size):
         return 0.0, f"{int(np.count_nonzero(stray))} pixels of other structure farther than {guard_px:g} px"
-    sides = [crop[d < -guard_px], crop[d > guard_px]]
+    sides = [crop[(d < -guard_px) & ok], crop[(d > guard_px) & ok]]
     if min(s.size for s in sides) < 16:
         return 0.0, "plateaus too narrow"
     contrast = float(np.median(sides[1]) - np.median(sides[0]))
@@ -319,7 +338,42 @@ def _isolation(a, roi, cx, cy, ux, uy, noise, threshold, guard_px):
     return contrast, ""
 
 
-def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
+def _trimmed_roi(a, line, direction, hw, p, levels):
+    """(roi, contrast, detail) of the segment's ROI: first its whole length (1 px off each end); where other
+    structure intrudes (a corner, a neighbouring side) the ROI ends just before it, on the side it lies, and
+    is checked again.  ``roi`` None when the segment itself is too short; where the trimming would leave too
+    few lines (a structure alongside the edge, not at its ends) the untrimmed ROI and its detail are returned,
+    so that a narrower ROI is tried."""
+    cx, cy, ux, uy, length = line
+    noise, threshold, inner = levels
+    roi = _roi_for(cx, cy, ux, uy, length, direction, hw, a.shape, trim=1.0)
+    ax, ca = (1, cy) if direction == "ACT" else (0, cx)  # the ROI's along-edge bounds: roi[ax], roi[ax + 2]
+
+    def too_short(r):
+        return r[ax + 2] - r[ax] < max(p["min_length_px"] * 0.75, 12)
+
+    if roi is None or too_short(roi):
+        n = 0 if roi is None else roi[ax + 2] - roi[ax]
+        return None, 0.0, f"ROI holds {n} lines once trimmed"
+    for _ in range(6):
+        stray: list = []
+        contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"], inner, stray)
+        if not stray or not why.endswith(f"{p['guard_px']:g} px"):
+            return roi, contrast, why
+        pos = np.array([xy[ax] for xy in stray], dtype=float)  # along the edge
+        lo, hi = pos[pos < ca], pos[pos >= ca]
+        r = list(roi)
+        if lo.size:
+            r[ax] = max(r[ax], int(lo.max()) + 2)
+        if hi.size:
+            r[ax + 2] = min(r[ax + 2], int(hi.min()) - 1)
+        if too_short(r):
+            return roi, contrast, why
+        roi = tuple(r)
+    return roi, contrast, why
+
+
+def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float, inner=None):
     """An EdgeCandidate, or a Rejection with its reason."""
     cx, cy, ux, uy, length = s.fit()
     ang = _angle_from_y(ux, uy)
@@ -344,13 +398,9 @@ def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
     hw0 = p["half_width_px"]
     widths = sorted({hw0, *(w for w in (0.75 * hw0, 0.625 * hw0) if w >= max(10.0, p["guard_px"] + 4))})[::-1]
     for hw in widths:  # narrower ROIs when a neighbour intrudes
-        roi = _roi_for(cx, cy, ux, uy, length, direction, hw, a.shape)
+        roi, contrast, why = _trimmed_roi(a, (cx, cy, ux, uy, length), direction, hw, p, (noise, threshold, inner))
         if roi is None:
-            return rej("short", "too short once the corners are trimmed")
-        n_along = roi[3] - roi[1] if direction == "ACT" else roi[2] - roi[0]
-        if n_along < p["min_length_px"] * 0.5 or n_along < 12:
-            return rej("short", f"ROI holds {n_along} lines once trimmed")
-        contrast, why = _isolation(a, roi, cx, cy, ux, uy, noise, threshold, p["guard_px"])
+            return rej("short", why)
         if not why:
             break
     if why:
@@ -364,7 +414,7 @@ def _evaluate(a, s: _Segment, p: dict, noise: float, threshold: float):
 def find_edges(
     image,
     *,
-    min_length_px: float = 32.0,
+    min_length_px: float = 25.0,
     min_cnr: float = 10.0,
     min_tilt_deg: float = 1.0,
     max_tilt_deg: float = 44.0,
@@ -372,6 +422,8 @@ def find_edges(
     guard_px: float = 5.0,
     max_edges: int | None = None,
     band_rows: int = 512,
+    valid=None,
+    nodata: float | None = None,
 ) -> EdgeSearch:
     """Find straight, isolated, slanted edges with enough contrast, each with an ROI for slanted-edge MTF.
 
@@ -395,6 +447,11 @@ def find_edges(
         directions stay represented).
     band_rows : int
         Rows per processing band (memory: a few float32 arrays of ``band_rows`` x width).
+    valid : array_like of bool, optional
+        Pixels to search (True); excluded pixels (an area-of-interest mask) are never edges, structure,
+        plateau or noise: edge pixels are kept 3 px inside the valid area, so its border is no edge.
+    nodata : float, optional
+        Pixels equal to this value are excluded as well.
 
     Returns
     -------
@@ -416,6 +473,11 @@ def find_edges(
     (1, 'ACT', 6.0)
     """
     a = as_float_array("image", image, ndim=2, finite=False) if not isinstance(image, np.ndarray) else image
+    ok = valid_mask(a, valid, nodata)
+    inner = None
+    if ok is not None:
+        a = fill_invalid(a, ok)
+        inner = ndi.binary_erosion(ok, np.ones((7, 7), dtype=bool))  # filters reaching no excluded pixel
     if a.ndim != 2:
         raise InputError(f"image: must be 2-D, got shape {a.shape}")
     if min(a.shape) < 32:
@@ -434,14 +496,14 @@ def find_edges(
         raise InputError(f"guard_px = {guard_px:g}: must be < half_width_px - 2 = {p['half_width_px'] - 2:g}")
     band_rows = int(check_range("band_rows", band_rows, 64, None))
     _check_finite(a, band_rows)
-    noise = estimate_noise(a, band_rows=band_rows)
-    threshold = max(_K_NOISE * _GRAD_NOISE_GAIN * noise, _REL_RANGE * _robust_range(a), 1e-12)
-    mask = _edge_mask(a, threshold, band_rows)
+    noise = estimate_noise(a, band_rows=band_rows, valid=ok)
+    threshold = max(_K_NOISE * _GRAD_NOISE_GAIN * noise, _REL_RANGE * _robust_range(a, ok), 1e-12)
+    mask = _edge_mask(a, threshold, band_rows, inner)
     segs = _merge_collinear(_segments(a, mask, p["min_length_px"]))
     del mask
     found, rejected = [], []
     for s in segs:
-        r = _evaluate(a, s, p, noise, threshold)
+        r = _evaluate(a, s, p, noise, threshold, inner)
         (found if isinstance(r, EdgeCandidate) else rejected).append(r)
     found.sort(key=lambda c: -c.length_px)
     warnings = []

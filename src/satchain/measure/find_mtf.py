@@ -26,6 +26,7 @@ the noise grows; ``f_max`` = 1.0 extends the table where wanted.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, first_crossing
+from satchain.measure._common import ResultMixin, first_crossing, valid_mask, zero_fill_mask
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
@@ -52,6 +53,9 @@ class FoundEdge(ResultMixin):
 
     ``mtf_at_nyquist_sigma`` = the edge's noise sigma and :data:`SIGMA_FLOOR` in quadrature; ``warnings`` and
     ``flags`` are those of the edge measurement (``flags`` empty where the edge module has none).
+    Two collinear halves of one target edge (a checkerboard's cross: opposite polarities, the junction
+    between them) are joined: ``angle_deg`` is then the angle of the one line fitted to both (a longer
+    baseline), ``own_angle_deg`` the half's own and ``joined_with`` the other half's index in ``edges``.
     """
 
     candidate: EdgeCandidate
@@ -64,6 +68,8 @@ class FoundEdge(ResultMixin):
     noise_sigma: float
     warnings: tuple[str, ...]
     flags: tuple[str, ...] = ()
+    own_angle_deg: float | None = None
+    joined_with: int | None = None
 
 
 @dataclass(frozen=True)
@@ -131,21 +137,65 @@ def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
     return np.maximum(_nyquist_sigma(r) * shape, SIGMA_FLOOR)
 
 
-def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None):
+def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None, ok=None):
     """(EdgeResult, None) or (None, reason detail)."""
     try:
         x0, y0, x1, y1 = c.roi  # crop first: measure_edge would convert the whole image to float64 per call
-        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale)
+        v = None if ok is None else ok[y0:y1, x0:x1]
+        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale, valid=v)
     except InputError as exc:
         return None, str(exc)
     if r.direction != c.direction:
         return None, f"measure_edge saw an {r.direction} edge where an {c.direction} edge was found"
     if abs(r.angle_deg - c.angle_deg) > 1.0:
         return None, f"angle {r.angle_deg:.2f} deg measured vs {c.angle_deg:.2f} deg found"
+    if r.edge_point_xy is not None:  # in the image, not the crop
+        r = dataclasses.replace(r, edge_point_xy=(r.edge_point_xy[0] + x0, r.edge_point_xy[1] + y0))
     m = np.asarray(r.mtf)
     if not np.all(np.isfinite(m)) or m.min() < 0 or r.mtf_at_nyquist > MTF_VALID_MAX:
         return None, "MTF outside [0, 1.2]"
     return r, None
+
+
+def _line(r: EdgeResult):
+    """(a, c, slope dc/da) of a measured edge: a along it (y for ACT, x for ALT), c across it."""
+    x, y = r.edge_point_xy
+    t = np.deg2rad(r.angle_deg)
+    if r.direction == "ACT":
+        return y, x, float(np.tan(t))
+    return x, y, float(np.cos(t) / np.sin(t))
+
+
+def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]) -> list[FoundEdge]:
+    """Join pairs of collinear edges (same direction, angles within 1 deg, each centre within 1.5 px of the
+    other's line): one straight line ``c = c0 + s a`` fitted by least squares to both halves' centre
+    positions (variance ``sigma^2 / n``) and slopes (variance ``12 sigma^2 / n^3``), ``n`` lines each."""
+    out = list(edges)
+    used: set[int] = set()
+    for i, j in itertools.combinations(range(len(edges)), 2):
+        ri, rj = results[i], results[j]
+        if i in used or j in used or ri.direction != rj.direction or ri.edge_point_xy is None:
+            continue
+        if abs(ri.angle_deg - rj.angle_deg) > 1.0:
+            continue
+        (ai, ci, si), (aj, cj, sj) = _line(ri), _line(rj)
+        if abs(cj - ci - si * (aj - ai)) > 1.5 or abs(ci - cj - sj * (ai - aj)) > 1.5 or abs(aj - ai) < 10:
+            continue
+        ni, nj = float(ri.n_lines), float(rj.n_lines)
+        a0 = 0.5 * (ai + aj)
+        # rows: [1, a - a0] for positions (weight n), [0, 1] for slopes (weight n^3 / 12)
+        design = np.array([[1.0, ai - a0], [1.0, aj - a0], [0.0, 1.0], [0.0, 1.0]])
+        obs = np.array([ci, cj, si, sj])
+        w = np.array([ni, nj, ni**3 / 12.0, nj**3 / 12.0])
+        sol = np.linalg.solve(design.T @ (w[:, None] * design), design.T @ (w * obs))
+        s = float(sol[1])
+        ang = float(np.degrees(np.arctan(s))) if ri.direction == "ACT" else float(np.degrees(np.arctan2(1.0, s)))
+        if ang > 90.0:
+            ang -= 180.0
+        for k, other in ((i, j), (j, i)):
+            out[k] = dataclasses.replace(out[k], angle_deg=ang, own_angle_deg=out[k].angle_deg, joined_with=other)
+        used |= {i, j}
+    return out
 
 
 def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
@@ -229,11 +279,13 @@ def measure_found_edges(
     image,
     *,
     pixel_m: float | None = None,
-    min_length_px: float = 32.0,
+    min_length_px: float = 25.0,
     max_edges: int | None = None,
     min_cnr: float = 10.0,
     search: EdgeSearch | None = None,
     full_scale: float | None = None,
+    valid=None,
+    nodata: float | None = None,
 ) -> FindResult:
     """Find every usable slanted edge of ``image``, measure each, and combine them into ACT and ALT MTFs.
 
@@ -250,6 +302,13 @@ def measure_found_edges(
     full_scale : float, optional
         The sensor's full scale in the image's units, passed to the edge measurement (an edge with more than
         1 % of its pixels there is refused as clipped); integer images default to their dtype maximum.
+    valid : array_like of bool, optional
+        Pixels to use (True), e.g. the area-of-interest mask; excluded pixels are left out of the search,
+        the noise and every edge's ESF, and are never clipping.
+    nodata : float, optional
+        Pixels equal to this value are excluded as well (0 for the zero-filled crops cal/val tools write).
+        Without ``valid`` and ``nodata``, the zeros of an integer image are excluded where they are evidently a
+        fill (:func:`~satchain.measure._common.zero_fill_mask`; flagged).
 
     Returns
     -------
@@ -270,12 +329,15 @@ def measure_found_edges(
     >>> sorted(res.combined), res.edges[0].direction
     (['ACT'], 'ACT')
     """
+    ok, fill_note = valid_mask(image, valid, nodata), None
+    if ok is None and valid is None and nodata is None:
+        ok, fill_note = zero_fill_mask(image)
     if search is None:
-        search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr)
+        search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr, valid=ok)
     rejected = list(search.rejected)
     edges, results = [], []
     for c in search.candidates:
-        r, why = _measure_one(image, c, pixel_m, full_scale)
+        r, why = _measure_one(image, c, pixel_m, full_scale, ok)
         if r is None:
             rejected.append(Rejection(c.center_xy, c.angle_deg, c.length_px, "measurement refused", why))
             continue
@@ -298,13 +360,14 @@ def measure_found_edges(
         results.append(r)
     if not edges:
         raise _refusal(search, rejected)
+    edges = _join_collinear(edges, results)
     combined = {}
     for d in ("ACT", "ALT"):
         rs = [r for r in results if r.direction == d]
         if rs:
             combined[d] = _combine(d, rs)
     combined = _add_tilt_systematic(combined, edges)
-    flags = list(search.warnings)
+    flags = list(search.warnings) + ([fill_note] if fill_note else [])
     for d in ("ACT", "ALT"):
         if d not in combined:
             flags.append(f"no usable {d} edge: only the {'ALT' if d == 'ACT' else 'ACT'} MTF is measured")
