@@ -236,9 +236,7 @@ def measure_edge(
     flags += check_saturation(data, full_scale, ok)
     work, okw, direction, transposed, sign = _orient(data, ok)
     q_step = quantisation_step(data if ok is None else data[ok])
-    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
-        work, deg, os_, q_step, okw
-    )
+    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step, okw)
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
