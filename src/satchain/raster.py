@@ -154,8 +154,11 @@ class RasterReader:
             raise ConfigError(f"band = {band!r}: must be an integer in [1, {self.count}]")
         return self._bands[int(band) - 1]
 
-    def _window(self, row0: int, col0: int, height: int, width: int):
+    def _window(self, row0: int, col0: int, height: int | None, width: int | None):
+        """The rasterio window; ``height``/``width`` None: the rest of the image from ``(row0, col0)``."""
         rows, cols = self.shape
+        height = rows - row0 if height is None else height
+        width = cols - col0 if width is None else width
         if row0 < 0 or col0 < 0 or height < 1 or width < 1 or row0 + height > rows or col0 + width > cols:
             raise InputError(f"window = {(row0, col0, height, width)!r}: outside the image of shape {self.shape}")
         from rasterio.windows import Window
@@ -180,8 +183,6 @@ class RasterReader:
     ) -> np.ndarray:
         """The stored values of a window of one band (the file's dtype); ``scaled``: ``value * scale + offset``
         as float64. Without ``height``/``width`` the rest of the image from ``(row0, col0)``."""
-        height = self.shape[0] - row0 if height is None else height
-        width = self.shape[1] - col0 if width is None else width
         win = self._window(row0, col0, height, width)
         b = self._band(band)
         try:
@@ -200,8 +201,6 @@ class RasterReader:
     ) -> np.ndarray:
         """Boolean validity of a window (True = valid): GDAL's mask of the band, from its nodata value, an
         internal mask or the alpha band (alpha 0 = invalid)."""
-        height = self.shape[0] - row0 if height is None else height
-        width = self.shape[1] - col0 if width is None else width
         win = self._window(row0, col0, height, width)
         b = self._band(band)
         try:
