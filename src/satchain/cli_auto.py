@@ -12,6 +12,7 @@ from rich.table import Table
 from satchain._cli_common import handle_errors, print_warning
 from satchain._safety import check_dir_outputs
 from satchain.cli_options import (
+    BandOpt,
     FullScaleOpt,
     ImageArg,
     JsonOpt,
@@ -103,6 +104,7 @@ def auto(
     origin_m: OriginOpt = None,
     threshold: ThresholdOpt = 0.15,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
     full_scale: FullScaleOpt = None,
@@ -111,7 +113,7 @@ def auto(
     from satchain.measure.auto import measure_auto
 
     check_dir_outputs(out, ["auto.json", "*.png"], {"IMAGE": image, "--truth": truth})
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     truth_dict = read_truth(truth)  # read before --origin-m is parsed (the order of the checks is kept)
     origin = parse_origin(origin_m, meta)
     fs = parse_full_scale(full_scale, data, meta)

@@ -16,6 +16,7 @@ from rich.table import Table
 
 from satchain._cli_common import handle_errors
 from satchain.cli_options import (
+    BandOpt,
     FullScaleOpt,
     ImageArg,
     JsonOpt,
@@ -94,6 +95,7 @@ def _ceos_rich(tab: dict) -> Table:
 def find(
     image: ImageArg,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     min_length: Annotated[float, typer.Option("--min-length", help="shortest usable edge (px)")] = 25.0,
     max_edges: Annotated[
         int, typer.Option("--max-edges", help="measure at most N edges (the longest, ACT and ALT in turn)")
@@ -117,7 +119,7 @@ def find(
     check_range("--min-length", min_length, 12, None)
     check_range("--max-edges", max_edges, 1, None)
     check_positive("--min-cnr", min_cnr)
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     fs = parse_full_scale(full_scale, data, meta)
     res = measure_found_edges(
         data,

@@ -26,6 +26,7 @@ from satchain.errors import ConfigError, SatchainIOError
 
 __all__ = [
     "SHARED_OPTIONS",
+    "BandOpt",
     "FitDegreeOpt",
     "FullScaleOpt",
     "ImageArg",
@@ -85,6 +86,9 @@ FullScaleOpt = Annotated[
     ),
 ]
 
+BandOpt = Annotated[
+    int | None, typer.Option("--band", help="band of a multiband raster, from 1 (default: 1, with a warning)")
+]
 NodataOpt = Annotated[
     float | None,
     typer.Option(
@@ -106,6 +110,7 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--fit-degree": (FitDegreeOpt,),
     "--full-scale": (FullScaleOpt,),
     "--nodata": (NodataOpt,),
+    "--band": (BandOpt,),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing
@@ -195,12 +200,18 @@ def parse_valid(image, nodata: float | None, meta: dict) -> np.ndarray | None:
     return valid_mask(image, meta.get("valid"), nd, name="IMAGE")
 
 
-def load_image(path: Path, pixel_m: float | None):
-    """Read IMAGE; returns (array, pixel_m or None, metadata): ``--pixel-m`` wins over the file's metadata."""
+def load_image(path: Path, pixel_m: float | None, band: int | None = None):
+    """Read IMAGE (band ``--band`` of a multiband raster); returns (array, pixel_m or None, metadata):
+    ``--pixel-m`` wins over the file's metadata; the file's own mask (nodata, internal mask, alpha) is
+    ``metadata["valid"]`` (see :func:`parse_valid`)."""
     from satchain._validate import check_positive
     from satchain.io import read_image
 
-    image, meta = read_image(path)
+    if band is not None and (isinstance(band, bool) or band < 1):
+        raise ConfigError(f"--band = {band!r}: bands are numbered from 1")
+    image, valid, meta = read_image(path, band=band, mask=True)
+    if valid is not None:
+        meta = {**meta, "valid": valid}
     if pixel_m is not None:
         pixel_m = check_positive("--pixel-m", pixel_m)
     elif meta.get("pixel_m") is not None:

@@ -16,6 +16,7 @@ from rich.table import Table
 from satchain._cli_common import handle_errors, parse_numbers, print_warning
 from satchain._safety import check_dir_outputs, check_star_radius
 from satchain.cli_options import (
+    BandOpt,
     FitDegreeOpt,
     FullScaleOpt,
     ImageArg,
@@ -75,6 +76,7 @@ def edge(
     image: ImageArg,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
     fit_degree: FitDegreeOpt = "auto",
@@ -91,7 +93,7 @@ def edge(
     from satchain.report.measure_plots import plot_edge
 
     check_dir_outputs(out, ["edge.json", "edge.png"], {"IMAGE": image})
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     region = parse_roi("--roi", roi)
     fs = parse_full_scale(full_scale, data, meta)
     r = measure_edge(
@@ -146,6 +148,7 @@ def star(
     ] = None,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
     full_scale: FullScaleOpt = None,
@@ -155,7 +158,7 @@ def star(
     from satchain.report.measure_plots import plot_star
 
     check_dir_outputs(out, ["star.json", "star.png"], {"IMAGE": image})
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     check_star_radius(radius, data.shape)
     region = parse_roi("--roi", roi)
     c = None if center is None else parse_numbers("--center", center, 2)
@@ -245,6 +248,7 @@ def bars(
     ] = 3,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
     full_scale: FullScaleOpt = None,
@@ -256,7 +260,7 @@ def bars(
     from satchain.report.measure_plots import plot_bars
 
     check_dir_outputs(out, ["bars.json", "bars.png"], {"IMAGE": image})
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     periods = parse_numbers("--periods-px", periods_px)
     rois = _bar_group_rois(periods, periods_px, group_roi, roi, data.shape)
     lv = None if levels is None else tuple(parse_numbers("--levels", levels, 2))
@@ -366,6 +370,7 @@ def wedge(
     origin_m: OriginOpt = None,
     roi: RoiOpt = None,
     pixel_m: PixelOpt = None,
+    band: BandOpt = None,
     as_json: JsonOpt = False,
     out: OutOpt = None,
     full_scale: FullScaleOpt = None,
@@ -379,7 +384,7 @@ def wedge(
     from satchain.report.measure_plots import plot_wedge
 
     check_dir_outputs(out, ["wedge.json", "wedge.png"], {"IMAGE": image, "--truth": truth})
-    data, p, meta = load_image(image, pixel_m)
+    data, p, meta = load_image(image, pixel_m, band)
     fs = parse_full_scale(full_scale, data, meta)
     if truth is not None:
         if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
