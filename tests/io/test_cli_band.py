@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from satchain.cli_measure import measure_app
 
 rasterio = pytest.importorskip("rasterio")
-from rasterio.transform import from_origin  # noqa: E402
+from rasterio.transform import Affine  # noqa: E402
 
 runner = CliRunner()
 
@@ -33,7 +33,7 @@ def _edge(n=80, angle_deg=6.0, blur=0.8, lo=300.0, hi=3000.0) -> np.ndarray:
 def _write(path, bands, *, alpha=None):
     count = len(bands) + (alpha is not None)
     prof = dict(driver="GTiff", height=bands[0].shape[0], width=bands[0].shape[1], count=count, dtype="uint16",
-                crs="EPSG:32636", transform=from_origin(500000.0, 4100000.0, 0.5, 0.5))  # fmt: skip
+                crs="EPSG:32636", transform=Affine(0.5, 0.0, 500000.0, 0.0, -0.5, 4100000.0))  # fmt: skip
     with rasterio.open(path, "w", **prof) as d:
         for i, b in enumerate(bands, 1):
             d.write(np.round(b).astype("uint16"), i)
