@@ -15,46 +15,29 @@ Run:  PYTHONPATH=src python benchmarks/bench_clipping.py [--n 200] [--seed 0]
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
-from scipy.special import ndtr
 
 from satchain.errors import InputError
 from satchain.measure import find_clipping
 from satchain.measure.edge import measure_edge
 
-_U, _W = np.polynomial.legendre.leggauss(8)
-_U, _W = _U / 2, _W / 2
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "measure"))
+from _render_clip import render_edge, render_grating, render_star  # noqa: E402  (the tests' exact renders)
 
 
 def edge(shape, angle_deg, blur, phase, lo, hi):
-    ny, nx = shape
-    t = np.deg2rad(angle_deg)
-    y, x = np.mgrid[0:ny, 0:nx].astype(float)
-    xc, yc = (nx - 1) / 2 + phase[0], (ny - 1) / 2 + phase[1]
-    acc = np.zeros(shape)
-    for ux, wx in zip(_U, _W, strict=True):
-        for uy, wy in zip(_U, _W, strict=True):
-            acc += wx * wy * ndtr(((x + ux - xc) * np.cos(t) - (y + uy - yc) * np.sin(t)) / blur)
-    return lo + (hi - lo) * acc
+    return render_edge(angle_deg, blur, phase, lo=lo, hi=hi, shape=shape)
 
 
 def grating(period, blur, phase, lo, hi, shape=(20, 96)):
-    x = np.arange(shape[1], dtype=float)
-    prof = np.zeros(shape[1])
-    for u, w in zip(_U, _W, strict=True):
-        for k in range(-2, int(shape[1] / period) + 3):
-            a = phase + k * period
-            prof += w * (ndtr((x + u - a) / blur) - ndtr((x + u - a - period / 2) / blur))
-    return np.tile(lo + (hi - lo) * prof, (shape[0], 1))
+    return render_grating(period, blur, phase, lo=lo, hi=hi, shape=shape)
 
 
-def star(center, blur, n=32, mean=100.0, amp=40.0, size=81):
-    y, x = np.mgrid[0:size, 0:size].astype(float)
-    dx, dy = x - center[0], y - center[1]
-    r, th = np.hypot(dx, dy), np.arctan2(dy, dx)
-    f = n / (2 * np.pi * np.maximum(r, 1e-9))
-    return mean + amp * np.exp(-2 * np.pi**2 * blur**2 * f**2) * np.cos(n * th)
+def star(center, blur, n=32):
+    return render_star(n, center, blur)
 
 
 def edge_named(img) -> bool:
