@@ -61,9 +61,14 @@ def _rasterio():
     return rasterio
 
 
+#: GDAL's block cache, MB: its default (5 % of the machine's memory) would count in a streamed run's peak RSS
+GDAL_CACHE_MB = 128
+
+
 def _gdal_env():
-    """The rasterio environment every GDAL call of this module runs in (GDAL messages go to logging)."""
-    return _rasterio().Env()
+    """The rasterio environment every GDAL call of this module runs in (GDAL messages go to logging; a
+    bounded block cache)."""
+    return _rasterio().Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
 class RasterReader:
@@ -209,6 +214,26 @@ class RasterReader:
         except Exception as exc:
             raise SatchainIOError(f"image = {str(self.path)!r}: cannot read the mask of window "
                                   f"{(row0, col0, height, width)}: {_one_line(exc)}") from None  # fmt: skip
+
+    def overview(self, max_px: int = 1024, *, band: int | None = None, scaled: bool = False):
+        """``(values, valid)`` of the whole band decimated (nearest) to at most ``max_px`` a side, from the
+        file's overviews where it has them: a fill value, a preview. ``valid`` is None without a mask."""
+        from rasterio.enums import Resampling
+
+        rows, cols = self.shape
+        f = max(1, -(-max(rows, cols) // int(max_px)))
+        shape = (-(-rows // f), -(-cols // f))
+        b = self._band(band)
+        try:
+            with _gdal_env():
+                out = self._ds.read(b, out_shape=shape, resampling=Resampling.nearest)
+                valid = self._ds.read_masks(b, out_shape=shape, resampling=Resampling.nearest) > 0
+        except Exception as exc:
+            raise SatchainIOError(f"image = {str(self.path)!r}: cannot read band {b}: {_one_line(exc)}") from None
+        if scaled:
+            i = self._bands.index(b)
+            out = out.astype(np.float64) * self.scales[i] + self.offsets[i]
+        return out, (valid if self.has_mask else None)
 
     @property
     def has_mask(self) -> bool:

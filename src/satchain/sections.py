@@ -19,6 +19,7 @@ __all__ = [
     "EARTH_GM_M3_PER_S2",
     "EARTH_RADIUS_M",
     "Atmosphere",
+    "Band",
     "Detector",
     "Illumination",
     "Motion",
@@ -489,3 +490,36 @@ class Illumination(_Frozen):
     atmosphere_path: Literal["both", "down", "up"] = "both"
     path_radiance_w_per_m2_sr_per_um: float = Field(default=0.0, ge=0, le=1e4)
     solar_spectrum: Literal["astm_g173_etr", "planck_5778k"] = "astm_g173_etr"
+
+
+class Band(_Frozen):
+    """One spectral band of a multiband camera (a ``[[bands]]`` table of a system file), in the order of the
+    bands of a multiband input: ``satchain simulate`` forms band i of the input with the system's optics at
+    this band's ``wavelengths_m`` (and ``wavelength_weights``) and, when given, integrates its signal over
+    ``band_m`` instead of ``radiometry.band_m``. Without ``[[bands]]`` every band uses the system's own optics.
+
+    Examples
+    --------
+    >>> Band(name="red", wavelengths_m=(6.5e-7,)).name
+    'red'
+    """
+
+    name: str = Field(default="", max_length=64)
+    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="effective wavelengths of the band, m")
+    wavelength_weights: tuple[float, ...] | None = None
+    band_m: tuple[float, float] | None = Field(default=None, description="spectral band [min, max], m")
+
+    @model_validator(mode="after")
+    def _check(self) -> Band:
+        for i, w in enumerate(self.wavelengths_m):
+            if not (1e-8 <= w <= 1e-4):
+                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
+        w = self.wavelength_weights
+        if w is not None and (len(w) != len(self.wavelengths_m) or min(w) < 0 or sum(w) <= 0):
+            raise ValueError(
+                f"wavelength_weights = {list(w)!r}: must give one weight >= 0 per wavelength "
+                f"({len(self.wavelengths_m)}), with a positive sum"
+            )
+        if self.band_m is not None and not (1e-8 <= self.band_m[0] < self.band_m[1] <= 1e-4):
+            raise ValueError(f"band_m = {list(self.band_m)!r}: must be [min, max] with 1e-08 <= min < max <= 1e-04 m")
+        return self

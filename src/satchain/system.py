@@ -40,6 +40,7 @@ from satchain.sections import (  # noqa: F401  (re-exported: the sections are pa
     EARTH_GM_M3_PER_S2,
     EARTH_RADIUS_M,
     Atmosphere,
+    Band,
     Detector,
     Illumination,
     Motion,
@@ -53,6 +54,7 @@ from satchain.sections import (  # noqa: F401  (re-exported: the sections are pa
 
 __all__ = [
     "Atmosphere",
+    "Band",
     "Detector",
     "Illumination",
     "ImagingSystem",
@@ -79,6 +81,7 @@ class ImagingSystem(_Frozen):
     radiometry: Radiometry = Field(default_factory=Radiometry)
     illumination: Illumination = Field(default_factory=Illumination)
     atmosphere: Atmosphere = Field(default_factory=Atmosphere)
+    bands: tuple[Band, ...] = Field(default=(), description="per-band optics of a multiband camera ([[bands]])")
     provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
     # ----------------------------------------------------------------- construction
@@ -125,6 +128,27 @@ class ImagingSystem(_Frozen):
                 sub.setdefault("fill_factor", ff)
             sub[field] = v
         return type(self).from_dict(d)
+
+    def for_band(self, index: int) -> ImagingSystem:
+        """The system that forms band ``index`` (0-based) of a multiband input: its ``[[bands]]`` entry's
+        wavelengths (and radiometric band) in place of the optics' own; the system itself without ``bands``.
+
+        Examples
+        --------
+        >>> s = load_preset("ankarasat3").replace({})
+        >>> s.for_band(2) is s
+        True
+        """
+        if not self.bands:
+            return self
+        b = self.bands[index]
+        values: dict[str, Any] = {
+            "optics.wavelengths_m": b.wavelengths_m,
+            "optics.wavelength_weights": b.wavelength_weights,
+        }
+        if b.band_m is not None:
+            values["radiometry.band_m"] = b.band_m
+        return self.replace(values).model_copy(update={"bands": ()})
 
     # ----------------------------------------------------------------- derived quantities
     @property

@@ -7,7 +7,7 @@ import pytest
 from _reference import make_scene
 
 from satchain import io, load_preset
-from satchain.engine import files
+from satchain.engine import georaster
 from satchain.engine.files import SimulatedFile, simulate_file
 from satchain.engine.simulate import simulate
 from satchain.errors import ConfigError, SatchainError
@@ -68,7 +68,7 @@ def test_noise_follows_the_seed_and_dn_are_integers_in_the_adc_range(tmp_path, s
 def test_the_streamed_path_writes_the_same_image_and_says_so(tmp_path, scene_tif, monkeypatch):
     path, _ = scene_tif
     full = simulate_file(path, tmp_path / "full.tif", SYSTEM, units="reflectance", noise=False)
-    monkeypatch.setattr(files, "choose_streamed", lambda *a, **k: True)
+    monkeypatch.setattr(georaster, "_in_memory", lambda *a, **k: False)
     said, stages = [], []
     r = simulate_file(path, tmp_path / "s.tif", SYSTEM, units="reflectance", noise=False, notify=said.append,
                       progress=lambda stage, done, total: stages.append((stage, done, total)))  # fmt: skip

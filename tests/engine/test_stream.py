@@ -134,9 +134,9 @@ def test_cli_streams_when_the_full_frame_does_not_fit(tmp_path, monkeypatch):
     common = ["--preset", "ankarasat3", "--units", "reflectance", "--no-noise"]
     r = runner.invoke(cli.app, ["simulate", str(inp), *common, "-o", str(tmp_path / "full.tif")])
     assert r.exit_code == 0, r.output
-    from satchain.engine import files
+    from satchain.engine import georaster
 
-    monkeypatch.setattr(files, "choose_streamed", lambda *a, **k: True)
+    monkeypatch.setattr(georaster, "_in_memory", lambda *a, **k: False)  # a raster input's plan
     r = runner.invoke(cli.app, ["simulate", str(inp), *common, "-o", str(tmp_path / "s.tif")])
     assert r.exit_code == 0, r.output
     assert "streamed" in r.output

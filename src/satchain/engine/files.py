@@ -42,6 +42,7 @@ from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import Simulator
 from satchain.engine.stream import choose_streamed
 from satchain.errors import ConfigError
+from satchain.io import GDAL_SUFFIXES
 
 if TYPE_CHECKING:
     from satchain.engine.sensor import SensorModel
@@ -65,7 +66,8 @@ Progress = Callable[[str, int, int], None]
 class SimulatedFile:
     """What :func:`simulate_file` wrote: ``path`` (the image, ``shape_px`` rows x cols in ``units``) and its
     ``preview`` (.png), ``focal_plane_path`` with its sample size ``focal_plane_pixel_m`` (None when not asked
-    for), whether the image was ``streamed`` through a coarse grid on disk, and the ``metadata`` stored in it."""
+    for), whether the image was ``streamed`` through a coarse grid on disk, the ``metadata`` stored in it, its
+    band ``count`` and, for a raster input, its ``crs`` and affine ``transform`` (the input's, at the GSD)."""
 
     path: Path
     preview: Path
@@ -75,6 +77,9 @@ class SimulatedFile:
     focal_plane_path: Path | None
     focal_plane_pixel_m: float | None
     metadata: Mapping[str, Any]
+    count: int = 1
+    crs: Any = None
+    transform: Any = None
 
 
 def ground_truth_source(
@@ -136,13 +141,17 @@ def simulate_file(
     progress: Progress | None = None,
     notify: Callable[[str], None] | None = None,
     names: Mapping[str, str] | None = None,
+    band: int | None = None,
 ) -> SimulatedFile:
     """Simulate the satellite image of a scene or an image file and write it (a GeoTIFF and a .png preview).
 
     Parameters
     ----------
     input_ : str or path
-        ``"paper"``, a scene layout (.toml / .json), or an image of reflectance (.tif, .tiff, .png, .npy).
+        ``"paper"``, a scene layout (.toml / .json), or an image of reflectance: a GDAL raster (GeoTIFF, COG,
+        JP2, NITF, VRT: :data:`satchain.io.GDAL_SUFFIXES`), a PNG or an NPY. A GDAL raster goes through
+        :func:`satchain.engine.georaster.simulate_raster`: every band (or ``band``), its georeference, nodata
+        and scale kept, written as a Cloud-Optimized GeoTIFF.
     out : path
         The output TIFF; its ``.png`` preview is written beside it.
     system : ImagingSystem
@@ -168,6 +177,8 @@ def simulate_file(
     names : mapping, optional
         How to name the parameters in error messages (the command line passes its option names, e.g.
         ``{"out": "-o", "seed": "--seed"}``).
+    band : int, optional
+        Only this band (1-based) of a multiband raster (default: every band).
 
     Returns
     -------
@@ -183,6 +194,18 @@ def simulate_file(
     _check_options(units, noise, seed, focal_plane_grid, name)
     out, fp_path = Path(out), (None if focal_plane is None else Path(focal_plane))
     _check_paths(input_, out, fp_path, name)
+    if fp_path is None and Path(input_).suffix.lower() in GDAL_SUFFIXES:
+        from satchain.engine.georaster import simulate_raster
+
+        r = simulate_raster(input_, out, system, band=band, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+                            units=units, noise=noise, seed=seed, scheduler=scheduler, progress=progress,
+                            notify=notify, names=names)  # fmt: skip
+        return SimulatedFile(out, r["preview"], r["shape_px"], units, r["streamed"], None, None, r["metadata"],
+                             r["count"], r["crs"], r["transform"])  # fmt: skip
+    if band is not None:
+        raise ConfigError(
+            f"{name('band')} {band!r}: applies to a GDAL raster input (one of {', '.join(GDAL_SUFFIXES)})"
+        )
     src, _ = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
     sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None)
     if min(src.shape_px) < MIN_INPUT_PX:

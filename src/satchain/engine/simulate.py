@@ -28,7 +28,7 @@ import numpy as np
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border
+from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
@@ -269,6 +269,7 @@ class Simulator:
         coarse = np.empty(self.n_coarse, dtype=np.float32) if out is None else out
         for n, tile in enumerate(self.tiles):
             coarse[tile.coarse.rows, tile.coarse.cols] = self.decimate_tile(source, tile)
+            release_pages(coarse)
             if progress is not None:
                 progress(n + 1, len(self.tiles))
         return coarse
@@ -312,6 +313,7 @@ class Simulator:
         iy, ix = idx
         # only the window's elements are read (a disk-backed coarse grid is never loaded whole)
         out = np.asarray(coarse[np.ix_(np.maximum(iy, 0), np.maximum(ix, 0))], dtype=np.float32)
+        release_pages(coarse)
         if self.params.border == "constant":
             out[iy < 0, :] = self.params.border_value
             out[:, ix < 0] = self.params.border_value

@@ -12,6 +12,8 @@ border rule: ``"symmetric"`` (mirror about the edge, the default: no artificial 
 
 from __future__ import annotations
 
+import contextlib
+import mmap
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -20,9 +22,30 @@ from satchain._validate import check_choice, check_positive
 from satchain.engine.tiling import Window
 from satchain.errors import InputError
 
-__all__ = ["BORDER_RULES", "ArraySource", "GroundTruth", "SceneSource", "as_ground_truth", "read_with_border"]
+__all__ = [
+    "BORDER_RULES",
+    "ArraySource",
+    "GroundTruth",
+    "SceneSource",
+    "as_ground_truth",
+    "read_with_border",
+    "release_pages",
+]
 
 BORDER_RULES = ("symmetric", "periodic", "constant")
+
+
+def release_pages(array) -> None:
+    """Flush a disk-backed array (:class:`numpy.memmap`) and drop its pages from this process's resident memory;
+    the data stays in the file (and the OS page cache). The streamed path calls it after every tile it writes to
+    or reads from its coarse grid on disk, so its peak RSS is its working set, not the grid's size. A no-op for
+    an in-memory array (or where the OS has no ``madvise``)."""
+    mm = getattr(array, "_mmap", None)
+    if mm is None or not hasattr(mm, "madvise") or not hasattr(mmap, "MADV_DONTNEED"):
+        return
+    with contextlib.suppress(OSError, ValueError):
+        array.flush()
+        mm.madvise(mmap.MADV_DONTNEED)
 
 
 @runtime_checkable
