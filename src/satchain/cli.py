@@ -266,7 +266,7 @@ class _StageBars:
 def simulate(
     inputs: Annotated[
         list[str],
-        typer.Argument(metavar="INPUT...", help="'paper', a scene file, or an image (TIFF/PNG/NPY); one or more"),
+        typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY); one or more"),
     ],
     scene_pixel_m: Annotated[
         float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")
@@ -275,7 +275,7 @@ def simulate(
     system: SystemOpt = None,
     units_: Annotated[str, typer.Option("--units", help="dn | electrons | radiance | reflectance")] = "dn",
     no_noise: Annotated[bool, typer.Option("--no-noise", help="no noise (deterministic)")] = False,
-    seed: Annotated[int, typer.Option("--seed", help="noise seed")] = 0,
+    seed: Annotated[int, typer.Option("--seed", help="noise seed (a sweep derives one per case from it)")] = 0,
     focal_plane: Annotated[Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")] = None,
     fp_grid: Annotated[
         str, typer.Option("--focal-plane-grid", help="input: on the input grid (exact); coarse: every D-th pixel")
