@@ -264,7 +264,10 @@ class _StageBars:
 @app.command()
 @_handle_errors
 def simulate(
-    input_: Annotated[str, typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY)")],
+    inputs: Annotated[
+        list[str],
+        typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY); one or more"),
+    ],
     scene_pixel_m: Annotated[
         float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")
     ] = None,
@@ -272,7 +275,7 @@ def simulate(
     system: SystemOpt = None,
     units_: Annotated[str, typer.Option("--units", help="dn | electrons | radiance | reflectance")] = "dn",
     no_noise: Annotated[bool, typer.Option("--no-noise", help="no noise (deterministic)")] = False,
-    seed: Annotated[int, typer.Option("--seed", help="noise seed")] = 0,
+    seed: Annotated[int, typer.Option("--seed", help="noise seed (a sweep derives one per case from it)")] = 0,
     focal_plane: Annotated[Path | None, typer.Option("--focal-plane", help="also write the focal-plane image")] = None,
     fp_grid: Annotated[
         str, typer.Option("--focal-plane-grid", help="input: on the input grid (exact); coarse: every D-th pixel")
@@ -286,11 +289,30 @@ def simulate(
             "so 8-bit 255 and 16-bit 65535 are reflectance 1; float images as they are)",
         ),
     ] = None,
-    out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF")] = ...,
+    sweep: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--sweep",
+            help="KEY=V1,V2,...: one case per value of a system key, e.g. motion.smear_px=0.5,1,2 (repeat for "
+            "the cartesian product); -o is then a directory with one image per case and a manifest",
+        ),
+    ] = None,
+    out: Annotated[
+        Path, typer.Option("-o", "--out", help="output TIFF (a directory with several inputs or --sweep)")
+    ] = ...,
 ) -> None:
-    """Simulate the satellite image of a scene or an image (exact, tiled, any size)."""
+    """Simulate the satellite image of a scene or an image (exact, tiled, any size); with several inputs or
+    --sweep, one image per case into the -o directory, with manifest.json / manifest.csv."""
     from satchain.engine.files import simulate_file
 
+    if len(inputs) > 1 or sweep:
+        from satchain.cli_sweep import simulate_cases
+
+        options = dict(scene_pixel_m=scene_pixel_m, input_scale=input_scale, units=units_, noise=not no_noise,
+                       scheduler=scheduler)  # fmt: skip
+        return simulate_cases(inputs, out, _system(preset, system), sweep_texts=sweep or [], seed=seed,
+                              focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
+    input_ = inputs[0]
     check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
     bars = _StageBars()
     try:
