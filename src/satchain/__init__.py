@@ -9,7 +9,9 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
 * design: :class:`ImagingSystem`, :func:`load_preset`, :func:`load_system`, :class:`SystemOTF`,
   :func:`coltman_ctf`, :func:`predict_quality`;
 * a whole run: :func:`run` (:class:`RunConfig` -> :class:`RunResult`), :func:`predict`, :func:`compare`;
-* images: :func:`simulate`, :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
+* images: :func:`simulate`, :func:`simulate_image` (an array or a raster path -> the image with its transform),
+  :func:`simulate_file` (file to COG), :func:`simulate_sweep` (several inputs x parameter sweeps),
+  :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
   :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`;
 * errors: :class:`SatchainError` and its subclasses.
@@ -59,6 +61,10 @@ _LAZY = {
     "mtf_from_ctf": "satchain.ctf",
     "predict_quality": "satchain.quality",
     "simulate": "satchain.engine.simulate",
+    "simulate_image": "satchain.engine.degrade",
+    "SimulatedImage": "satchain.engine.degrade",
+    "simulate_file": "satchain.engine.files",
+    "simulate_sweep": "satchain.engine.sweep",
     "load_layout": "satchain.scene",
     "read_truth": "satchain.scene.truth",
     "Truth": "satchain.scene.truth",

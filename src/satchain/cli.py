@@ -22,6 +22,7 @@ from satchain._safety import (
     check_run_dir,
     check_sidecars,
 )
+from satchain.cli_options import BandsOpt
 from satchain.errors import ConfigError
 
 app = typer.Typer(
@@ -289,6 +290,7 @@ def simulate(
             "so 8-bit 255 and 16-bit 65535 are reflectance 1; float images as they are)",
         ),
     ] = None,
+    band: BandsOpt = None,
     sweep: Annotated[
         list[str] | None,
         typer.Option(
@@ -309,7 +311,7 @@ def simulate(
         from satchain.cli_sweep import simulate_cases
 
         options = dict(scene_pixel_m=scene_pixel_m, input_scale=input_scale, units=units_, noise=not no_noise,
-                       scheduler=scheduler)  # fmt: skip
+                       scheduler=scheduler, band=band)  # fmt: skip
         return simulate_cases(inputs, out, _system(preset, system), sweep_texts=sweep or [], seed=seed,
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
@@ -319,13 +321,15 @@ def simulate(
         r = simulate_file(
             input_, out, _system(preset, system), scene_pixel_m=scene_pixel_m, input_scale=input_scale,
             units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
-            scheduler=scheduler, progress=bars, notify=_say, names=_SIMULATE_OPTIONS,
+            scheduler=scheduler, progress=bars, notify=_say, names=_SIMULATE_OPTIONS, band=band,
         )  # fmt: skip
     finally:
         bars.close()
     how = ", streamed" if r.streamed else ""
     preview = " (subsampled preview)" if r.streamed else ""
-    _say(f"wrote {r.path} ({r.shape_px[0]} x {r.shape_px[1]} px, {r.units}{how}) and {r.preview}{preview}")
+    bands = f" x {r.count} bands" if r.count > 1 else ""
+    geo = f", {r.crs.to_string() or 'CRS'}" if r.crs is not None else ""
+    _say(f"wrote {r.path} ({r.shape_px[0]} x {r.shape_px[1]} px{bands}, {r.units}{geo}{how}) and {r.preview}{preview}")
     if r.focal_plane_path is not None:
         _say(f"wrote {r.focal_plane_path} (focal-plane image, {r.focal_plane_pixel_m:g} m samples)")
 
@@ -340,6 +344,7 @@ _SIMULATE_OPTIONS = {
     "input_scale": "--input-scale",
     "units": "--units",
     "seed": "--seed",
+    "band": "--band",
 }
 
 

@@ -27,6 +27,7 @@ from satchain.errors import ConfigError, SatchainIOError
 __all__ = [
     "SHARED_OPTIONS",
     "BandOpt",
+    "BandsOpt",
     "FitDegreeOpt",
     "FullScaleOpt",
     "ImageArg",
@@ -89,6 +90,10 @@ FullScaleOpt = Annotated[
 BandOpt = Annotated[
     int | None, typer.Option("--band", help="band of a multiband raster, from 1 (default: 1, with a warning)")
 ]
+BandsOpt = Annotated[
+    int | None,
+    typer.Option("--band", help="only this band of a multiband raster, from 1 (default: every band, each simulated)"),
+]
 NodataOpt = Annotated[
     float | None,
     typer.Option(
@@ -110,7 +115,7 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--fit-degree": (FitDegreeOpt,),
     "--full-scale": (FullScaleOpt,),
     "--nodata": (NodataOpt,),
-    "--band": (BandOpt,),
+    "--band": (BandOpt, BandsOpt),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing

@@ -45,7 +45,7 @@ import numpy as np
 from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError
 
-__all__ = ["WORK_BYTES", "RasterBandSource", "output_transform", "simulate_raster"]
+__all__ = ["WORK_BYTES", "RasterBandSource", "invalid_cells", "output_transform", "simulate_raster"]
 
 #: working memory a raster simulation plans for by default (the machine's limit when lower)
 WORK_BYTES = 1.25 * 2**30
@@ -115,21 +115,8 @@ class RasterBandSource:
         return v
 
     def invalid_cells(self, sim, rows: tuple[int, int]) -> np.ndarray | None:
-        """True at the output pixels of ``rows`` (all columns) whose pitch cell touches an invalid input
-        pixel; None when the band has no invalid pixel there."""
-        if not self.masked:
-            return None
-        (ry0, ry1), (cx0, cx1) = _cells(sim.ys, *rows), _cells(sim.xs, 0, sim.output_shape[1])
-        a, b = int(ry0[0]), int(ry1[-1])
-        valid = self.valid(Window(a, 0, b - a, self.shape_px[1]))
-        if valid is None or valid.all():
-            return None
-        cs = np.zeros((b - a + 1, valid.shape[1]), dtype=np.int32)
-        np.cumsum(~valid, axis=0, out=cs[1:])
-        by_rows = cs[ry1 - a] - cs[ry0 - a]  # invalid pixels per output row's cell, per input column
-        cs = np.zeros((by_rows.shape[0], by_rows.shape[1] + 1), dtype=np.int32)
-        np.cumsum(by_rows, axis=1, out=cs[:, 1:])
-        return (cs[:, cx1] - cs[:, cx0]) > 0
+        """See :func:`invalid_cells`."""
+        return invalid_cells(self, sim, rows) if self.masked else None
 
     def __getstate__(self) -> dict:
         return {k: v for k, v in self.__dict__.items() if k != "_reader"} | {"_reader": None}
@@ -138,6 +125,22 @@ class RasterBandSource:
         if self._reader is not None:
             self._reader.close()
             self._reader = None
+
+
+def invalid_cells(src, sim, rows: tuple[int, int]) -> np.ndarray | None:
+    """True at the output pixels of ``rows`` (all columns) whose pitch cell touches an invalid pixel of
+    ``src`` (anything with ``shape_px`` and ``valid(window) -> bool array or None``); None when there is none."""
+    (ry0, ry1), (cx0, cx1) = _cells(sim.ys, *rows), _cells(sim.xs, 0, sim.output_shape[1])
+    a, b = int(ry0[0]), int(ry1[-1])
+    valid = src.valid(Window(a, 0, b - a, src.shape_px[1]))
+    if valid is None or valid.all():
+        return None
+    cs = np.zeros((b - a + 1, valid.shape[1]), dtype=np.int32)
+    np.cumsum(~valid, axis=0, out=cs[1:])
+    by_rows = cs[ry1 - a] - cs[ry0 - a]  # invalid pixels per output row's cell, per input column
+    cs = np.zeros((by_rows.shape[0], by_rows.shape[1] + 1), dtype=np.int32)
+    np.cumsum(by_rows, axis=1, out=cs[:, 1:])
+    return (cs[:, cx1] - cs[:, cx0]) > 0
 
 
 def _cells(axis, i0: int, i1: int) -> tuple[np.ndarray, np.ndarray]:
@@ -180,7 +183,10 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
     from satchain._imagemeta import _gdal_meta
     from satchain.raster import open_raster
 
-    with open_raster(path, band=band) as r:
+    with open_raster(path) as r:
+        if band is not None and (isinstance(band, bool) or not isinstance(band, int) or not 1 <= band <= r.count):
+            raise ConfigError(f"{name('band')} {band!r}: must be an integer in [1, {r.count}] ({str(path)!r} has "
+                              f"{r.count} data band{'s' * (r.count > 1)})")  # fmt: skip
         meta = _gdal_meta(r)
         if scene_pixel_m is None and r.pixel_m is None and isinstance(meta.get("pixel_m"), float):
             pixel_m = meta["pixel_m"]  # satchain's description or resolution tags of an ungeoreferenced TIFF
@@ -319,7 +325,7 @@ def simulate_raster(
             f"{name('scene_pixel_m')}"
         )
     bands = [band] if band is not None else list(range(1, plan.count + 1))
-    if system.bands and band is None and len(system.bands) != plan.count:
+    if system.bands and len(system.bands) != plan.count:
         raise ConfigError(f"{name('input')} {str(path)!r} has {plan.count} bands but the system {system.name!r} "
                           f"describes {len(system.bands)} ([[bands]]); they must match")  # fmt: skip
     systems = [system.for_band(b - 1) for b in bands]
