@@ -64,6 +64,7 @@ from satchain.measure._common import (
     valid_mask,
     zero_fill_mask,
 )
+from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
     check_model,
@@ -77,7 +78,6 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
-from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_locate import curvature, locate_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
