@@ -268,9 +268,7 @@ def measure_edge(
     check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma, okw)
     f_top = oversampled_f_max(f_max, axis, os_ / 4.0)
     f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_top, w, noise_target, debias), flags)
-    flags += _curvature_flags(
-        work, (rows, own, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw
-    )
+    flags += _curvature_flags(work, (rows, own, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw)
     flags += critical_angle_flags(slope, len(rows), mode, w)
     flags += _cnr_flags(contrast, sigma)
     f, mtf, mtf_sig, scale = on_axis(f, mtf, mtf_sig, slope, axis, f_max)
