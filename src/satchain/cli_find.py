@@ -2,8 +2,9 @@
 
 Registered on the ``measure`` sub-app in :mod:`satchain.cli_measure`.  Prints a table of
 the edges used, the combined MTF at Nyquist with its 1-sigma, the CEOS-style table (MTF at f / f_s = 0, 0.02,
-..., 0.5 and 0.25; with a ground pixel size, also in cy/m), flags and the rejected segments counted by reason; ``--json`` prints JSON, ``--csv`` the CEOS table
-as CSV; ``-o DIR`` writes ``find.json``, ``find_ceos.csv`` and ``find.png`` there (atomically).
+..., 0.5 and 0.25; with a ground pixel size, also in cy/m), flags and the rejected segments counted by reason;
+``--json`` prints JSON, ``--csv`` the CEOS table as CSV; ``-o DIR`` writes ``find.json``, ``find_ceos.csv`` and
+``find.png`` there (atomically).
 """
 
 from __future__ import annotations

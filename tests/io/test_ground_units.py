@@ -99,7 +99,8 @@ def test_star_and_bars_carry_ground_units(tmp_path):
     x = np.arange(96)
     grating = np.where((x // 4) % 2 == 0, 800.0, 2400.0)[None, :] + np.zeros((40, 1))  # period 8 px, bars along y
     bars = _write(tmp_path / "bars.tif", grating)
-    args = ["bars", str(bars), "--periods-px", "8", "--bars-per-group", "0", "--roi", "2,0,94,40", "--levels", "800,2400"]
+    args = ["bars", str(bars), "--periods-px", "8", "--bars-per-group", "0", "--roi", "2,0,94,40"]
+    args += ["--levels", "800,2400"]
     d = _json(args)
     assert d["pixel_m"] == PIXEL_M
     assert d["f_cy_per_m_ground"] == pytest.approx([0.125 / PIXEL_M])  # 1/8 cy/px = 0.25 cy/m

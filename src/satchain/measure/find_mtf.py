@@ -18,9 +18,9 @@ The edges are tilted a few degrees, so each measures the MTF along its normal, r
 ``MTF_dir^(cos^2 t) MTF_other^(sin^2 t)``; where both directions are measured, ``mean(sin^2 t) |MTF_ACT -
 MTF_ALT|`` is added to the sigma as a systematic (it is not corrected, as MTF Mapper does not).
 
-CEOS-style table: the MTF at normalised frequencies f / f_s = 0, 0.02, ..., 0.5 (Nyquist), with the
-row at 0.25 (half Nyquist) that CEOS reports, and each row's ground frequency (cy/m) where the pixel size is known.  The slanted edge
-also measures the pre-sampling MTF beyond Nyquist (to 1.0 cy/px), but there the image itself is aliased and
+CEOS-style table: the MTF at normalised frequencies f / f_s = 0, 0.02, ..., 0.5 (Nyquist), with the row at 0.25
+(half Nyquist) that CEOS reports, and each row's ground frequency (cy/m) where the pixel size is known.  The slanted
+edge also measures the pre-sampling MTF beyond Nyquist (to 1.0 cy/px), but there the image itself is aliased and
 the noise grows; ``f_max`` = 1.0 extends the table where wanted.
 """
 
@@ -444,10 +444,10 @@ def measure_found_edges(
 def ceos_table(
     result: FindResult, *, step: float = 0.02, f_max: float = 0.5, pixel_m: float | None = None
 ) -> dict[str, np.ndarray]:
-    """MTF at normalised frequencies f / f_s = 0, step, ..., f_max and 0.25 (half Nyquist): columns ``f_over_fs``, ``mtf_act``,
-    ``mtf_act_sigma``, ``mtf_alt``, ``mtf_alt_sigma`` (NaN where a direction is missing or a value is
-    outside [0, 1.2]); with a ground pixel size (``pixel_m``, else the result's) also ``f_cy_per_m_ground`` =
-    (f / f_s) / pixel_m, the ground frequency of each row.
+    """MTF at normalised frequencies f / f_s = 0, step, ..., f_max and 0.25 (half Nyquist): columns
+    ``f_over_fs``, ``mtf_act``, ``mtf_act_sigma``, ``mtf_alt``, ``mtf_alt_sigma`` (NaN where a direction is
+    missing or a value is outside [0, 1.2]); with a ground pixel size (``pixel_m``, else the result's) also
+    ``f_cy_per_m_ground`` = (f / f_s) / pixel_m, the ground frequency of each row.
 
     ``f_s`` is the sampling frequency (1 cy/px), so 0.5 is Nyquist; ``f_max`` in (0, 1].  The frequencies are
     on the result's ``frequency_axis`` (along the edge normal, or the image row / column).
