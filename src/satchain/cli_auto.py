@@ -21,12 +21,13 @@ from satchain.cli_options import (
     PixelOpt,
     ThresholdOpt,
     TruthRequiredOpt,
+    ground_fields,
     load_image,
     parse_full_scale,
     parse_origin,
     read_truth,
 )
-from satchain.cli_output import emit, fmt, kv_table, wide_console
+from satchain.cli_output import emit, fmt, kv_table, print_ground, wide_console
 
 __all__ = ["auto"]
 
@@ -50,7 +51,7 @@ def _edges_table(d: dict) -> Table:
     from satchain.report.kinds import EDGES
 
     t = Table(title=f"slanted edges (pixel {d['pixel_m']:g} m)")
-    for col in ("id", "dir", "angle", "truth", "MTF@Nyq", "MTF50 cy/px", "RER", "H"):
+    for col in ("id", "dir", "angle", "truth", "MTF@Nyq", "MTF50 cy/px", "MTF50 cy/m", "RER", "H"):
         t.add_column(col, justify="right")
     for e in d[EDGES.key]:
         t.add_row(
@@ -60,6 +61,7 @@ def _edges_table(d: dict) -> Table:
             f"{e['angle_deg_truth']:.3f}",
             fmt(e["mtf_at_nyquist"]),
             fmt(e["mtf50_cy_per_px"]),
+            fmt(None if e["mtf50_cy_per_px"] is None else e["mtf50_cy_per_px"] / d["pixel_m"]),
             fmt(e["rer"]),
             fmt(e["overshoot"]),
         )
@@ -84,8 +86,10 @@ def _auto_tables(d: dict) -> None:
         rows = [
             ("resolution (line width, m)", w["resolution_m"]),
             ("frequency (cy/px)", w["resolved_f_cy_per_px"]),
+            ("frequency (cy/m ground)", w["resolved_f_cy_per_m_ground"]),
         ]
         c.print(kv_table(f"hyperbolic wedge {w['id']} ({w['direction']}, threshold {w['threshold']:.0%})", rows))
+    print_ground(d["pixel_m"])
     if d["skipped"]:
         t = Table(title="not measured")
         for col in ("id", "kind", "reason"):
@@ -118,7 +122,7 @@ def auto(
     origin = parse_origin(origin_m, meta)
     fs = parse_full_scale(full_scale, data, meta)
     res = measure_auto(data, truth_dict, pixel_m=p, origin_m=origin, wedge_threshold=threshold, full_scale=fs)
-    payload = {"image": str(image), "truth": str(truth), **res.to_dict()}
+    payload = {"image": str(image), "truth": str(truth), **ground_fields(res.pixel_m, meta), **res.to_dict()}
     emit(payload, as_json, out, "auto", lambda d: _auto_plots(res, d), lambda: _auto_tables(payload))
     if not res.items:  # a run that measured nothing is not a success (exit status 2, the reasons on stderr)
         from satchain._safety import nothing_measured

@@ -14,6 +14,7 @@ option name means one thing (one help text) across the commands.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 from typing import Annotated
@@ -29,6 +30,7 @@ __all__ = [
     "BandOpt",
     "BandsOpt",
     "FitDegreeOpt",
+    "FrequencyAxisOpt",
     "FullScaleOpt",
     "ImageArg",
     "JsonOpt",
@@ -41,7 +43,10 @@ __all__ = [
     "TruthOpt",
     "TruthRequiredOpt",
     "load_image",
+    "ground_fields",
+    "measuring",
     "parse_fit_degree",
+    "parse_frequency_axis",
     "parse_full_scale",
     "parse_valid",
     "parse_origin",
@@ -103,6 +108,16 @@ NodataOpt = Annotated[
     ),
 ]
 
+FrequencyAxisOpt = Annotated[
+    str,
+    typer.Option(
+        "--frequency-axis",
+        help="normal: the MTF along each edge's normal (ISO 12233); row: along the image row (ACT) or column "
+        "(ALT), MTF_Estimator's convention, whose frequencies are cos(tilt) x the normal ones (4.3 %% lower at "
+        "16.8 deg)",
+    ),
+]
+
 #: Every shared option, by its long name (``--truth`` has two forms: required and optional).
 SHARED_OPTIONS: dict[str, tuple] = {
     "--roi": (RoiOpt,),
@@ -116,6 +131,7 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--full-scale": (FullScaleOpt,),
     "--nodata": (NodataOpt,),
     "--band": (BandOpt, BandsOpt),
+    "--frequency-axis": (FrequencyAxisOpt,),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing
@@ -144,6 +160,22 @@ def parse_fit_degree(text: str) -> str:
     value = text.strip().lower()
     if value not in ("auto", "1", "2", "3"):
         raise ConfigError(f"--fit-degree = {text!r}: must be auto, 1, 2 or 3")
+    return value
+
+
+def parse_frequency_axis(text: str) -> str:
+    """``--frequency-axis``: ``normal`` or ``row`` (case and spaces ignored).
+
+    Examples
+    --------
+    >>> parse_frequency_axis(" Row ")
+    'row'
+    """
+    from satchain.measure._edge_axis import FREQUENCY_AXES
+
+    value = str(text).strip().lower()
+    if value not in FREQUENCY_AXES:
+        raise ConfigError(f"--frequency-axis = {text!r}: must be one of {', '.join(FREQUENCY_AXES)}")
     return value
 
 
@@ -188,9 +220,10 @@ def read_truth(path: Path) -> dict:
         raise ConfigError(f"--truth = {str(path)!r}: not JSON: {exc}") from None
 
 
-def parse_valid(image, nodata: float | None, meta: dict) -> np.ndarray | None:
+def parse_valid(image, nodata: float | None, meta: dict, path: Path | None = None) -> np.ndarray | None:
     """The mask of the pixels to measure (None: all): ``--nodata`` (else the file's ``nodata``) and the
     file's own mask (``meta["valid"]``, a boolean array of the image's shape, where the reader gives one).
+    A mask that excludes every pixel is refused, naming ``path`` (the IMAGE) where given.
 
     Examples
     --------
@@ -202,7 +235,7 @@ def parse_valid(image, nodata: float | None, meta: dict) -> np.ndarray | None:
     from satchain.measure._common import valid_mask
 
     nd = nodata if nodata is not None else meta.get("nodata")
-    return valid_mask(image, meta.get("valid"), nd, name="IMAGE")
+    return valid_mask(image, meta.get("valid"), nd, name="IMAGE" if path is None else f"IMAGE {str(path)!r}")
 
 
 def load_image(path: Path, pixel_m: float | None, band: int | None = None):
@@ -219,9 +252,50 @@ def load_image(path: Path, pixel_m: float | None, band: int | None = None):
         meta = {**meta, "valid": valid}
     if pixel_m is not None:
         pixel_m = check_positive("--pixel-m", pixel_m)
+    elif meta.get("pixel_m_xy"):  # not square: no one ground frequency per cy/px; said, not guessed
+        sx, sy = meta["pixel_m_xy"]
+        meta = {**meta, "pixel_m_note": f"IMAGE {str(path)!r}: its pixels are {sx:.6g} x {sy:.6g} m (not square): "
+                "no ground frequency is given (cy/px only); give --pixel-m for cy/m"}  # fmt: skip
     elif meta.get("pixel_m") is not None:
         pixel_m = float(meta["pixel_m"])
     elif "invalid_pixel_m" in meta:  # a bad pixel size in the file is refused, never silently dropped
         raise ConfigError(f"IMAGE {str(path)!r}: its pixel size {meta['invalid_pixel_m']!r} is not a ground pixel "
                           "size in (0, 1e6] m; give --pixel-m")  # fmt: skip
+    else:
+        meta = {**meta, "pixel_m_note": f"IMAGE {str(path)!r} states no ground pixel size (no metric georeference): "
+                "frequencies in cy/px only; give --pixel-m for cy/m"}  # fmt: skip
     return image, pixel_m, meta
+
+
+def ground_fields(pixel_m: float | None, meta: dict) -> dict:
+    """The ground units every measurement result carries: ``pixel_m`` and the Nyquist frequency in cy/m on
+    the ground, or ``pixel_m`` None and ``pixel_m_note`` saying why (no metric georeference, non-square pixels).
+
+    Examples
+    --------
+    >>> ground_fields(0.5, {})
+    {'pixel_m': 0.5, 'nyquist_cy_per_m_ground': 1.0}
+    >>> ground_fields(None, {"pixel_m_note": "no georeference"})
+    {'pixel_m': None, 'pixel_m_note': 'no georeference'}
+    """
+    if pixel_m:
+        return {"pixel_m": pixel_m, "nyquist_cy_per_m_ground": 0.5 / pixel_m}
+    return {"pixel_m": None, "pixel_m_note": meta.get("pixel_m_note", "no ground pixel size: cy/px only")}
+
+
+@contextlib.contextmanager
+def measuring(path: Path, valid: np.ndarray | None):
+    """Name IMAGE in a measurement's refusal, and the share of its pixels the mask or nodata excludes where
+    one does (a mask that leaves no usable edge is the file's problem, not the tool's): one line, exit 2."""
+    from satchain.errors import InputError
+
+    try:
+        yield
+    except InputError as exc:
+        msg = str(exc)
+        for prefix in ("image: ", "IMAGE: ", "image "):
+            msg = msg.removeprefix(prefix)
+        if valid is not None and not np.all(valid):
+            msg += (f" (the mask / nodata excludes {100 * (1 - np.count_nonzero(valid) / valid.size):.0f} % of "
+                    "the pixels)")  # fmt: skip
+        raise InputError(f"IMAGE {str(path)!r}: {msg}") from None

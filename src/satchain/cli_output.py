@@ -12,7 +12,18 @@ from rich.table import Table
 
 from satchain.errors import SatchainIOError
 
-__all__ = ["curve_table", "emit", "fmt", "kv_table", "one_plot", "pm", "print_flags", "wide_console"]
+__all__ = [
+    "axis_words",
+    "curve_table",
+    "emit",
+    "fmt",
+    "kv_table",
+    "one_plot",
+    "pm",
+    "print_flags",
+    "print_ground",
+    "wide_console",
+]
 
 
 def wide_console() -> Console:
@@ -111,3 +122,28 @@ def print_flags(flags) -> None:
     """Quality flags of a star/bars/wedge measurement, one yellow line each."""
     for f in flags:
         wide_console().print(f"[yellow]flag: {f}[/]", highlight=False)
+
+
+def print_ground(pixel_m: float | None, note: str | None = None) -> None:
+    """One line: the ground pixel size and Nyquist in cy/m, or why frequencies are in cy/px only."""
+    if pixel_m:
+        text = f"ground: pixel {pixel_m:.6g} m, Nyquist {0.5 / pixel_m:.6g} cy/m (cy/m = cy/px / {pixel_m:.6g})"
+    else:
+        text = f"ground: not given: {note or 'no ground pixel size'}"
+    wide_console().print(text, highlight=False, markup=False)
+
+
+def axis_words(axis: str, scale: float, angle_deg: float | None = None) -> str:
+    """The frequency axis in words, with the factor of MTF_Estimator's row axis.
+
+    Examples
+    --------
+    >>> axis_words("row", 0.9573, 16.8)
+    'image row/column (MTF_Estimator): f_row = 0.9573 f_normal = cos(16.80 deg) f_normal'
+    >>> axis_words("normal", 1.0)
+    'edge normal (ISO 12233)'
+    """
+    if axis == "normal":
+        return "edge normal (ISO 12233)"
+    tilt = "" if angle_deg is None else f" = cos({min(abs(angle_deg), 90 - abs(angle_deg)):.2f} deg) f_normal"
+    return f"image row/column (MTF_Estimator): f_row = {scale:.4f} f_normal{tilt}"

@@ -18,6 +18,7 @@ from satchain._safety import check_dir_outputs, check_star_radius
 from satchain.cli_options import (
     BandOpt,
     FitDegreeOpt,
+    FrequencyAxisOpt,
     FullScaleOpt,
     ImageArg,
     JsonOpt,
@@ -28,15 +29,28 @@ from satchain.cli_options import (
     RoiOpt,
     ThresholdOpt,
     TruthOpt,
+    ground_fields,
     load_image,
+    measuring,
     parse_fit_degree,
+    parse_frequency_axis,
     parse_full_scale,
     parse_origin,
     parse_roi,
     parse_valid,
     read_truth,
 )
-from satchain.cli_output import curve_table, emit, kv_table, one_plot, pm, print_flags, wide_console
+from satchain.cli_output import (
+    axis_words,
+    curve_table,
+    emit,
+    kv_table,
+    one_plot,
+    pm,
+    print_flags,
+    print_ground,
+    wide_console,
+)
 from satchain.errors import ConfigError
 
 __all__ = ["bars", "edge", "star", "wedge"]
@@ -44,7 +58,7 @@ __all__ = ["bars", "edge", "star", "wedge"]
 # ------------------------------------------------------------------------------------------------------ edge
 
 
-def _edge_tables(r, name: str, p: float | None) -> None:
+def _edge_tables(r, name: str, p: float | None, note: str | None = None) -> None:
     c = wide_console()
     rows = [
         ("edge angle (deg from y/ALT)", r.angle_deg),
@@ -64,11 +78,17 @@ def _edge_tables(r, name: str, p: float | None) -> None:
     ]
     if p and r.mtf50_cy_per_px is not None:
         rows.insert(4, ("MTF50 (cy/m ground)", r.mtf50_cy_per_px / p))
+    rows.insert(0, ("frequency axis", axis_words(r.frequency_axis, r.frequency_scale, r.angle_deg)))
     c.print(kv_table(f"slanted edge: {name}", rows))
+    print_ground(p, note)
     sig = r.mtf_sigma if r.mtf_sigma is not None else 0 * r.mtf
-    c.print(curve_table("MTF along the edge normal", r.f_cy_per_px, {"MTF": r.mtf, "1 sigma": sig}, p))
+    title = "MTF along the edge normal" if r.frequency_axis == "normal" else f"MTF along the image {_ROW[r.direction]}"
+    c.print(curve_table(title, r.f_cy_per_px, {"MTF": r.mtf, "1 sigma": sig}, p))
     for w in r.warnings:
         print_warning(w, c)
+
+
+_ROW = {"ACT": "row", "ALT": "column"}
 
 
 @handle_errors
@@ -82,12 +102,16 @@ def edge(
     fit_degree: FitDegreeOpt = "auto",
     full_scale: FullScaleOpt = None,
     nodata: NodataOpt = None,
+    frequency_axis: FrequencyAxisOpt = "normal",
 ) -> None:
     """Slanted-edge MTF (ISO 12233 e-SFR, improved): MTF +- 1 sigma, MTF at Nyquist, MTF50, RER, overshoot.
 
     The region must hold one straight (or gently curved) edge; stripes, corners, no edge and clipped
     plateaus are refused (exit 2).  Quality flags (near-critical angle, curvature, illumination gradient,
     low contrast-to-noise, clipping) are printed and listed in the JSON (``flags``, ``warnings``).
+    With a metric pixel size (``--pixel-m`` or the raster's projected transform) every frequency is also given
+    in cy/m on the ground.  ``--frequency-axis row`` gives the MTF on MTF_Estimator's axis (along the image
+    row / column: ``f_row = cos(tilt) f_normal``, the factor printed and in the JSON as ``frequency_scale``).
     """
     from satchain.measure.edge import measure_edge
     from satchain.report.measure_plots import plot_edge
@@ -96,21 +120,22 @@ def edge(
     data, p, meta = load_image(image, pixel_m, band)
     region = parse_roi("--roi", roi)
     fs = parse_full_scale(full_scale, data, meta)
-    r = measure_edge(
-        data, roi=region, pixel_m=p, fit_degree=parse_fit_degree(fit_degree), full_scale=fs,
-        valid=parse_valid(data, nodata, meta),
-    )  # fmt: skip
-    payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
+    axis, deg = parse_frequency_axis(frequency_axis), parse_fit_degree(fit_degree)
+    valid = parse_valid(data, nodata, meta, image)
+    with measuring(image, valid):
+        r = measure_edge(data, roi=region, pixel_m=p, fit_degree=deg, full_scale=fs, valid=valid, frequency_axis=axis)
+    ground = ground_fields(p, meta)
+    payload = {"image": str(image), "roi": region, **ground, **r.to_dict()}
     emit(
         payload, as_json, out, "edge", lambda d: one_plot(plot_edge, r, d / "edge.png"),
-        lambda: _edge_tables(r, image.name, p),
+        lambda: _edge_tables(r, image.name, p, ground.get("pixel_m_note")),
     )  # fmt: skip
 
 
 # ------------------------------------------------------------------------------------------------------ star
 
 
-def _star_tables(r, name: str, region, p: float | None) -> None:
+def _star_tables(r, name: str, region, p: float | None, note: str | None = None) -> None:
     from satchain.measure.star import STAR_DIRECTIONS
 
     con = wide_console()
@@ -128,6 +153,7 @@ def _star_tables(r, name: str, region, p: float | None) -> None:
     con.print(kv_table(f"Siemens star: {name}", rows))
     cols = {**r.mtf, "± (all)": r.mtf_all_std}
     con.print(curve_table("MTF per direction (1-sigma of the all-angle curve)", r.f_cy_per_px, cols, p, 0.05))
+    print_ground(p, note)
     print_flags(r.flags)
 
 
@@ -168,17 +194,17 @@ def star(
         data, cycles=cycles, center=c, radius_px=radius, roi=region, input_modulation=input_modulation,
         pixel_m=p, refine_center=refine_center, full_scale=parse_full_scale(full_scale, data, meta),
     )  # fmt: skip
-    payload = {"image": str(image), "roi": region, "pixel_m": p, **r.to_dict()}
+    payload = {"image": str(image), "roi": region, **ground_fields(p, meta), **r.to_dict()}
     emit(
         payload, as_json, out, "star", lambda d: one_plot(plot_star, r, d / "star.png"),
-        lambda: _star_tables(r, image.name, region, p),
+        lambda: _star_tables(r, image.name, region, p, payload.get("pixel_m_note")),
     )  # fmt: skip
 
 
 # ------------------------------------------------------------------------------------------------------ bars
 
 
-def _bars_tables(r, name: str, p: float | None) -> None:
+def _bars_tables(r, name: str, p: float | None, note: str | None = None) -> None:
     t = Table(title=f"bar target ({r.direction}): {name}")
     ground_col = ["f cy/m ground"] if p else []
     for col in ("period px", "f cy/px", *ground_col, "CTF ± 1σ", "of which correction",
@@ -207,6 +233,7 @@ def _bars_tables(r, name: str, p: float | None) -> None:
     )
     for k, reason in r.refused:
         wide_console().print(f"group {k} (period {r.periods_px[k]:.3g} px) refused: {reason}", highlight=False)
+    print_ground(p, note)
     print_flags(r.flags)
 
 
@@ -272,10 +299,10 @@ def bars(
         data, periods_px=periods, group_rois=rois, direction=direction.upper(), levels=lv, pixel_m=p,
         bars_per_group=bars_per_group or None, full_scale=parse_full_scale(full_scale, data, meta),
     )  # fmt: skip
-    payload = {"image": str(image), "group_rois": rois, "pixel_m": p, **r.to_dict()}
+    payload = {"image": str(image), "group_rois": rois, **ground_fields(p, meta), **r.to_dict()}
     emit(
         payload, as_json, out, "bars", lambda d: one_plot(plot_bars, r, d / "bars.png"),
-        lambda: _bars_tables(r, image.name, p),
+        lambda: _bars_tables(r, image.name, p, payload.get("pixel_m_note")),
     )  # fmt: skip
 
 
@@ -332,10 +359,10 @@ def _wedge_from_widths(data, roi, start_px, end_px, profile: str, direction: str
         data, line_width_px=lw, direction=direction.upper(), roi=region, threshold=threshold, pixel_m=p,
         full_scale=full_scale,
     )  # fmt: skip
-    return r, {"roi": region, "pixel_m": p, "profile": profile, **r.to_dict()}
+    return r, {"roi": region, "profile": profile, **r.to_dict()}
 
 
-def _wedge_tables(r, name: str) -> None:
+def _wedge_tables(r, name: str, p: float | None = None, note: str | None = None) -> None:
     rows = [
         ("direction (resolution)", r.direction),
         ("threshold", r.threshold),
@@ -345,6 +372,7 @@ def _wedge_tables(r, name: str) -> None:
         ("resolved frequency (cy/m ground)", r.resolved_f_cy_per_m_ground),
     ]
     wide_console().print(kv_table(f"hyperbolic wedge: {name}", rows))
+    print_ground(p, note)
     print_flags(r.flags)
 
 
@@ -390,13 +418,13 @@ def wedge(
         if roi is not None or line_width_start_px is not None or line_width_end_px is not None:
             raise ConfigError("--truth: the geometry comes from the truth file; drop --roi and --line-width-*")
         r, summary, p = _wedge_from_truth(data, truth, item_id, p, parse_origin(origin_m, meta), threshold, fs)
-        payload = {"image": str(image), "truth": str(truth), "pixel_m": p, **summary}
+        payload = {"image": str(image), "truth": str(truth), **ground_fields(p, meta), **summary}
     else:
         r, summary = _wedge_from_widths(
             data, roi, line_width_start_px, line_width_end_px, profile, direction, threshold, p, fs
         )
-        payload = {"image": str(image), **summary}
+        payload = {"image": str(image), "roi": summary.pop("roi"), **ground_fields(p, meta), **summary}
     emit(
         payload, as_json, out, "wedge", lambda d: one_plot(plot_wedge, r, d / "wedge.png", pixel_m=p),
-        lambda: _wedge_tables(r, image.name),
+        lambda: _wedge_tables(r, image.name, p, payload.get("pixel_m_note")),
     )  # fmt: skip

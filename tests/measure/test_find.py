@@ -79,8 +79,9 @@ def test_chart_combined_mtf_at_nyquist_matches_truth(chart_result):
 
 def test_ceos_table_steps_and_values(chart_result):
     t = ceos_table(chart_result)
-    assert t["f_over_fs"].size == 26
-    assert np.allclose(np.diff(t["f_over_fs"]), 0.02)
+    assert t["f_over_fs"].size == 27  # 0, 0.02, ..., 0.5 and the CEOS row 0.25 (half Nyquist)
+    assert np.allclose(np.diff(t["f_over_fs"][t["f_over_fs"] != 0.25]), 0.02)
+    assert 0.25 in t["f_over_fs"]
     assert t["f_over_fs"][-1] == pytest.approx(0.5)
     assert t["mtf_act"][0] == pytest.approx(1.0) and t["mtf_alt"][0] == pytest.approx(1.0)
     assert np.all(np.abs(t["mtf_act"] - true_mtf(t["f_over_fs"], SX)) < 0.03)
@@ -88,7 +89,7 @@ def test_ceos_table_steps_and_values(chart_result):
     assert np.all(t["mtf_act_sigma"][1:] > 0) and np.all(t["mtf_alt_sigma"][1:] > 0)
     assert t["mtf_act_sigma"][0] == 0 and t["mtf_alt_sigma"][0] == 0  # MTF(0) = 1 by normalisation
     t1 = ceos_table(chart_result, f_max=1.0)
-    assert t1["f_over_fs"].size == 51
+    assert t1["f_over_fs"].size == 52
 
 
 def test_json_round_trip(chart_result):
@@ -189,7 +190,7 @@ def test_cli_find_writes_json_csv_png(chart, tmp_path):
     assert {p.name for p in out.iterdir()} == {"find.json", "find_ceos.csv", "find.png"}
     rows = (out / "find_ceos.csv").read_text().splitlines()
     assert rows[0] == "f_over_fs,mtf_act,mtf_act_sigma,mtf_alt,mtf_alt_sigma"
-    assert len(rows) == 27
+    assert len(rows) == 28 and any(r.startswith("0.25,") for r in rows)
     last = [float(v) for v in rows[-1].split(",")]
     assert last[0] == 0.5 and abs(last[1] - true_mtf(0.5, SX)) < 0.02 and abs(last[3] - true_mtf(0.5, SY)) < 0.02
 

@@ -64,6 +64,7 @@ from satchain.measure._common import (
     valid_mask,
     zero_fill_mask,
 )
+from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
     check_model,
@@ -77,8 +78,10 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
-from satchain.measure._edge_locate import MIN_ROWS, curvature, locate_edge, project
+from satchain.measure._edge_locate import curvature, locate_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
+from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
+from satchain.measure._edge_mtf import trim_ends as _trim_ends
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
 
 __all__ = ["EdgeResult", "measure_edge", "DEGENERATE_ANGLES_DEG"]
@@ -95,7 +98,7 @@ _CURVE_SCREEN = 0.3  # ... computed exactly where the estimate from the position
 
 @dataclass(frozen=True)
 class EdgeResult(ResultMixin):
-    """Result of :func:`measure_edge`; frequencies are along the edge normal.
+    """Result of :func:`measure_edge`; frequencies are along the edge normal (``frequency_axis``).
 
     ``mtf_at_nyquist_sigma`` is the predicted 1-sigma noise of ``mtf_at_nyquist``
     (propagated from the measured pixel noise), ``mtf_sigma`` the same at every frequency; ``noise_sigma`` is
@@ -108,6 +111,8 @@ class EdgeResult(ResultMixin):
     ``illumination_gradient_per_px`` the relative change of the step per px along the normal (removed).
     ``edge_point_xy`` is a point (x = column, y = row, px, in the image, ``roi`` offset included) on the fitted
     edge at its middle line: with ``angle_deg`` it places the edge line (to join collinear halves).
+    ``frequency_axis`` is the axis of every frequency (``"normal"`` or ``"row"``, see :func:`measure_edge`)
+    and ``frequency_scale`` = f_row / f_normal (``cos t``; 1 on the normal axis).
     """
 
     f_cy_per_px: np.ndarray
@@ -137,6 +142,8 @@ class EdgeResult(ResultMixin):
     bin_width_px: float = 0.25
     illumination_gradient_per_px: float = 0.0
     edge_point_xy: tuple[float, float] | None = None
+    frequency_axis: str = "normal"
+    frequency_scale: float = 1.0
 
     @property
     def edge_angle_deg(self) -> float:
@@ -166,6 +173,8 @@ def measure_edge(
     debias: bool = False,
     valid=None,
     nodata: float | None = None,
+    frequency_axis: str = "normal",
+    edge_line=None,
 ) -> EdgeResult:
     """Measure the MTF (with its noise), ESF, LSF, RER and overshoot from a slanted edge.
 
@@ -209,6 +218,18 @@ def measure_edge(
         zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``).
     nodata : float, optional
         Pixels equal to this value are excluded as well (NaN: NaN pixels).
+    frequency_axis : {"normal", "row"}
+        The frequency axis of the MTF.  ``"normal"`` (default, ISO 12233): along the edge normal.  ``"row"``:
+        along the image row (ACT) or column (ALT), MTF_Estimator's (FidMTF's) convention, which projects the
+        pixels on the row: for an edge tilted by ``t`` from the nearest pixel axis ``MTF_row(f) =
+        MTF_normal(f / cos t)``, i.e. the normal axis scaled by ``cos t`` (``frequency_scale``; 0.957 at the
+        Baotou target's 16.8 deg: the row MTF at Nyquist is the normal MTF at 0.522 cy/px).  Every frequency
+        of the result (``f_cy_per_px``, ground, focal plane, MTF at Nyquist, MTF50) is then on the row axis;
+        the ESF, LSF, RER and overshoot stay along the normal.  See :mod:`satchain.measure._edge_axis`.
+    edge_line : (x, y, angle_deg), optional
+        A known edge line (a point in the image, x = column, y = row, ``roi`` offset included, and the angle
+        as ``angle_deg``), e.g. the joint line of two collinear halves of one target edge: the ESF is projected
+        on it instead of the line fitted in the region (which still chooses the lines used).
 
     Returns
     -------
@@ -232,21 +253,40 @@ def measure_edge(
     os_, f_max, deg, full_scale = _check_args(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
+    axis = check_axis(frequency_axis)
     data, ok, flags = _region(image, roi, valid, nodata)
     flags += check_saturation(data, full_scale, ok)
     work, okw, direction, transposed, sign = _orient(data, ok)
+    line = None if edge_line is None else line_coef(edge_line, roi, transposed)
     q_step = quantisation_step(data if ok is None else data[ok])
-    coef, rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(work, deg, os_, q_step, okw)
+    (coef, own), rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
+        work, deg, os_, q_step, okw, line
+    )
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
     check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma, okw)
-    f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_max, w, noise_target, debias), flags)
-    flags += _curvature_flags(
-        work, (rows, coef, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw
-    )
+    f_top = oversampled_f_max(f_max, axis, os_ / 4.0)
+    f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_top, w, noise_target, debias), flags)
+    flags += _curvature_flags(work, (rows, own, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw)
     flags += critical_angle_flags(slope, len(rows), mode, w)
     flags += _cnr_flags(contrast, sigma)
+    f, mtf, mtf_sig, scale = on_axis(f, mtf, mtf_sig, slope, axis, f_max)
+    return _result(
+        (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
+        (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m),
+    )  # fmt: skip
+
+
+def _result(curve, esf, fit, stats, scales) -> EdgeResult:
+    """The :class:`EdgeResult`: ``curve = (f, mtf, sigma, axis, scale)``, ``esf = (x, esf)``, ``fit = (coef,
+    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``
+    and ``scales = (pixel_m, pitch_m)``."""
+    f, mtf, mtf_sig, axis, scale = curve
+    x, esf_n = esf
+    coef, rows, slope, transposed, roi = fit
+    contrast, sigma, half_w, w, grad, direction, flags = stats
+    pixel_m, pitch_m = scales
     rer, overshoot = _edge_metrics(x, esf_n)
     return EdgeResult(
         f_cy_per_px=f,
@@ -260,7 +300,7 @@ def measure_edge(
         mtf50_cy_per_px=first_crossing(f, mtf, 0.5),
         rer=rer,
         overshoot=overshoot,
-        contrast=float(contrast) * sign,
+        contrast=float(contrast),
         noise_sigma=float(sigma),
         window_half_width_px=float(half_w),
         n_lines=len(rows),
@@ -272,10 +312,12 @@ def measure_edge(
         flags=tuple(c for c, _ in flags),
         fit_degree=len(coef) - 1,
         curvature_per_px=curvature(coef, rows),
-        cnr=float(contrast / sigma) if sigma > 0 else float("inf"),
+        cnr=float(abs(contrast) / sigma) if sigma > 0 else float("inf"),
         bin_width_px=float(w),
         illumination_gradient_per_px=float(grad),
         edge_point_xy=_edge_point(coef, rows, transposed, roi),
+        frequency_axis=axis,
+        frequency_scale=float(scale),
     )
 
 
@@ -342,10 +384,12 @@ def _mtf(x, esf_n, counts, rel_sigma, opts, flags):
     return f, mtf, mtf_sig, half_w
 
 
-def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None, valid=None):
-    """Locate the edge, project and bin: (coef, rows, slope, bin width, bin mode, (x, esf, counts, sigma), flags,
-    (lines, edge positions) of the ridge).  Pixels outside ``valid`` are left out."""
-    coef, rows, flags, ridge = locate_edge(work, deg, valid)
+def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None, valid=None, line=None):
+    """Locate the edge, project and bin: ((coef used, coef fitted), rows, slope, bin width, bin mode, (x, esf,
+    counts, sigma), flags, (lines, edge positions) of the ridge).  Pixels outside ``valid`` are left out.  With
+    ``line`` (a degree-1 polynomial) the ESF is projected on that line, not on the one fitted."""
+    own, rows, flags, ridge = locate_edge(work, deg, valid)
+    coef = own if line is None else line
     d, v, slope, phase = project(work[rows], rows, coef)
     ok = None if valid is None else valid[rows].ravel()
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
@@ -365,7 +409,7 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | Non
     sigma = robust_sigma(resid)
     if q_step is not None:
         flags += quantisation_flags(q_step, x, esf_raw, resid)
-    return coef, rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
+    return (coef, own), rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
 
 
 def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
@@ -383,7 +427,7 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
         return []
     _, _, spread, k = found
     try:
-        coef_k, _, _, _, _, (x, esf, counts, _), _, _ = _binned_esf(work, k, os_, None, valid)
+        (coef_k, _), _, _, _, _, (x, esf, counts, _), _, _ = _binned_esf(work, k, os_, None, valid)
         esf = _normalise(x, esf, counts, sigma, rows.size)[0]
     except InputError:  # the better edge is refused: keep the estimate from the spread
         shift, f_at = found[0], found[1]
@@ -400,26 +444,6 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
     if shift <= _CURVE_MTF_SHIFT:
         return []
     return [curvature_bias_flag(len(coef) - 1, shift, f_at, spread, k, forced=forced)]
-
-
-def _trim_ends(x, esf, counts, frac: float = 0.3):
-    """Keep the central run of bins holding >= ``frac`` x the typical count (the region's corners cut the
-    outer bins to a few samples, whose noise would otherwise dominate the smoothed tails).  The counts are
-    compared as means over 2 px: near a critical tilt the rows' phases bunch, so neighbouring bins alternate
-    between many samples and few, which is not a corner (at 44.5 deg in a 60 px region it cut one side to
-    nothing)."""
-    step = float(np.median(np.diff(x))) if x.size > 1 else 1.0
-    k = max(1, int(round(2.0 / step)))
-    smooth = np.convolve(counts.astype(float), np.ones(k) / k, mode="same") if x.size > k else counts.astype(float)
-    near = np.abs(x) < 5
-    typical = float(np.median(smooth[near])) if np.any(near) else float(np.median(smooth))
-    low = smooth < frac * typical
-    i0 = int(np.argmin(np.abs(x)))
-    left = np.nonzero(low[:i0])[0]
-    right = np.nonzero(low[i0:])[0]
-    a = int(left[-1]) + 1 if left.size else 0
-    b = i0 + int(right[0]) if right.size else x.size
-    return x[a:b], esf[a:b], counts[a:b]
 
 
 def _check_degree(fit_degree) -> int | None:
@@ -466,50 +490,6 @@ def _normalise(x, esf, counts, sigma, n_lines):
             )
         )
     return (esf - a - b * x) / denom, float(c), float(e / c), flags, (a, b, c, e)
-
-
-def _flatten_rows(d, v, n_rows: int, x, esf, ok=None):
-    """Remove illumination changes along the edge, line by line.
-
-    Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
-    ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
-    on a uniformly lit edge, whatever its tails or the region's shape).  Only ``ok`` samples enter the fits.
-    Returns (values, flags).
-    """
-    q = max(2, esf.size // 8)
-    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
-    if not hi > lo:
-        return v, []
-    e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
-    vv = v.reshape(n_rows, -1)
-    m = np.ones(e.shape) if ok is None else ok.reshape(n_rows, -1).astype(float)
-    n = m.sum(axis=1)
-    se, sv = (m * e).sum(axis=1), (m * vv).sum(axis=1)
-    see, sev = (m * e * e).sum(axis=1), (m * e * vv).sum(axis=1)
-    det = n * see - se * se
-    ok = det > 1e-6 * np.maximum(n, 1) ** 2
-    if np.count_nonzero(ok) < MIN_ROWS:
-        return v, []
-    beta = (n * sev - se * sv)[ok] / det[ok]
-    alpha = (sv[ok] - beta * se[ok]) / n[ok]
-    r = np.arange(n_rows, dtype=float)
-    alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
-    beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
-    mid = n_rows // 2
-    if np.any(beta_r <= 0.1 * beta_r[mid]):
-        return v, []
-    out = alpha_r[mid] + (vv - alpha_r[:, None]) * (beta_r[mid] / beta_r)[:, None]
-    change = float(max(np.ptp(alpha_r), np.ptp(beta_r)) / beta_r[mid])
-    flags = []
-    if change > 0.02:
-        flags.append(
-            (
-                "illumination_gradient",
-                f"non-uniform illumination along the edge: levels change by {100 * change:.1f} % of the step "
-                "over the lines (removed line by line)",
-            )
-        )
-    return out.ravel(), flags
 
 
 def _check_mtf(f, mtf, sig, flags):

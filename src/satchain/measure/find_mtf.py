@@ -18,8 +18,9 @@ The edges are tilted a few degrees, so each measures the MTF along its normal, r
 ``MTF_dir^(cos^2 t) MTF_other^(sin^2 t)``; where both directions are measured, ``mean(sin^2 t) |MTF_ACT -
 MTF_ALT|`` is added to the sigma as a systematic (it is not corrected, as MTF Mapper does not).
 
-CEOS-style table: the MTF at normalised frequencies f / f_s = 0, 0.02, ..., 0.5 (Nyquist).  The slanted edge
-also measures the pre-sampling MTF beyond Nyquist (to 1.0 cy/px), but there the image itself is aliased and
+CEOS-style table: the MTF at normalised frequencies f / f_s = 0, 0.02, ..., 0.5 (Nyquist), with the row at 0.25
+(half Nyquist) that CEOS reports, and each row's ground frequency (cy/m) where the pixel size is known.  The slanted
+edge also measures the pre-sampling MTF beyond Nyquist (to 1.0 cy/px), but there the image itself is aliased and
 the noise grows; ``f_max`` = 1.0 extends the table where wanted.
 """
 
@@ -35,6 +36,7 @@ from scipy.stats import chi2 as chi2_dist
 from satchain._validate import check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, first_crossing, valid_mask, zero_fill_mask
+from satchain.measure._edge_axis import check_axis
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
@@ -55,7 +57,10 @@ class FoundEdge(ResultMixin):
     ``flags`` are those of the edge measurement (``flags`` empty where the edge module has none).
     Two collinear halves of one target edge (a checkerboard's cross: opposite polarities, the junction
     between them) are joined: ``angle_deg`` is then the angle of the one line fitted to both (a longer
-    baseline), ``own_angle_deg`` the half's own and ``joined_with`` the other half's index in ``edges``.
+    baseline), ``own_angle_deg`` the half's own and ``joined_with`` the other half's index in ``edges``; each
+    half's ESF is then projected on that joint line (``own_mtf_at_nyquist``: the half measured on its own line).
+    ``mtf50_cy_per_m_ground`` is MTF50 on the ground (with a pixel size); ``frequency_scale`` = f_row / f_normal
+    of this edge (``cos`` of its tilt; 1 on the normal axis).
     """
 
     candidate: EdgeCandidate
@@ -70,11 +75,15 @@ class FoundEdge(ResultMixin):
     flags: tuple[str, ...] = ()
     own_angle_deg: float | None = None
     joined_with: int | None = None
+    own_mtf_at_nyquist: float | None = None
+    mtf50_cy_per_m_ground: float | None = None
+    frequency_scale: float = 1.0
 
 
 @dataclass(frozen=True)
 class CombinedMTF(ResultMixin):
-    """Combined MTF of one direction (ACT or ALT); ``sigma`` is the 1-sigma uncertainty of ``mtf``."""
+    """Combined MTF of one direction (ACT or ALT); ``sigma`` is the 1-sigma uncertainty of ``mtf``; with a
+    ground pixel size, ``f_cy_per_m_ground`` = ``f_cy_per_px / pixel_m`` and MTF50 in cy/m."""
 
     direction: str
     f_cy_per_px: np.ndarray
@@ -87,11 +96,14 @@ class CombinedMTF(ResultMixin):
     scatter_at_nyquist: float | None
     chi2_reduced_at_nyquist: float | None
     flags: tuple[str, ...]
+    f_cy_per_m_ground: np.ndarray | None = None
+    mtf50_cy_per_m_ground: float | None = None
 
 
 @dataclass(frozen=True)
 class FindResult(ResultMixin):
-    """Result of :func:`measure_found_edges`: per-edge results, combined ACT/ALT curves, what was rejected."""
+    """Result of :func:`measure_found_edges`: per-edge results, combined ACT/ALT curves, what was rejected;
+    ``pixel_m`` the ground pixel size (m) or None, ``frequency_axis`` the axis of every frequency."""
 
     edges: tuple[FoundEdge, ...]
     combined: dict
@@ -100,10 +112,14 @@ class FindResult(ResultMixin):
     shape: tuple[int, int]
     flags: tuple[str, ...]
     results: tuple = ()  # the full EdgeResult of each edge (not serialised)
+    pixel_m: float | None = None
+    frequency_axis: str = "normal"
 
     def to_dict(self) -> dict:
         return {
             "shape": list(self.shape),
+            "pixel_m": self.pixel_m,
+            "frequency_axis": self.frequency_axis,
             "noise_sigma": self.noise_sigma,
             "flags": list(self.flags),
             "combined": {k: v.to_dict() for k, v in self.combined.items()},
@@ -137,12 +153,13 @@ def _edge_sigma_curve(r: EdgeResult) -> np.ndarray:
     return np.maximum(_nyquist_sigma(r) * shape, SIGMA_FLOOR)
 
 
-def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None, ok=None):
-    """(EdgeResult, None) or (None, reason detail)."""
+def _measure_one(image, c: EdgeCandidate, opts: dict, ok=None, edge_line=None):
+    """(EdgeResult, None) or (None, reason detail); ``opts`` are :func:`measure_edge`'s keywords."""
     try:
         x0, y0, x1, y1 = c.roi  # crop first: measure_edge would convert the whole image to float64 per call
         v = None if ok is None else ok[y0:y1, x0:x1]
-        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], pixel_m=pixel_m, full_scale=full_scale, valid=v)
+        line = None if edge_line is None else (edge_line[0] - x0, edge_line[1] - y0, edge_line[2])
+        r = measure_edge(np.asarray(image)[y0:y1, x0:x1], valid=v, edge_line=line, **opts)
     except InputError as exc:
         return None, str(exc)
     if r.direction != c.direction:
@@ -157,6 +174,46 @@ def _measure_one(image, c: EdgeCandidate, pixel_m, full_scale=None, ok=None):
     return r, None
 
 
+def _found(c: EdgeCandidate, r: EdgeResult, pixel_m: float | None) -> FoundEdge:
+    """The summary of one measured edge."""
+    m50 = r.mtf50_cy_per_px
+    return FoundEdge(
+        c,
+        r.direction,
+        r.angle_deg,
+        r.mtf_at_nyquist,
+        float(np.hypot(_nyquist_sigma(r), SIGMA_FLOOR)),
+        m50,
+        r.rer,
+        r.noise_sigma,
+        tuple(r.warnings),
+        tuple(str(x) for x in getattr(r, "flags", ()) or ()),
+        mtf50_cy_per_m_ground=None if (m50 is None or pixel_m is None) else m50 / pixel_m,
+        frequency_scale=float(getattr(r, "frequency_scale", 1.0)),
+    )
+
+
+def _on_joint_lines(image, edges, results, lines: dict, opts: dict, ok):
+    """Measure each joined half again with its ESF projected on the joint line (a baseline twice as long fixes
+    the slope better than the half's own fit); a half the joint line does not suit keeps its own measurement,
+    with a warning."""
+    edges, results = list(edges), list(results)
+    for k, line in lines.items():
+        e = edges[k]
+        r, why = _measure_one(image, e.candidate, opts, ok, edge_line=line)
+        if r is None:
+            w = f"measured on its own line: the joint line with edge {e.joined_with} was refused ({why})"
+            edges[k] = dataclasses.replace(e, warnings=(*e.warnings, w))
+            continue
+        joint = _found(e.candidate, r, opts["pixel_m"])
+        edges[k] = dataclasses.replace(
+            joint, angle_deg=e.angle_deg, own_angle_deg=e.own_angle_deg, joined_with=e.joined_with,
+            own_mtf_at_nyquist=e.mtf_at_nyquist,
+        )  # fmt: skip
+        results[k] = r
+    return edges, results
+
+
 def _line(r: EdgeResult):
     """(a, c, slope dc/da) of a measured edge: a along it (y for ACT, x for ALT), c across it."""
     x, y = r.edge_point_xy
@@ -166,15 +223,20 @@ def _line(r: EdgeResult):
     return x, y, float(np.cos(t) / np.sin(t))
 
 
-def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]) -> list[FoundEdge]:
+def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]):
     """Join pairs of collinear edges (same direction, angles within 1 deg, each centre within 1.5 px of the
     other's line): one straight line ``c = c0 + s a`` fitted by least squares to both halves' centre
-    positions (variance ``sigma^2 / n``) and slopes (variance ``12 sigma^2 / n^3``), ``n`` lines each."""
+    positions (variance ``sigma^2 / n``) and slopes (variance ``12 sigma^2 / n^3``), ``n`` lines each.
+    Returns (edges, {index: the joint line (x, y, angle_deg) at that half's centre}); halves fitted with a
+    curved (degree > 1) edge are not joined."""
     out = list(edges)
+    lines: dict[int, tuple[float, float, float]] = {}
     used: set[int] = set()
     for i, j in itertools.combinations(range(len(edges)), 2):
         ri, rj = results[i], results[j]
         if i in used or j in used or ri.direction != rj.direction or ri.edge_point_xy is None:
+            continue
+        if max(getattr(ri, "fit_degree", 1), getattr(rj, "fit_degree", 1)) > 1:
             continue
         if abs(ri.angle_deg - rj.angle_deg) > 1.0:
             continue
@@ -192,15 +254,19 @@ def _join_collinear(edges: list[FoundEdge], results: list[EdgeResult]) -> list[F
         ang = float(np.degrees(np.arctan(s))) if ri.direction == "ACT" else float(np.degrees(np.arctan2(1.0, s)))
         if ang > 90.0:
             ang -= 180.0
-        for k, other in ((i, j), (j, i)):
+        for k, other, ak in ((i, j, ai), (j, i, aj)):
             out[k] = dataclasses.replace(out[k], angle_deg=ang, own_angle_deg=out[k].angle_deg, joined_with=other)
+            ck = float(sol[0] + s * (ak - a0))
+            lines[k] = (ck, ak, ang) if ri.direction == "ACT" else (ak, ck, ang)
         used |= {i, j}
-    return out
+    return out, lines
 
 
-def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
-    """Inverse-variance weighted mean of the edges' MTF curves, Birge-inflated sigma, consistency flags."""
-    f = np.asarray(results[0].f_cy_per_px, dtype=float)
+def _combine(direction: str, results: list[EdgeResult], pixel_m: float | None = None) -> CombinedMTF:
+    """Inverse-variance weighted mean of the edges' MTF curves, Birge-inflated sigma, consistency flags; on the
+    frequencies every edge reaches (the shortest band: a band-limited edge, or the row axis of the most tilted
+    one)."""
+    f = np.asarray(min((r.f_cy_per_px for r in results), key=lambda a: a[-1]), dtype=float)
     m = np.array([np.interp(f, r.f_cy_per_px, r.mtf) for r in results])
     s = np.array([np.interp(f, r.f_cy_per_px, _edge_sigma_curve(r)) for r in results])
     s[:, 0] = np.maximum(s[:, 0], 1e-9)
@@ -232,6 +298,7 @@ def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
         )
     if np.any(mean > MTF_VALID_MAX):
         flags.append(f"{direction}: combined MTF exceeds {MTF_VALID_MAX} somewhere; those values are withheld")
+    m50 = first_crossing(f, mean, 0.5)
     return CombinedMTF(
         direction=direction,
         f_cy_per_px=f,
@@ -240,10 +307,12 @@ def _combine(direction: str, results: list[EdgeResult]) -> CombinedMTF:
         n_edges=n,
         mtf_at_nyquist=float(mean[i_nyq]),
         mtf_at_nyquist_sigma=float(sig[i_nyq]),
-        mtf50_cy_per_px=first_crossing(f, mean, 0.5),
+        mtf50_cy_per_px=m50,
         scatter_at_nyquist=scatter,
         chi2_reduced_at_nyquist=chi2r,
         flags=tuple(flags),
+        f_cy_per_m_ground=None if pixel_m is None else f / pixel_m,
+        mtf50_cy_per_m_ground=None if (pixel_m is None or m50 is None) else m50 / pixel_m,
     )
 
 
@@ -286,6 +355,7 @@ def measure_found_edges(
     full_scale: float | None = None,
     valid=None,
     nodata: float | None = None,
+    frequency_axis: str = "normal",
 ) -> FindResult:
     """Find every usable slanted edge of ``image``, measure each, and combine them into ACT and ALT MTFs.
 
@@ -294,7 +364,8 @@ def measure_found_edges(
     image : array_like, 2-D
         The image (no truth file needed).
     pixel_m : float, optional
-        Ground sample distance (m), passed to the edge measurement (adds ground frequencies).
+        Ground sample distance (m): adds ground frequencies (cy/m) to every edge, the combined curves and
+        the CEOS table.
     min_length_px, max_edges, min_cnr
         Passed to :func:`~satchain.measure.find.find_edges`.
     search : EdgeSearch, optional
@@ -309,6 +380,11 @@ def measure_found_edges(
         Pixels equal to this value are excluded as well (0 for the zero-filled crops cal/val tools write).
         Without ``valid`` and ``nodata``, the zeros of an integer image are excluded where they are evidently a
         fill (:func:`~satchain.measure._common.zero_fill_mask`; flagged).
+    frequency_axis : {"normal", "row"}
+        ``"normal"`` (default): every edge's MTF along its normal.  ``"row"``: along the image row (ACT) or
+        column (ALT), as MTF_Estimator reports it: each edge's normal axis scaled by the cosine of its tilt
+        (``MTF_row(f) = MTF_normal(f / cos t)``, see :func:`~satchain.measure.edge.measure_edge`), before
+        the edges are combined.
 
     Returns
     -------
@@ -334,58 +410,54 @@ def measure_found_edges(
         ok, fill_note = zero_fill_mask(image)
     if search is None:
         search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr, valid=ok)
+    opts = {"pixel_m": pixel_m, "full_scale": full_scale, "frequency_axis": check_axis(frequency_axis)}
     rejected = list(search.rejected)
     edges, results = [], []
     for c in search.candidates:
-        r, why = _measure_one(image, c, pixel_m, full_scale, ok)
+        r, why = _measure_one(image, c, opts, ok)
         if r is None:
             rejected.append(Rejection(c.center_xy, c.angle_deg, c.length_px, "measurement refused", why))
             continue
-        s_nyq = float(np.hypot(_nyquist_sigma(r), SIGMA_FLOOR))
-        flags = tuple(str(x) for x in getattr(r, "flags", ()) or ())
-        edges.append(
-            FoundEdge(
-                c,
-                r.direction,
-                r.angle_deg,
-                r.mtf_at_nyquist,
-                s_nyq,
-                r.mtf50_cy_per_px,
-                r.rer,
-                r.noise_sigma,
-                tuple(r.warnings),
-                flags,
-            )
-        )
+        edges.append(_found(c, r, pixel_m))
         results.append(r)
     if not edges:
         raise _refusal(search, rejected)
-    edges = _join_collinear(edges, results)
+    edges, lines = _join_collinear(edges, results)
+    edges, results = _on_joint_lines(image, edges, results, lines, opts, ok)
     combined = {}
     for d in ("ACT", "ALT"):
         rs = [r for r in results if r.direction == d]
         if rs:
-            combined[d] = _combine(d, rs)
+            combined[d] = _combine(d, rs, pixel_m)
     combined = _add_tilt_systematic(combined, edges)
     flags = list(search.warnings) + ([fill_note] if fill_note else [])
     for d in ("ACT", "ALT"):
         if d not in combined:
             flags.append(f"no usable {d} edge: only the {'ALT' if d == 'ACT' else 'ACT'} MTF is measured")
     shape = tuple(int(v) for v in np.shape(image))
-    return FindResult(tuple(edges), combined, tuple(rejected), search.noise_sigma, shape, tuple(flags), tuple(results))
+    return FindResult(
+        tuple(edges), combined, tuple(rejected), search.noise_sigma, shape, tuple(flags), tuple(results),
+        pixel_m=pixel_m, frequency_axis=opts["frequency_axis"],
+    )  # fmt: skip
 
 
-def ceos_table(result: FindResult, *, step: float = 0.02, f_max: float = 0.5) -> dict[str, np.ndarray]:
-    """MTF at normalised frequencies f / f_s = 0, step, ..., f_max: columns ``f_over_fs``, ``mtf_act``,
-    ``mtf_act_sigma``, ``mtf_alt``, ``mtf_alt_sigma`` (NaN where a direction is missing or a value is
-    outside [0, 1.2]).
+def ceos_table(
+    result: FindResult, *, step: float = 0.02, f_max: float = 0.5, pixel_m: float | None = None
+) -> dict[str, np.ndarray]:
+    """MTF at normalised frequencies f / f_s = 0, step, ..., f_max and 0.25 (half Nyquist): columns
+    ``f_over_fs``, ``mtf_act``, ``mtf_act_sigma``, ``mtf_alt``, ``mtf_alt_sigma`` (NaN where a direction is
+    missing or a value is outside [0, 1.2]); with a ground pixel size (``pixel_m``, else the result's) also
+    ``f_cy_per_m_ground`` = (f / f_s) / pixel_m, the ground frequency of each row.
 
-    ``f_s`` is the sampling frequency (1 cy/px), so 0.5 is Nyquist; ``f_max`` in (0, 1].
+    ``f_s`` is the sampling frequency (1 cy/px), so 0.5 is Nyquist; ``f_max`` in (0, 1].  The frequencies are
+    on the result's ``frequency_axis`` (along the edge normal, or the image row / column).
     """
     check_range("step", step, 0.0, 0.5, lo_open=True)
     check_range("f_max", f_max, 0.0, 1.0, lo_open=True)
+    p = pixel_m if pixel_m is not None else getattr(result, "pixel_m", None)
     fn = np.round(np.arange(0.0, f_max + step / 2, step), 10)
-    out = {"f_over_fs": fn}
+    fn = np.union1d(fn, [0.25]) if f_max >= 0.25 else fn  # the CEOS row at half Nyquist, whatever the step
+    out = {"f_over_fs": fn, **({"f_cy_per_m_ground": fn / p} if p else {})}
     for d in ("ACT", "ALT"):
         c = result.combined.get(d)
         if c is None:
@@ -403,19 +475,12 @@ def ceos_table(result: FindResult, *, step: float = 0.02, f_max: float = 0.5) ->
 def ceos_csv(result: FindResult, *, step: float = 0.02, f_max: float = 0.5, pixel_m: float | None = None) -> str:
     """The :func:`ceos_table` as CSV text (empty cells where a value is not available).
 
-    With ``pixel_m`` a column ``f_cy_per_m_ground`` = (f / f_s) / pixel_m is added.
+    With a ground pixel size (``pixel_m``, else the result's) a column ``f_cy_per_m_ground`` = (f / f_s) /
+    pixel_m is added.
     """
-    t = ceos_table(result, step=step, f_max=f_max)
-    cols = [
-        "f_over_fs",
-        *(["f_cy_per_m_ground"] if pixel_m else []),
-        "mtf_act",
-        "mtf_act_sigma",
-        "mtf_alt",
-        "mtf_alt_sigma",
-    ]
-    if pixel_m:
-        t["f_cy_per_m_ground"] = t["f_over_fs"] / pixel_m
+    t = ceos_table(result, step=step, f_max=f_max, pixel_m=pixel_m)
+    cols = [k for k in ("f_over_fs", "f_cy_per_m_ground") if k in t]
+    cols += ["mtf_act", "mtf_act_sigma", "mtf_alt", "mtf_alt_sigma"]
     lines = [",".join(cols)]
     for i in range(t["f_over_fs"].size):
         cells = []
