@@ -235,3 +235,25 @@ def test_simulate_image_of_an_array_has_the_engine_geometry():
     assert r.transform.almost_equals(t @ Affine.scale(5.0, 5.0)) and r.pixel_m == (GSD, SYSTEM.gsd_alt_m)
     with pytest.raises(ConfigError, match="pixel_m = None"):
         satchain.simulate_image(a[0], SYSTEM)
+
+
+def test_a_sweep_over_rasters_writes_georeferenced_cases_and_checks_every_input_first(tmp_path):
+    jp2 = _write(tmp_path / "a.jp2", _edges(120, bands=2), transform=_utm(0.098), driver="JP2OpenJPEG")
+    tif = _write(tmp_path / "b.tif", _edges(120)[0], transform=_utm(0.098, 600000.0))
+    out = tmp_path / "cases"
+    r = runner.invoke(app, ["simulate", str(jp2), str(tif), "--preset", "ankarasat3", "--no-noise",
+                            "--sweep", "motion.smear_px=1,2", "-o", str(out)])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    images = sorted(out.glob("*.tif"))
+    assert len(images) == 4
+    for p in images:
+        with rasterio.open(p) as o:
+            assert o.crs.to_epsg() == 32636 and o.tags(ns="IMAGE_STRUCTURE")["LAYOUT"] == "COG"
+            assert o.count == (2 if p.name.startswith("a") else 1)
+            assert o.transform.c == (500000.0 if p.name.startswith("a") else 600000.0)
+    geo = _write(tmp_path / "g.tif", _edges(120)[0], transform=Affine(1e-6, 0, 33, 0, -1e-6, 39), crs="EPSG:4326")
+    out2 = tmp_path / "cases2"
+    r = runner.invoke(app, ["simulate", str(tif), str(geo), "--preset", "ankarasat3", "--sweep",
+                            "motion.smear_px=1,2", "-o", str(out2)])  # fmt: skip
+    assert r.exit_code == 2 and "--scene-pixel-m" in r.stderr and "g.tif" in r.stderr
+    assert not list(out2.glob("*.tif"))  # nothing simulated before every input was checked

@@ -50,10 +50,17 @@ if TYPE_CHECKING:
     from satchain.scene import Scene
     from satchain.system import ImagingSystem
 
-__all__ = ["IMAGE_SUFFIXES", "REFLECTANCE_RANGE", "SimulatedFile", "ground_truth_source", "simulate_file"]
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "REFLECTANCE_RANGE",
+    "SimulatedFile",
+    "check_input",
+    "ground_truth_source",
+    "simulate_file",
+]
 
 #: Inputs with these suffixes are images of reflectance; any other input is a scene (``"paper"`` or a layout).
-IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".npy")
+IMAGE_SUFFIXES = (*GDAL_SUFFIXES, ".png", ".npy")
 #: Reflectance an image input may hold after scaling (glints above 1 allowed; 255 or 65535 are not reflectance).
 REFLECTANCE_RANGE = (-0.5, 4.0)
 #: The smallest ground truth (px a side) worth simulating.
@@ -114,6 +121,30 @@ def ground_truth_source(
         )
     sc = load_layout(input_)
     return SceneSource(sc, pixel_m=pixel_m), sc
+
+
+def check_input(
+    input_: str | os.PathLike,
+    *,
+    scene_pixel_m: float | None = None,
+    input_scale: float | None = None,
+    band: int | None = None,
+    names: Mapping[str, str] | None = None,
+) -> None:
+    """Refuse, without simulating anything, an input that :func:`simulate_file` would refuse for what it is (an
+    unreadable file, no pixel size, non-square pixels, a band that is not there, an option that does not apply):
+    what a sweep checks for every input before its first case."""
+    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
+    if Path(input_).suffix.lower() in GDAL_SUFFIXES:
+        from satchain.engine.georaster import _plan_input
+
+        _plan_input(Path(input_), band, scene_pixel_m, name)
+        return
+    if band is not None:
+        raise ConfigError(
+            f"{name('band')} {band!r}: applies to a GDAL raster input (one of {', '.join(GDAL_SUFFIXES)})"
+        )
+    ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
 
 
 def _check_options(units: str, noise: bool, seed: int, fp_grid: str, name: Callable[[str], str]) -> None:
@@ -203,9 +234,8 @@ def simulate_file(
         return SimulatedFile(out, r["preview"], r["shape_px"], units, r["streamed"], None, None, r["metadata"],
                              r["count"], r["crs"], r["transform"])  # fmt: skip
     if band is not None:
-        raise ConfigError(
-            f"{name('band')} {band!r}: applies to a GDAL raster input (one of {', '.join(GDAL_SUFFIXES)})"
-        )
+        raise ConfigError(f"{name('band')} {band!r}: applies to a GDAL raster input (one of "
+                          f"{', '.join(GDAL_SUFFIXES)}) without {name('focal_plane')}")  # fmt: skip
     src, _ = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
     sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None)
     if min(src.shape_px) < MIN_INPUT_PX:

@@ -395,7 +395,7 @@ def _check_options(options: Mapping[str, Any], name: Callable) -> None:
 
 def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], names, name: Callable) -> None:
     """The output directory and every output name, before any work; and every input readable."""
-    from satchain.engine.files import IMAGE_SUFFIXES, ground_truth_source
+    from satchain.engine.files import IMAGE_SUFFIXES, check_input
 
     opt_out = name("out_dir", name("out", "out_dir"))
     if out.exists() and not out.is_dir():
@@ -415,8 +415,8 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
         if Path(input_).suffix.lower() in IMAGE_SUFFIXES and not Path(input_).is_file():
             what = "is not a file" if Path(input_).exists() else "no such file"
             raise SatchainIOError(f"{name('inputs', 'inputs')} {input_!r}: {what}")
-        ground_truth_source(input_, pixel_m=options.get("scene_pixel_m"), input_scale=options.get("input_scale"),
-                            names=names)  # fmt: skip
+        check_input(input_, scene_pixel_m=options.get("scene_pixel_m"), input_scale=options.get("input_scale"),
+                    band=options.get("band"), names=names)  # fmt: skip
 
 
 def _remove_case_files(case: Case) -> None:
