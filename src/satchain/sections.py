@@ -520,6 +520,7 @@ class Band(_Frozen):
                 f"wavelength_weights = {list(w)!r}: must give one weight >= 0 per wavelength "
                 f"({len(self.wavelengths_m)}), with a positive sum"
             )
-        if self.band_m is not None and not (1e-8 <= self.band_m[0] < self.band_m[1] <= 1e-4):
-            raise ValueError(f"band_m = {list(self.band_m)!r}: must be [min, max] with 1e-08 <= min < max <= 1e-04 m")
+        if self.band_m is not None and not (2.8e-7 <= self.band_m[0] < self.band_m[1] <= 4.0e-6):
+            raise ValueError(f"band_m = {list(self.band_m)!r}: must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m "
+                             "(the solar table spans 280-4000 nm)")  # fmt: skip
         return self
