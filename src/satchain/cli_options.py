@@ -93,7 +93,7 @@ FullScaleOpt = Annotated[
 ]
 
 BandOpt = Annotated[
-    int | None, typer.Option("--band", help="band of a multiband raster, from 1 (default: 1, with a warning)")
+    int | None, typer.Option("--band", help="band of a multiband raster, from 1 (required when it has several)")
 ]
 BandsOpt = Annotated[
     int | None,
@@ -243,10 +243,15 @@ def load_image(path: Path, pixel_m: float | None, band: int | None = None):
     ``--pixel-m`` wins over the file's metadata; the file's own mask (nodata, internal mask, alpha) is
     ``metadata["valid"]`` (see :func:`parse_valid`)."""
     from satchain._validate import check_positive
-    from satchain.io import read_image
+    from satchain.io import GDAL_SUFFIXES, read_image
 
     if band is not None and (isinstance(band, bool) or band < 1):
         raise ConfigError(f"--band = {band!r}: bands are numbered from 1")
+    if band is None and Path(path).suffix.lower() in GDAL_SUFFIXES and Path(path).is_file():
+        from satchain.raster import open_raster
+
+        with open_raster(path) as r:  # a measurement is of one band: never a blend of bands, never a guess
+            r.require_band("--band")
     image, valid, meta = read_image(path, band=band, mask=True)
     if valid is not None:
         meta = {**meta, "valid": valid}

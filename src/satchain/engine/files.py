@@ -54,7 +54,6 @@ __all__ = [
     "IMAGE_SUFFIXES",
     "REFLECTANCE_RANGE",
     "SimulatedFile",
-    "check_input",
     "ground_truth_source",
     "simulate_file",
 ]
@@ -121,30 +120,6 @@ def ground_truth_source(
         )
     sc = load_layout(input_)
     return SceneSource(sc, pixel_m=pixel_m), sc
-
-
-def check_input(
-    input_: str | os.PathLike,
-    *,
-    scene_pixel_m: float | None = None,
-    input_scale: float | None = None,
-    band: int | None = None,
-    names: Mapping[str, str] | None = None,
-) -> None:
-    """Refuse, without simulating anything, an input that :func:`simulate_file` would refuse for what it is (an
-    unreadable file, no pixel size, non-square pixels, a band that is not there, an option that does not apply):
-    what a sweep checks for every input before its first case."""
-    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
-    if Path(input_).suffix.lower() in GDAL_SUFFIXES:
-        from satchain.engine.georaster import _plan_input
-
-        _plan_input(Path(input_), band, scene_pixel_m, name)
-        return
-    if band is not None:
-        raise ConfigError(
-            f"{name('band')} {band!r}: applies to a GDAL raster input (one of {', '.join(GDAL_SUFFIXES)})"
-        )
-    ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
 
 
 def _check_options(units: str, noise: bool, seed: int, fp_grid: str, name: Callable[[str], str]) -> None:

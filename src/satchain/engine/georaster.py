@@ -188,16 +188,11 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
             raise ConfigError(f"{name('band')} {band!r}: must be an integer in [1, {r.count}] ({str(path)!r} has "
                               f"{r.count} data band{'s' * (r.count > 1)})")  # fmt: skip
         meta = _gdal_meta(r)
+        _check_grid(r, path, scene_pixel_m, name)
         if scene_pixel_m is None and r.pixel_m is None and isinstance(meta.get("pixel_m"), float):
             pixel_m = meta["pixel_m"]  # satchain's description or resolution tags of an ungeoreferenced TIFF
         elif scene_pixel_m is None:
-            sx, sy = r.require_pixel_m(name("scene_pixel_m"))
-            if not math.isclose(sx, sy, rel_tol=1e-6):
-                raise ConfigError(
-                    f"{name('input')} {str(path)!r}: its pixels are {sx:.6g} x {sy:.6g} m, not square; the chain "
-                    "needs square ground pixels: resample it first (e.g. gdalwarp -tr)"
-                )
-            pixel_m = sx
+            pixel_m = r.require_pixel_m(name("scene_pixel_m"))[0]
         else:
             pixel_m = float(scene_pixel_m)
         transform = r.transform
@@ -206,6 +201,20 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
 
             transform = Affine(pixel_m, 0.0, 0.0, 0.0, -pixel_m, 0.0)
         return _Plan(path, r.count, r.shape, pixel_m, r.crs, transform, r.descriptions, meta)
+
+
+def _check_grid(r, path: Path, scene_pixel_m: float | None, name: Callable[[str], str]) -> None:
+    """A sheared (or degenerate) transform, or metric pixels that are not square, is refused whether or not
+    ``scene_pixel_m`` is given: the output keeps the input's transform, so a pixel size cannot mend its grid."""
+    if r.pixel_m is None and r.pixel_m_problem.startswith("its transform"):
+        problem = r.pixel_m_problem
+    elif r.pixel_m is not None and not math.isclose(*r.pixel_m, rel_tol=1e-6):
+        problem = f"its pixels are {r.pixel_m[0]:.6g} x {r.pixel_m[1]:.6g} m, not square"
+    else:
+        return
+    why = "" if scene_pixel_m is None else f" ({name('scene_pixel_m')} sets a pixel size, not the grid)"
+    raise ConfigError(f"{name('input')} {str(path)!r}: {problem}; the chain needs square ground pixels on a "
+                      f"regular grid{why}: resample it first (e.g. gdalwarp -tr RES RES)")  # fmt: skip
 
 
 def _band_source(plan: _Plan, band: int, input_scale: float | None) -> RasterBandSource:
@@ -225,8 +234,22 @@ def _band_source(plan: _Plan, band: int, input_scale: float | None) -> RasterBan
         fill = float(v[ok].mean()) if ok.any() else _valid_mean(r, band, own, gain)
     if fill is None:
         raise InputError(f"image = {str(path)!r}: band {band}: every pixel is nodata or masked; nothing to simulate")
+    if ok.any():  # values that are not reflectance are refused before any work, not in the middle of it
+        _check_reflectance(path, band, float(v[ok].min()), float(v[ok].max()), gain, input_scale is None)
     src.fill, src.valid_range = fill, REFLECTANCE_RANGE
     return src
+
+
+def _check_reflectance(path: Path, band: int, lo: float, hi: float, gain: float, default: bool) -> None:
+    """Refuse sampled values that are not reflectance, naming ``--input-scale``."""
+    if REFLECTANCE_RANGE[0] <= lo and hi <= REFLECTANCE_RANGE[1]:
+        return
+    how = "the default scale" if default else "--input-scale"
+    raise InputError(
+        f"image = {str(path)!r}: band {band} values {lo:g}..{hi:g} (as reflectance, x {gain:g}: {how}) are not "
+        f"reflectance (allowed {REFLECTANCE_RANGE[0]:g}..{REFLECTANCE_RANGE[1]:g}); give --input-scale, the factor "
+        "that makes them reflectance (e.g. 0.0001 for reflectance x 10000)"
+    )
 
 
 def _sample(r, band: int, scaled: bool, n: int = 8, side: int = 256) -> tuple[np.ndarray, np.ndarray | None]:
@@ -306,10 +329,12 @@ def simulate_raster(
     progress: Progress | None = None,
     notify: Callable[[str], None] | None = None,
     names: Mapping[str, str] | None = None,
-) -> dict[str, Any]:
+    check_only: bool = False,
+) -> dict[str, Any] | None:
     """Simulate every band (or only ``band``) of a raster file and write the COG ``out`` (and its ``.png``
     preview); see the module docstring. Returns ``{"shape_px", "count", "streamed", "metadata", "preview"}``.
-    Options and inputs are checked before anything is written; a failure leaves nothing under ``out``."""
+    Options and inputs are checked before anything is written; a failure leaves nothing under ``out``.
+    ``check_only``: only those checks (the input, its values' sample, memory and disk); returns None."""
     from satchain._safety import check_disk, clean_stale, memory_limit_bytes
     from satchain.engine.sensor import sensor_from_system
 
@@ -330,6 +355,7 @@ def simulate_raster(
                           f"describes {len(system.bands)} ([[bands]]); they must match")  # fmt: skip
     systems = [system.for_band(b - 1) for b in bands]
     sources = [_band_source(plan, b, input_scale) for b in bands]
+    _check_output_disk(plan, system, len(bands), units, out)  # before planning, which grows with the input
     budget = min(float(memory_bytes or WORK_BYTES), float(memory_limit_bytes()))
     planned = [_simulator(s, plan, budget) for s in systems]
     sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
@@ -346,14 +372,18 @@ def simulate_raster(
         meta["bit_depth"] = int(bits)
     if not math.isclose(system.gsd_act_m, system.gsd_alt_m, rel_tol=1e-9):
         meta["pixel_m_xy"] = [system.gsd_act_m, system.gsd_alt_m]
+    oy, ox = sim0.output_shape
+    scratch = max(4.0 * s.n_coarse[0] * s.n_coarse[1] for s in sims) if streamed else 0.0
+    check_disk(scratch + 2.0 * len(bands) * oy * ox * dtype.itemsize, [out], f"simulating {str(path)!r}")
+    if check_only:
+        for src in sources:
+            src.close()
+        return None
     if notify is not None and streamed:
         notify(f"streamed: {plan.shape[0]} x {plan.shape[1]} px x {len(bands)} band(s) in {budget / 2**30:.2f} GiB: "
                f"the coarse grid goes to disk beside {out}, the image is formed in "
                f"{sims[0].params.stream_tile_px}-px tiles")  # fmt: skip
     out.parent.mkdir(parents=True, exist_ok=True)
-    oy, ox = sim0.output_shape
-    scratch = max(4.0 * s.n_coarse[0] * s.n_coarse[1] for s in sims) if streamed else 0.0
-    check_disk(scratch + 2.0 * len(bands) * oy * ox * dtype.itemsize, [out], f"simulating {str(path)!r}")
     clean_stale(out)
     report = progress or (lambda stage, done, total: None)
     with _staging(out) as d:
@@ -372,6 +402,20 @@ def simulate_raster(
     preview = _write_preview(out, nodata)
     return {"shape_px": sim0.output_shape, "count": len(bands), "streamed": streamed, "metadata": meta,
             "preview": preview, "transform": transform, "crs": plan.crs}  # fmt: skip
+
+
+def _check_output_disk(plan: _Plan, system, n_bands: int, units: str, out: Path) -> None:
+    """Refuse, from the sizes alone, an output (staging and COG) larger than the free disk: a header that
+    claims 10^12 px is refused at once, before a plan whose cost grows with the input is made."""
+    from satchain._safety import check_disk
+    from satchain.io import simulated_dtype
+
+    (iy, ix), px = plan.shape, plan.pixel_m
+    oy, ox = int(iy * px / system.gsd_alt_m), int(ix * px / system.gsd_act_m)
+    size = simulated_dtype(units, system.detector.bit_depth).itemsize
+    check_disk(2.0 * n_bands * oy * ox * size, [out], f"image = {str(plan.path)!r}: simulating its {iy} x {ix} px "
+               f"({iy * ix / 1e9:.3g} Gpx at {px:g} m) into {oy} x {ox} px x {n_bands} band(s)",
+               fix="crop or resample it first (e.g. gdal_translate -srcwin, gdalwarp -tr)")  # fmt: skip
 
 
 def _in_memory(sim, budget: float) -> bool:
@@ -402,8 +446,11 @@ def _simulator(system, plan: _Plan, budget: float):
         s = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, params=p, otf=sim.otf)
         if stream_bytes(s) <= budget:
             return s, True
-    raise ResourceLimitError(f"simulating {plan.shape[0]} x {plan.shape[1]} px of {str(plan.path)!r}: needs more "
-                             f"than {budget / 2**30:.2f} GiB of memory even in 128-px tiles")  # fmt: skip
+    (iy, ix), (oy, ox) = plan.shape, sim.output_shape
+    raise ResourceLimitError(f"image = {str(plan.path)!r}: simulating its {iy} x {ix} px ({iy * ix / 1e9:.3g} Gpx at "
+                             f"{plan.pixel_m:g} m) into {oy} x {ox} px needs more than {budget / 2**30:.2f} GiB of "
+                             "memory even streamed in 128-px tiles: crop or resample it first (e.g. gdal_translate "
+                             "-srcwin, gdalwarp -tr); nothing was written")  # fmt: skip
 
 
 class _Writer:

@@ -346,7 +346,7 @@ def simulate_sweep(
     _check_options(options, name)
     cases, systems = plan_sweep(inputs, system, out_dir, sweep=sweep, seed=seed, names=names)
     out = Path(out_dir)
-    _check_outputs(cases, out, options, names, name)
+    _check_outputs(cases, out, options, names, name, system)
     out.mkdir(parents=True, exist_ok=True)
     write_run_marker(out, kind="simulate")
     report = progress or (lambda stage, done, total: None)
@@ -393,9 +393,13 @@ def _check_options(options: Mapping[str, Any], name: Callable) -> None:
             raise ConfigError(f"option {k!r}: simulate_sweep passes on only {allowed}")
 
 
-def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], names, name: Callable) -> None:
-    """The output directory and every output name, before any work; and every input readable."""
-    from satchain.engine.files import IMAGE_SUFFIXES, check_input
+def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], names, name: Callable,
+                   system: ImagingSystem) -> None:  # fmt: skip
+    """The output directory and every output name, before any work; and every input readable (a GDAL raster
+    checked as simulating it checks it: its grid, bands, values, memory and disk)."""
+    from satchain.engine.files import IMAGE_SUFFIXES, ground_truth_source
+    from satchain.engine.georaster import simulate_raster
+    from satchain.io import GDAL_SUFFIXES
 
     opt_out = name("out_dir", name("out", "out_dir"))
     if out.exists() and not out.is_dir():
@@ -411,12 +415,19 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
         check_distinct_paths({label: path}, inputs)
     if not (out / MARKER).exists():  # in a sweep's own directory, its files may be replaced
         check_sidecars({**previews, **manifests})
-    for input_ in dict.fromkeys(c.input for c in cases):
+    raster = {k: options[k] for k in ("band", "scene_pixel_m", "input_scale", "units", "noise") if k in options}
+    first: dict[str, Case] = {}
+    for c in cases:
+        first.setdefault(c.input, c)
+    for input_, case in first.items():
         if Path(input_).suffix.lower() in IMAGE_SUFFIXES and not Path(input_).is_file():
             what = "is not a file" if Path(input_).exists() else "no such file"
             raise SatchainIOError(f"{name('inputs', 'inputs')} {input_!r}: {what}")
-        check_input(input_, scene_pixel_m=options.get("scene_pixel_m"), input_scale=options.get("input_scale"),
-                    band=options.get("band"), names=names)  # fmt: skip
+        if Path(input_).suffix.lower() in GDAL_SUFFIXES:
+            simulate_raster(input_, case.image, system, names=names, check_only=True, **raster)
+        else:
+            ground_truth_source(input_, pixel_m=options.get("scene_pixel_m"), input_scale=options.get("input_scale"),
+                                names=names)  # fmt: skip
 
 
 def _remove_case_files(case: Case) -> None:
