@@ -93,7 +93,7 @@ FullScaleOpt = Annotated[
 ]
 
 BandOpt = Annotated[
-    int | None, typer.Option("--band", help="band of a multiband raster, from 1 (required when it has several)")
+    int | None, typer.Option("--band", help="band of a multiband raster, from 1 (default: 1, with a warning)")
 ]
 BandsOpt = Annotated[
     int | None,
@@ -250,8 +250,15 @@ def load_image(path: Path, pixel_m: float | None, band: int | None = None):
     if band is None and Path(path).suffix.lower() in GDAL_SUFFIXES and Path(path).is_file():
         from satchain.raster import open_raster
 
-        with open_raster(path) as r:  # a measurement is of one band: never a blend of bands, never a guess
-            r.require_band("--band")
+        with open_raster(path) as r:  # a measurement is of one band, never a blend of bands: band 1 by default
+            if r.count > 1:
+                import warnings
+
+                from satchain.errors import SatchainWarning
+
+                warnings.warn(f"image = {str(path)!r}: has {r.count} bands; band 1 is measured (--band N: "
+                              f"1..{r.count})", SatchainWarning, stacklevel=2)  # fmt: skip
+                band = 1
     image, valid, meta = read_image(path, band=band, mask=True)
     if valid is not None:
         meta = {**meta, "valid": valid}

@@ -1,8 +1,8 @@
 """Bad rasters, written here (rasterio or raw bytes), given to `satchain simulate` and `satchain measure edge|find`
 (issue 19, point 5): each is one line on stderr that names the file, the problem and what fixes it, exit status 2,
 no traceback, and nothing under the output name (no image, no preview, no hidden staging file). An RGBA raster
-simulates (3 bands out, alpha as the mask) and measures with --band; a sweep checks every input before its first
-case."""
+simulates (3 bands out, alpha as the mask) and measures band 1 by default or --band; a sweep checks every input
+before its first case."""
 
 from __future__ import annotations
 
@@ -223,10 +223,11 @@ def test_rgba_simulates_three_bands_with_alpha_as_the_mask_and_measures_one_band
     # output column j covers input columns [5 j, 5 j + 5): it touches an alpha-0 pixel from j = 16 on
     assert data.shape == (3, N // 5, N // 5)
     assert np.all(data[:, :, 16:] == nodata) and np.all(data[:, :, :16] != nodata)
-    _refused(runner.invoke(app, ["measure", "edge", str(src)]), src, ["has 3 bands", "--band N (1..3)"])
-    _refused(runner.invoke(app, ["measure", "find", str(src)]), src, ["has 3 bands", "--band N (1..3)"])
+    r1 = runner.invoke(app, ["measure", "edge", str(src), "--json"])  # band 1 by default (the issue), with a warning
+    assert r1.exit_code == 0 and "has 3 bands; band 1 is measured" in r1.stderr, r1.output
     d = json.loads(runner.invoke(app, ["measure", "edge", str(src), "--band", "2", "--json"]).stdout)
     assert abs(abs(d["angle_deg"]) - ANGLE) < 0.2 and d["pixel_m"] == pytest.approx(PX)
+    assert json.loads(r1.stdout)["mtf_at_nyquist"] == pytest.approx(d["mtf_at_nyquist"], abs=1e-12)  # same bands
 
 
 # ------------------------------------------------------------------------------------------------ sweeps

@@ -441,11 +441,17 @@ def _simulator(system, plan: _Plan, budget: float):
         check_simulation_memory(sim)
         sim.check_frame()
         return sim, False
-    for t in (2048, 1024, 512, 256, 128):
-        p = SimParams(stream_tile_px=t, max_tile_bytes=int(min(640 * 2**20, budget / 3)))
-        s = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, params=p, otf=sim.otf)
-        if stream_bytes(s) <= budget:
-            return s, True
+    from satchain._safety import memory_limit_bytes
+
+    # the far field of the streamed path grows with the frame: a scene too big for the planned budget may use
+    # the machine's limit before it is refused
+    for b in sorted({budget, max(budget, float(memory_limit_bytes()))}):
+        for t in (2048, 1024, 512, 256, 128):
+            p = SimParams(stream_tile_px=t, max_tile_bytes=int(min(640 * 2**20, b / 3)))
+            s = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, params=p, otf=sim.otf)
+            if stream_bytes(s) <= b:
+                return s, True
+        budget = b
     (iy, ix), (oy, ox) = plan.shape, sim.output_shape
     raise ResourceLimitError(f"image = {str(plan.path)!r}: simulating its {iy} x {ix} px ({iy * ix / 1e9:.3g} Gpx at "
                              f"{plan.pixel_m:g} m) into {oy} x {ox} px needs more than {budget / 2**30:.2f} GiB of "
