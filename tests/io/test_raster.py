@@ -4,7 +4,6 @@ geographic; multiband; nodata, alpha; window reads against the array written; ba
 from __future__ import annotations
 
 import pickle
-import struct
 import subprocess
 import sys
 import textwrap
@@ -13,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _forged import forge_size
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -270,21 +270,10 @@ def test_truncated_jp2_is_refused(tmp_path):
     _one_line(e, "t.jp2")
 
 
-def _forge_size(path: Path, size: int) -> None:
-    """Patch a little-endian TIFF's ImageWidth/ImageLength (tags 256, 257) to LONG ``size``."""
-    b = bytearray(path.read_bytes())
-    ifd = struct.unpack("<I", b[4:8])[0]
-    for k in range(struct.unpack("<H", b[ifd : ifd + 2])[0]):
-        e = ifd + 2 + 12 * k
-        if struct.unpack("<H", b[e : e + 2])[0] in (256, 257):
-            b[e + 2 : e + 4], b[e + 8 : e + 12] = struct.pack("<H", 4), struct.pack("<I", size)
-    path.write_bytes(bytes(b))
-
-
 def test_header_claiming_1e10_pixels_is_refused_before_reading(tmp_path):
     path = _write(tmp_path / "huge.tif", np.ones((64, 64), np.uint16), crs=None, tiled=True, blockxsize=16,
                   blockysize=16)  # fmt: skip
-    _forge_size(path, 100_000)  # 10^10 pixels claimed in a file of a few kB
+    forge_size(path, 100_000)  # 10^10 pixels claimed in a file of a few kB
     with pytest.raises(SatchainIOError, match=r"claims 100000 x 100000 px .* damaged or forged header") as e:
         open_raster(path)
     _one_line(e, "huge.tif")
