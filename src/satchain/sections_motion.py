@@ -72,7 +72,9 @@ class JitterPSD(_Frozen):
         if min(p) < 0:
             raise ValueError(f"psd_px2_per_hz = {list(p)!r}: must be >= 0 (a power spectral density)")
         if self.variance_px2 > 1e6:
-            raise ValueError(f"psd_px2_per_hz: the variance {self.variance_px2:.3g} px^2 is beyond 1e6 px^2 (1000 px rms)")
+            raise ValueError(
+                f"psd_px2_per_hz: the variance {self.variance_px2:.3g} px^2 is beyond 1e6 px^2 (1000 px rms)"
+            )
         return self
 
     @property
@@ -100,7 +102,9 @@ def check_earth_rotation(orbit: Any) -> None:
             if v is None:
                 raise ValueError(f"orbit.earth_rotation = true needs orbit.{key} ({why})")
     elif orbit.yaw_steering:
-        raise ValueError("orbit.yaw_steering = true needs orbit.earth_rotation = true (it steers out the Earth's motion)")
+        raise ValueError(
+            "orbit.yaw_steering = true needs orbit.earth_rotation = true (it steers out the Earth's motion)"
+        )
     if lat is not None and inc is not None:
         reach = min(inc, 180.0 - inc)
         if abs(lat) > reach + 1e-9:

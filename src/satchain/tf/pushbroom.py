@@ -54,7 +54,7 @@ _GL8 = np.polynomial.legendre.leggauss(8)
 
 
 def _series_length(a_max: float) -> int:
-    """Terms of a Bessel series in ``J_k(a)``, ``a <= a_max``: ``J_k(a)`` is below 1e-16 past ``a + 10 a^(1/3) + 20``."""
+    """Terms of a Bessel series in ``J_k(a)``, ``a <= a_max``: ``|J_k(a)| < 1e-16`` past ``a + 10 a^(1/3) + 20``."""
     return int(math.ceil(a_max + 10.0 * a_max ** (1.0 / 3.0) + 20.0))
 
 
@@ -164,7 +164,9 @@ def _frequency_nodes(f_hz: np.ndarray, window_s: float) -> tuple[np.ndarray, np.
     return np.concatenate(nodes), np.concatenate(weights)
 
 
-def psd_window(frequency_hz, psd_px2_per_hz, *, window_s: float, line_time_s: float, n_s: int | None = None) -> PSDWindow:
+def psd_window(
+    frequency_hz, psd_px2_per_hz, *, window_s: float, line_time_s: float, n_s: int | None = None
+) -> PSDWindow:
     """The motion of one-sided PSD ``psd_px2_per_hz`` (linear between ``frequency_hz``) through a window ``T``.
 
     Returns the variance about the window mean ``v(s)`` at Gauss-Legendre offsets ``s`` in ``[0, T/2]``, the
@@ -282,11 +284,12 @@ class PushbroomTerms:
         else:
             self.drift_px = (self.earth["tdi_drift_px_per_stage"][0], self.earth["tdi_drift_px_per_stage"][1] + e)
         self.psd: dict[str, PSDWindow] = {}
+        f_top = max((t.frequency_hz[-1] for t in mot.jitter_psd), default=0.0)
+        n_s = int(min(4096, math.ceil(2.0 * f_top * self.window_s) + 64))  # one node set: the tables of an axis add
         for table in mot.jitter_psd:
             w = psd_window(
-                table.frequency_hz, table.psd_px2_per_hz, window_s=self.window_s, line_time_s=self.line_time_s,
-                n_s=int(min(4096, math.ceil(2.0 * max(t.frequency_hz[-1] for t in mot.jitter_psd) * self.window_s) + 64)),
-            )  # fmt: skip
+                table.frequency_hz, table.psd_px2_per_hz, window_s=self.window_s, line_time_s=self.line_time_s, n_s=n_s
+            )
             self.psd[table.axis] = self.psd[table.axis] + w if table.axis in self.psd else w
 
     @property
@@ -303,7 +306,9 @@ class PushbroomTerms:
         for axis in ("act", "alt"):
             if axis in self.psd:
                 w = self.psd[axis]
-                comps[f"jitter_psd_{axis}"] = _on_axis(axis, self._pitch_mm[axis], lambda nu, w=w: jitter_psd_otf(nu, w))
+                comps[f"jitter_psd_{axis}"] = _on_axis(
+                    axis, self._pitch_mm[axis], lambda nu, w=w: jitter_psd_otf(nu, w)
+                )
         if self.drift_px is not None:
             dx, dy = self.drift_px
             px, py = self._pitch_mm["act"], self._pitch_mm["alt"]
@@ -326,8 +331,10 @@ class PushbroomTerms:
             var[osc.axis] += g["rms_px"] ** 2
             step[osc.axis] += g["line_to_line_rms_px"] ** 2
             entry = {"axis": osc.axis, "frequency_hz": osc.frequency_hz, "cycles_per_window": c}
-            oscs.append(entry | {"line_displacement_amplitude_px": g["amplitude_px"],
-                                 "line_displacement_rms_px": g["rms_px"], "line_to_line_rms_px": g["line_to_line_rms_px"]})  # fmt: skip
+            entry["line_displacement_amplitude_px"] = g["amplitude_px"]
+            entry["line_displacement_rms_px"] = g["rms_px"]
+            entry["line_to_line_rms_px"] = g["line_to_line_rms_px"]
+            oscs.append(entry)
         psd = {}
         for axis, w in self.psd.items():
             var[axis] += w.displacement_variance_px2
