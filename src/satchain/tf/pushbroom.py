@@ -379,9 +379,12 @@ def _osc_fn(amplitude_px: float, c: float) -> Callable[[np.ndarray], np.ndarray]
 
 def _on_axis(axis: str, pitch_mm: float, fn: Callable[[np.ndarray], np.ndarray]):
     """A component of (fx, fy) in cy/mm that depends on one axis only, in cy/px of that axis."""
-    if axis == "act":
-        return lambda fx, fy: on_one_axis(np.broadcast_arrays(fx, fy)[0] * pitch_mm, fn)
-    return lambda fx, fy: on_one_axis(np.broadcast_arrays(fx, fy)[1] * pitch_mm, fn)
+    k = 0 if axis == "act" else 1
+
+    def scaled(f_cy_per_mm: np.ndarray) -> np.ndarray:
+        return fn(f_cy_per_mm * pitch_mm)
+
+    return lambda fx, fy: on_one_axis(np.broadcast_arrays(fx, fy)[k], scaled)  # keeps a broadcast grid's 0 strides
 
 
 def _earth_rotation(system) -> dict:
