@@ -121,12 +121,34 @@ def _print_budget(res: dict[str, Any]) -> None:
         f"MTF at Nyquist: ALT {ny['alt']:.4f}, ACT {ny['act']:.4f}   "
         f"MTFA (0..Nyquist, cy/px): ALT {res['mtfa']['alt']:.4f}, ACT {res['mtfa']['act']:.4f}"
     )
+    if "motion_geometry" in res:
+        _print_motion_geometry(res["motion_geometry"])
     for key in ("radiometry", "quality"):
         if key in res:
             console.print(
                 f"[bold]{key}[/]: "
                 + ", ".join(f"{k}={_fmt(v)}" for k, v in res[key].items() if not isinstance(v, (list, dict)))
             )
+
+
+def _print_motion_geometry(g: dict[str, Any]) -> None:
+    """The pushbroom motion's geometry (satchain.tf.pushbroom): one row per quantity, nested ones flattened."""
+    t = Table(title="pushbroom motion geometry (TDI window, line displacement, Earth rotation)")
+    t.add_column("quantity")
+    t.add_column("value")
+
+    def rows(prefix: str, v: Any) -> None:
+        if isinstance(v, dict):
+            for k, item in v.items():
+                rows(f"{prefix}.{k}" if prefix else k, item)
+        elif isinstance(v, list):
+            for i, item in enumerate(v):
+                rows(f"{prefix}[{i}]", item)
+        else:
+            t.add_row(prefix, _fmt(v))
+
+    rows("", g)
+    console.print(t)
 
 
 def _budget(system_obj, freqs: list[float] | None) -> dict[str, Any]:
@@ -306,20 +328,25 @@ def simulate(
     """Simulate the satellite image of a scene or an image (exact, tiled, any size); with several inputs or
     --sweep, one image per case into the -o directory, with manifest.json / manifest.csv."""
     from satchain.engine.files import simulate_file
+    from satchain.tf.pushbroom import static_path_note
 
+    system_obj = _system(preset, system)
+    note = static_path_note(system_obj)  # the static path: MTF of the motion terms, no geometry
+    if note is not None:
+        print_warning(note)
     if len(inputs) > 1 or sweep:
         from satchain.cli_sweep import simulate_cases
 
         options = dict(scene_pixel_m=scene_pixel_m, input_scale=input_scale, units=units_, noise=not no_noise,
                        scheduler=scheduler, band=band)  # fmt: skip
-        return simulate_cases(inputs, out, _system(preset, system), sweep_texts=sweep or [], seed=seed,
+        return simulate_cases(inputs, out, system_obj, sweep_texts=sweep or [], seed=seed,
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
     check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
     bars = _StageBars()
     try:
         r = simulate_file(
-            input_, out, _system(preset, system), scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+            input_, out, system_obj, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
             units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
             scheduler=scheduler, progress=bars, notify=_say, names=_SIMULATE_OPTIONS, band=band,
         )  # fmt: skip

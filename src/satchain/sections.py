@@ -5,131 +5,41 @@
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar, Literal
+from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
-from satchain.errors import ConfigError
+from satchain._sections_base import (  # noqa: F401  (re-exported: other modules import them from here)
+    _allowed,
+    _config_error,
+    _Frozen,
+    _not_a_number,
+    _number_kinds,
+    _StrictNumbers,
+)
+from satchain.sections_motion import JitterPSD, Oscillation, as_tables, check_earth_rotation
 
 EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
 EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
+EARTH_ROTATION_RAD_PER_S = 7.292115e-5  # IERS nominal mean angular velocity
 
 __all__ = [
     "EARTH_GM_M3_PER_S2",
     "EARTH_RADIUS_M",
+    "EARTH_ROTATION_RAD_PER_S",
     "Atmosphere",
     "Band",
     "Detector",
     "Illumination",
+    "JitterPSD",
     "Motion",
     "Optics",
     "Orbit",
+    "Oscillation",
     "Radiometry",
     "Spiders",
 ]
-
-
-def _number_kinds(annotation: Any) -> tuple[bool, bool]:
-    """(takes a number, takes a bool or a string) for a field annotation, looking through unions and
-    containers: ``float | None`` -> (True, False); ``tuple[float, ...]`` -> (True, False); ``bool`` ->
-    (False, True)."""
-    if annotation in (float, int):
-        return True, False
-    if annotation in (bool, str, Any) or getattr(annotation, "__origin__", None) is Literal:
-        return False, True
-    args = [a for a in getattr(annotation, "__args__", ()) if a is not type(None) and a is not Ellipsis]
-    if getattr(annotation, "__origin__", None) is dict:
-        args = args[1:]  # the values (TOML keys are always strings)
-    kinds = [_number_kinds(a) for a in args]
-    return any(k[0] for k in kinds), any(k[1] for k in kinds)
-
-
-_BOUNDS = (("gt", True, True), ("ge", True, False), ("lt", False, True), ("le", False, False))
-
-
-def _allowed(field: Any) -> str:
-    """The interval a field's constraints allow, e.g. ``" in (0, 1e+08]"``, or ``""``."""
-    lo = hi = None
-    lo_open = hi_open = False
-    for m in getattr(field, "metadata", ()):
-        for attr, is_lo, is_open in _BOUNDS:
-            v = getattr(m, attr, None)
-            if v is not None:
-                lo, lo_open = (v, is_open) if is_lo else (lo, lo_open)
-                hi, hi_open = (v, is_open) if not is_lo else (hi, hi_open)
-    if lo is None and hi is None:
-        return ""
-    left, right = ("(" if lo_open or lo is None else "["), (")" if hi_open or hi is None else "]")
-    return f" in {left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{right}"
-
-
-def _not_a_number(value: Any, allowed: str = "") -> str | None:
-    """Why ``value`` cannot stand for a number (a bool, a string, NaN/inf), or None when it can."""
-    if isinstance(value, (bool, np.bool_)):
-        return f"must be a number{allowed}, not the boolean {str(bool(value)).lower()}"
-    if isinstance(value, (str, bytes)):
-        return f"must be a number{allowed}, not a string (write it without quotes)"
-    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
-        return f"not a finite number; must be a finite number{allowed}"
-    return None
-
-
-def _config_error(exc: ValidationError, title: str = "invalid imaging system") -> ConfigError:
-    """Turn pydantic's report into one ConfigError naming key, value and allowed range."""
-    lines = []
-    for e in exc.errors():
-        loc = ".".join(str(p) for p in e["loc"])
-        msg = e["msg"].removeprefix("Value error, ")
-        if e["type"] == "extra_forbidden":
-            lines.append(f"{loc}: unknown key (check the spelling; allowed keys are listed in the docs)")
-        elif e["type"] == "missing":
-            lines.append(f"{loc}: required key is missing")
-        elif loc and "input" in e and not isinstance(e["input"], dict) and not msg.startswith(loc):
-            lines.append(f"{loc} = {e['input']!r}: {msg[0].lower() + msg[1:]}")
-        else:
-            lines.append(f"{loc + ': ' if loc and not msg.startswith(loc) else ''}{msg}")
-    return ConfigError(f"{title}: " + "; ".join(lines))
-
-
-class _StrictNumbers(BaseModel):
-    """Refuses a bool (``true`` taken as 1), a string (``"0.035"``) or NaN/inf where a number is wanted, in
-    every field and in the items of tuple and dict fields, and anything but true/false for a flag, with a
-    message naming the value and what is allowed."""
-
-    #: the start of the one-line error of a direct construction, e.g. ``ImagingSystem(orbit=5)``
-    _error_title: ClassVar[str] = ""
-
-    def __init__(self, /, **data: Any) -> None:
-        try:
-            super().__init__(**data)
-        except ValidationError as exc:
-            raise _config_error(exc, self._error_title or f"invalid {type(self).__name__}") from None
-
-    __init__.__pydantic_base_init__ = True  # type: ignore[attr-defined]  # validation itself never calls it
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _strict_numbers(cls, value: Any, info) -> Any:
-        field = cls.model_fields[info.field_name]
-        if field.annotation is bool:
-            if not isinstance(value, (bool, np.bool_)):
-                raise ValueError("must be true or false")
-            return value
-        numeric, other = _number_kinds(field.annotation)
-        if not numeric or other:
-            return value
-        several = isinstance(value, (list, tuple, dict))
-        items = list(value.values() if isinstance(value, dict) else value) if several else [value]
-        for item in items:
-            why = _not_a_number(item, "" if several else _allowed(field))
-            if why is not None:
-                raise ValueError(f"{why} (the entry {item!r})" if several else why)
-        return value
-
-
-class _Frozen(_StrictNumbers):
-    model_config = ConfigDict(frozen=True, extra="forbid", validate_default=True)
 
 
 class Orbit(_Frozen):
@@ -143,6 +53,12 @@ class Orbit(_Frozen):
 
     altitude_m: float = Field(gt=0, le=1e8, description="height above the ground, m")
     off_nadir_deg: float = Field(default=0.0, ge=0, lt=90, description="look angle across-track at the satellite")
+    # --- the Earth's rotation under a pushbroom scan (satchain.sections_motion, README "Pushbroom TDI motion")
+    latitude_deg: float | None = Field(default=None, ge=-90, le=90, description="latitude of the scene")
+    inclination_deg: float | None = Field(default=None, ge=0, le=180, description="orbit inclination")
+    earth_rotation: bool = Field(default=False, description="the ground moves east under the satellite")
+    yaw_steering: bool = Field(default=False, description="detector line kept across the ground's relative motion")
+    pass_direction: Literal["descending", "ascending"] = "descending"
 
     @model_validator(mode="after")
     def _below_horizon(self) -> Orbit:
@@ -152,6 +68,7 @@ class Orbit(_Frozen):
                 f"orbit.off_nadir_deg = {self.off_nadir_deg!r}: must be below {limit:.2f} deg (the Earth's limb "
                 f"seen from {self.altitude_m:g} m)"
             )
+        check_earth_rotation(self)
         return self
 
     @property
@@ -431,6 +348,22 @@ class Motion(_Frozen):
     smear_px: float = Field(default=0.0, ge=0, le=100, description="along-track (ALT, y) linear smear length")
     smear_act_px: float = Field(default=0.0, ge=0, le=100, description="across-track (ACT, x) smear, e.g. yaw")
     jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
+    # --- pushbroom TDI motion in time (satchain.sections_motion, satchain.tf.pushbroom)
+    line_rate_error: float = Field(
+        default=0.0, ge=-0.5, le=0.5, description="image motion per line period / one line, minus 1 (TDI mismatch)"
+    )
+    oscillation: tuple[Oscillation, ...] = Field(default=(), max_length=64, description="[[motion.oscillation]]")
+    jitter_psd: tuple[JitterPSD, ...] = Field(default=(), max_length=16, description="[motion.jitter_psd] table(s)")
+
+    @field_validator("jitter_psd", mode="before")
+    @classmethod
+    def _one_or_more(cls, v: Any) -> Any:
+        return as_tables(v)
+
+    @property
+    def time_varying(self) -> bool:
+        """True when the motion has terms that change during a TDI window (oscillations, a jitter PSD)."""
+        return bool(self.oscillation or self.jitter_psd)
 
 
 class Radiometry(_Frozen):

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
 from satchain import units
 from satchain._argcheck import checked
@@ -84,6 +84,18 @@ class ImagingSystem(_Frozen):
     bands: tuple[Band, ...] = Field(default=(), description="per-band optics of a multiband camera ([[bands]])")
     provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
+    @model_validator(mode="after")
+    def _one_line_rate(self) -> ImagingSystem:
+        e = self.detector.tdi_sync_error
+        if e != 0 and (self.motion.line_rate_error != 0 or self.orbit.earth_rotation):
+            lr = self.motion.line_rate_error
+            other = f"motion.line_rate_error = {lr!r}" if lr != 0 else "orbit.earth_rotation = true"
+            raise ValueError(
+                f"detector.tdi_sync_error = {e!r} and {other}: both set the TDI line-rate mismatch; give "
+                "motion.line_rate_error (the same quantity) instead of detector.tdi_sync_error"
+            )
+        return self
+
     # ----------------------------------------------------------------- construction
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ImagingSystem:
@@ -100,13 +112,26 @@ class ImagingSystem(_Frozen):
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (the TOML structure; pitches and active widths in explicit form)."""
-        return self.model_dump(mode="json", exclude_none=True)
+        d = self.model_dump(mode="json", exclude_none=True)
+        for section, defaults in _TIME_KEYS.items():  # the pushbroom motion keys appear only when set
+            for key, default in defaults.items():
+                if d[section].get(key) == default:
+                    d[section].pop(key)
+        return d
 
     def replace(self, values: dict[str, Any]) -> ImagingSystem:
         """A new validated system with dotted keys replaced, e.g. ``{"optics.obscuration_ratio": 0.3}``.
 
         For ``optics.focal_length_m`` / ``optics.f_number`` the other one follows (aperture fixed);
-        for ``detector.pitch_*`` the active width keeps its fill factor.
+        for ``detector.pitch_*`` the active width keeps its fill factor. An entry of a table list is named by
+        its index: ``{"motion.oscillation[0].amplitude_px": 2.0}``.
+
+        Examples
+        --------
+        >>> s = load_preset("ankarasat3").replace({"motion.oscillation": [dict(axis="act", amplitude_px=0.5,
+        ...     frequency_hz=4465.0)]})
+        >>> s.replace({"motion.oscillation[0].amplitude_px": 2.0}).motion.oscillation[0].amplitude_px
+        2.0
         """
         d = self.model_dump(mode="python")
         for key, v in values.items():
@@ -114,7 +139,7 @@ class ImagingSystem(_Frozen):
             if section not in _SECTIONS or not field:
                 raise ConfigError(f"parameter {key!r}: must be '<{'|'.join(_SECTIONS)}>.<field>'")
             sub = d[section]
-            if field not in sub and field not in ("pitch_m", "fill_factor", "wavelength_m"):
+            if field.split(".")[0].split("[")[0] not in sub and field not in ("pitch_m", "fill_factor", "wavelength_m"):
                 raise ConfigError(f"parameter {key!r}: {section} has no field {field!r}")
             if section == "optics" and field in ("focal_length_m", "f_number"):
                 sub.pop("f_number" if field == "focal_length_m" else "focal_length_m")
@@ -126,7 +151,7 @@ class ImagingSystem(_Frozen):
                 if field == "pitch_m":
                     sub.pop("pitch_x_m"), sub.pop("pitch_y_m")
                 sub.setdefault("fill_factor", ff)
-            sub[field] = v
+            _set(sub, field, v, key)
         return type(self).from_dict(d)
 
     def for_band(self, index: int) -> ImagingSystem:
@@ -305,6 +330,36 @@ class ImagingSystem(_Frozen):
 
 
 _SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination", "atmosphere")
+
+#: The pushbroom motion keys and their defaults: ``to_dict`` leaves them out at these values.
+_TIME_KEYS = {
+    "orbit": {"earth_rotation": False, "yaw_steering": False, "pass_direction": "descending"},
+    "motion": {"line_rate_error": 0.0, "oscillation": [], "jitter_psd": []},
+}
+
+
+def _set(sub: dict[str, Any], field: str, value: Any, key: str) -> None:
+    """Set ``field`` of a section's dict, following ``name[i].name`` into table lists."""
+    parts = [p for p in field.replace("[", ".[").split(".") if p]
+    node: Any = sub
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if part.startswith("["):
+            if not (part.endswith("]") and part[1:-1].isdigit()) or not isinstance(node, (list, tuple)):
+                raise ConfigError(f"parameter {key!r}: {part!r} does not index a list of tables")
+            idx = int(part[1:-1])
+            if idx >= len(node):
+                raise ConfigError(f"parameter {key!r}: index {idx} is beyond the {len(node)} entries")
+            part = idx
+        elif not isinstance(node, dict) or (i > 0 and part not in node):
+            raise ConfigError(f"parameter {key!r}: no field {part!r} there")
+        if last:
+            node[part] = value
+        else:
+            child = node[part]
+            if isinstance(child, tuple):
+                child = node[part] = list(child)
+            node = child
 
 
 def _read_toml(path: str | Path) -> dict[str, Any]:

@@ -67,6 +67,9 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
         fmm = units.cy_per_px_to_cy_per_mm(fpx, pitch_m=_pitch(system, d))
         out["mtfa"][d] = mtfa(fpx, m(fmm), f_max_cy_per_px=0.5)
     out["mtf_at_nyquist"] = mtf_at_nyquist(system, otf=otf)
+    geometry = otf.pushbroom.geometry() if getattr(otf, "pushbroom", None) is not None else None
+    if geometry is not None:
+        out["motion_geometry"] = geometry  # line displacement, TDI drift, Earth-rotation shear/scale/rotation
     from satchain.quality import predict_quality
     from satchain.radiometry import radiometric_budget
 

@@ -19,6 +19,9 @@ _STYLE = {
     "jitter": dict(color="tab:brown"),
     "charge_diffusion": dict(color="tab:olive"),
     "tdi_sync": dict(color="tab:cyan"),
+    "tdi_drift": dict(color="tab:cyan", linestyle="--"),
+    "jitter_psd_act": dict(color="tab:brown", linestyle="--"),
+    "jitter_psd_alt": dict(color="tab:brown", linestyle=":"),
     "system": dict(color="black", linewidth=2.2),
 }
 

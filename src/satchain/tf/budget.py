@@ -15,6 +15,9 @@ The components of an :class:`~satchain.system.ImagingSystem`, in order:
     Gaussian line-of-sight jitter, when non-zero
 ``turbulence``, ``aerosol``
     atmospheric blur (:mod:`satchain.tf.atmosphere`), when the system's ``[atmosphere]`` enables them
+``oscillation_1``, ..., ``jitter_psd_act``, ``jitter_psd_alt``, ``tdi_drift``
+    pushbroom TDI motion averaged over the TDI window (:mod:`satchain.tf.pushbroom`), when the system has
+    ``[[motion.oscillation]]``, ``[motion.jitter_psd]``, ``motion.line_rate_error`` or ``orbit.earth_rotation``
 
 Examples
 --------
@@ -134,6 +137,12 @@ class SystemOTF:
             comps["jitter"] = lambda fx, fy: _mot.jitter_otf(
                 fx, fy, rms_x_m=mot.jitter_rms_px * det.pitch_x_m, rms_y_m=mot.jitter_rms_px * det.pitch_y_m
             )
+        self.pushbroom = None
+        if mot.line_rate_error != 0 or mot.time_varying or s.orbit.earth_rotation:
+            from satchain.tf.pushbroom import PushbroomTerms
+
+            self.pushbroom = PushbroomTerms(s)  # exposure-averaged over the TDI window; geometry in .geometry()
+            comps.update(self.pushbroom.components())
         return comps
 
     @property
