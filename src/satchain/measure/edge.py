@@ -339,7 +339,7 @@ def _region(image, roi, valid, nodata):
     mask, flags = valid_mask(image, valid, nodata), []
     if mask is None and valid is None and nodata is None:
         mask, note = zero_fill_mask(image)
-        flags = [("nodata_fill", note)] if note else []
+        flags = [("nodata_fill" if mask is not None else "nodata_fill_unsure", note)] if note else []
     if mask is None:
         return crop_roi(image, roi, min_size=12), None, flags
     data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
