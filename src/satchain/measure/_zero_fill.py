@@ -68,24 +68,27 @@ class FillEvidence:
     note: str | None
 
 
-def _noise_sigma(f: np.ndarray, rest: np.ndarray) -> float:
-    """Pixel noise of the non-zero pixels (Immerkaer's Laplacian mask, MAD); 0 on a noise-free image."""
+def _border_steps(a: np.ndarray, z: np.ndarray, band_rows: int = 512):
+    """Per border pixel: (shortfall below the pixel 2 px in, the border's tilt from the pixel axes in deg, the
+    value 2 px in); and the border pixels' values.  Computed over bands of rows (memory O(band))."""
+    pad = 20  # covers the filters' supports (4 + 1 + 12 px) and the 2 px step
+    out = [[], [], [], []]
+    for y0 in range(0, a.shape[0], band_rows):
+        b0, b1 = max(y0 - pad, 0), min(y0 + band_rows + pad, a.shape[0])
+        band = _band_steps(a[b0:b1].astype(np.float32), z[b0:b1], y0 - b0, min(band_rows, a.shape[0] - y0))
+        for o, v in zip(out, band, strict=True):
+            o.append(v)
+    return tuple(np.concatenate(o) for o in out)
+
+
+def _band_steps(f: np.ndarray, z: np.ndarray, c0: int, n_rows: int):
+    """:func:`_border_steps` for the border pixels in rows ``c0 : c0 + n_rows`` of one band."""
     from scipy import ndimage as ndi
 
-    core = ndi.binary_erosion(rest, np.ones((3, 3), bool))
-    if np.count_nonzero(core) < 64:
-        return float("nan")
-    lap = ndi.correlate(f, np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32), mode="nearest")[core]
-    return 1.482602218505602 * float(np.median(np.abs(lap))) / 6.0
-
-
-def _border_steps(f: np.ndarray, z: np.ndarray, rest: np.ndarray):
-    """(shortfall of each border pixel below the pixel 2 px in, its border's tilt from the pixel axes in deg,
-    the border pixels' values, the values 2 px in)."""
-    from scipy import ndimage as ndi
-
+    rest = ~z
     border = ndi.binary_dilation(z, np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], bool)) & rest
-    by, bx = np.nonzero(border)
+    by, bx = np.nonzero(border[c0 : c0 + n_rows])
+    by = by + c0
     g = ndi.gaussian_filter(z.astype(np.float32), 1.0)
     gy, gx = ndi.sobel(g, axis=0), ndi.sobel(g, axis=1)
     jxx, jyy, jxy = (ndi.gaussian_filter(v, _ORIENT_SIGMA)[by, bx] for v in (gx * gx, gy * gy, gx * gy))
@@ -103,7 +106,7 @@ def _border_steps(f: np.ndarray, z: np.ndarray, rest: np.ndarray):
     ix = np.clip(np.rint(bx + FILL_STEP_IN_PX * nx).astype(int), 0, f.shape[1] - 1)
     inside = rest[iy, ix] & ~border[iy, ix]
     fb, fin = f[by, bx][inside], f[iy, ix][inside]
-    return (fin - fb) / np.maximum(fin, 1.0), tilt[inside], f[by, bx], fin
+    return (fin - fb) / np.maximum(fin, 1.0), tilt[inside], fin, f[by, bx]
 
 
 def zero_fill_evidence(image) -> FillEvidence | None:
@@ -118,13 +121,15 @@ def zero_fill_evidence(image) -> FillEvidence | None:
         return None
     if not (z[0].any() or z[-1].any() or z[:, 0].any() or z[:, -1].any()):
         return None
+    from satchain.measure.find import estimate_noise
+
     rest = ~z
-    f = a.astype(np.float32)
-    sigma = _noise_sigma(f, rest)
-    if not np.isfinite(sigma):
+    if a.size - n < 64:
         return None
-    s, tilt, fb, fin = _border_steps(f, z, rest)
-    hi = float(np.percentile(f[rest], 99.5))
+    sigma = estimate_noise(a, valid=rest)
+    s, tilt, fin, fb = _border_steps(a, z)
+    k = max(1, int(np.sqrt(a.size / 4e6)))  # the data's range from <= 4 Mpx
+    hi = float(np.percentile(a[::k, ::k][rest[::k, ::k]], 99.5))
     gap = float(np.percentile(fb, 1)) / hi
     gap_min = max(FILL_GAP_SIGMA * sigma / hi, FILL_GAP_RANGE)
     tilted = tilt >= FILL_TILT_MIN_DEG
