@@ -215,7 +215,8 @@ def measure_edge(
         Pixels to measure (the image's shape; True = measure), e.g. an area-of-interest mask.  Excluded
         pixels are left out of the edge location, the ESF bins and the noise estimate, and are never
         clipping; a line whose edge window touches one is not used.  Without ``valid`` and ``nodata`` the
-        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``).
+        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``; flag
+        ``nodata_fill_unsure`` where they may be one but stay data: :mod:`satchain.measure._zero_fill`).
     nodata : float, optional
         Pixels equal to this value are excluded as well (NaN: NaN pixels).
     frequency_axis : {"normal", "row"}
