@@ -49,7 +49,7 @@ def baotou(angle, fraction, noise, dtype, rng, frame=False):
 
 def _row(name, c: Counter) -> str:
     n = sum(c.values())
-    return f"{name:<44} n={n:5d}  " + "  ".join(f"{v} {100 * c[v] / n:5.1f} %" for v in VERDICTS)
+    return f"{name:<48} n={n:5d}  " + "  ".join(f"{v} {100 * c[v] / n:5.1f} %" for v in VERDICTS)
 
 
 def verdict(img) -> str:
