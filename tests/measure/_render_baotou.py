@@ -44,13 +44,14 @@ def render_baotou(
     a: float = 0.1,
     half_px: float = 44.0,
     aoi_px: float | None = None,
+    fill_fraction: float = 0.35,
     seed: int | None = 0,
     sub: int = 12,
 ):
     """(uint16 image, valid mask) of the Baotou-like target; ``seed`` None: noise-free, not quantised.
 
     ``phase`` shifts the target centre (px) from the image centre; ``aoi_px`` is the side of the rotated
-    square area of interest (default: 35 % of the image outside it).
+    square area of interest (default: ``fill_fraction`` of the image outside it).
     """
     t = np.deg2rad(angle_deg)
     c, s = np.cos(t), np.sin(t)
@@ -76,7 +77,7 @@ def render_baotou(
     uc = (xx - cx) * c + (yy - cy) * s
     vc = -(xx - cx) * s + (yy - cy) * c
     if aoi_px is None:
-        aoi_px = _aoi_for_fraction(uc, vc, 0.35)
+        aoi_px = _aoi_for_fraction(uc, vc, fill_fraction)
     valid = (np.abs(uc) < aoi_px / 2) & (np.abs(vc) < aoi_px / 2)
     if seed is not None:
         rng = np.random.default_rng(seed)

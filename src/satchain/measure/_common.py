@@ -9,6 +9,7 @@ import numpy as np
 
 from satchain._validate import as_float_array
 from satchain.errors import InputError
+from satchain.measure._zero_fill import zero_fill_mask
 
 __all__ = [
     "valid_mask",
@@ -91,50 +92,6 @@ def valid_mask(image, valid=None, nodata=None, *, name: str = "image") -> np.nda
     if out is not None and not np.any(out):
         raise InputError(f"{name}: every pixel is excluded (nodata / valid mask); nothing to measure")
     return out
-
-
-FILL_MIN_FRACTION = 0.01  # zeros below this share of an image are never taken for a fill
-FILL_GAP_SIGMA = 10.0  # ... nor when the pixels bordering them come within this many noise sigma of 0
-FILL_GAP_RANGE = 0.05  # ... or within this share of the data's range
-
-
-def zero_fill_mask(image) -> tuple[np.ndarray | None, str | None]:
-    """Where an integer image is 0-filled outside an area of interest (a cal/val crop), the mask of its other
-    pixels and a one-line note; else (None, None).
-
-    Taken as a fill only on evidence: at least 1 % of the pixels are exactly 0 and reach the image border,
-    the rest is noisy (a pixel noise above 0), and the pixels bordering the zeros stand off 0 by at least
-    ``max(10 sigma, 5 % of the range)`` (1st percentile): a fill cuts across the scene, while a dark
-    plateau clipped at 0 is met by values near 0.  A float image, or zeros that can be scene, stay data.
-    """
-    from scipy import ndimage as ndi
-
-    a = np.asarray(image)
-    if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer) or min(a.shape) < 8:
-        return None, None
-    z = a == 0
-    n = int(np.count_nonzero(z))
-    if n < FILL_MIN_FRACTION * a.size or n == a.size:
-        return None, None
-    if not (z[0].any() or z[-1].any() or z[:, 0].any() or z[:, -1].any()):
-        return None, None
-    rest = ~z
-    core = ndi.binary_erosion(rest, np.ones((3, 3), bool))
-    if np.count_nonzero(core) < 64:
-        return None, None
-    f = a.astype(np.float64)
-    lap = ndi.correlate(f, np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], float), mode="nearest")[core]
-    sigma = 1.482602218505602 * float(np.median(np.abs(lap))) / 6.0
-    border = ndi.binary_dilation(z, np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], bool)) & rest
-    near = f[border]
-    hi = float(np.percentile(f[rest], 99.5))
-    if not sigma > 0 or near.size == 0 or np.percentile(near, 1) < max(FILL_GAP_SIGMA * sigma, FILL_GAP_RANGE * hi):
-        return None, None
-    note = (
-        f"{n} pixel(s) ({100 * n / a.size:.0f} %) equal to 0 taken as nodata (a fill outside the data, whose "
-        "neighbours stand far off 0); give nodata / --nodata to set it"
-    )
-    return rest, note
 
 
 def fill_invalid(a: np.ndarray, mask: np.ndarray | None) -> np.ndarray:

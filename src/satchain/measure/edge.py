@@ -215,7 +215,8 @@ def measure_edge(
         Pixels to measure (the image's shape; True = measure), e.g. an area-of-interest mask.  Excluded
         pixels are left out of the edge location, the ESF bins and the noise estimate, and are never
         clipping; a line whose edge window touches one is not used.  Without ``valid`` and ``nodata`` the
-        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``).
+        zeros of an integer image are excluded where they are evidently a fill (flag ``nodata_fill``; flag
+        ``nodata_fill_unsure`` where they may be one but stay data: :mod:`satchain.measure._zero_fill`).
     nodata : float, optional
         Pixels equal to this value are excluded as well (NaN: NaN pixels).
     frequency_axis : {"normal", "row"}
@@ -339,7 +340,7 @@ def _region(image, roi, valid, nodata):
     mask, flags = valid_mask(image, valid, nodata), []
     if mask is None and valid is None and nodata is None:
         mask, note = zero_fill_mask(image)
-        flags = [("nodata_fill", note)] if note else []
+        flags = [("nodata_fill" if mask is not None else "nodata_fill_unsure", note)] if note else []
     if mask is None:
         return crop_roi(image, roi, min_size=12), None, flags
     data = crop_roi(fill_invalid(image, mask), roi, min_size=12)

@@ -35,8 +35,9 @@ from scipy.stats import chi2 as chi2_dist
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, first_crossing, valid_mask, zero_fill_mask
+from satchain.measure._common import ResultMixin, first_crossing, valid_mask
 from satchain.measure._edge_axis import check_axis
+from satchain.measure._zero_fill import zero_fill_mask
 from satchain.measure.edge import EdgeResult, measure_edge
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
@@ -379,7 +380,8 @@ def measure_found_edges(
     nodata : float, optional
         Pixels equal to this value are excluded as well (0 for the zero-filled crops cal/val tools write).
         Without ``valid`` and ``nodata``, the zeros of an integer image are excluded where they are evidently a
-        fill (:func:`~satchain.measure._common.zero_fill_mask`; flagged).
+        fill (:func:`~satchain.measure._zero_fill.zero_fill_mask`, noisy or not; flagged, as is a fill that
+        the evidence cannot tell from a clipped dark area and that stays data).
     frequency_axis : {"normal", "row"}
         ``"normal"`` (default): every edge's MTF along its normal.  ``"row"``: along the image row (ACT) or
         column (ALT), as MTF_Estimator reports it: each edge's normal axis scaled by the cosine of its tilt
