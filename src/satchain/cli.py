@@ -328,12 +328,8 @@ def simulate(
     """Simulate the satellite image of a scene or an image (exact, tiled, any size); with several inputs or
     --sweep, one image per case into the -o directory, with manifest.json / manifest.csv."""
     from satchain.engine.files import simulate_file
-    from satchain.tf.pushbroom import static_path_note
 
     system_obj = _system(preset, system)
-    note = static_path_note(system_obj)  # the static path: MTF of the motion terms, no geometry
-    if note is not None:
-        print_warning(note)
     if len(inputs) > 1 or sweep:
         from satchain.cli_sweep import simulate_cases
 

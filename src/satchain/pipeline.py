@@ -96,7 +96,8 @@ def _stage_simulate(
     system, otf = (budget.system, budget.otf) if built is None else (built, SystemOTF(built))
     src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=otf)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=otf,
+                    motion_seed=c.seed)  # fmt: skip
     check_simulation_memory(sim, focal_plane="coarse")
     coarse = sim.decimate(src, progress=lambda d, t: progress("simulate", d, t + 1))
     sensor = sensor_from_system(system)

@@ -297,13 +297,6 @@ def _predict_wedges(
     return out
 
 
-def _motion_notes(system: Any) -> tuple[str, ...]:
-    from satchain.tf.pushbroom import static_path_note
-
-    note = static_path_note(system)
-    return () if note is None else (note,)
-
-
 def saturation_warnings(sensor: Any, truth: Mapping[str, Any]) -> tuple[str, ...]:
     """Targets whose brightest reflectance reaches the full well (they will be clipped): say so."""
     if sensor is None or not np.isfinite(sensor.full_well_e):
@@ -363,7 +356,7 @@ def predict(
         quality=quality,
         gsd_los_m=system.gsd_los_m,
         elevation_deg=system.orbit.elevation_deg,
-        warnings=saturation_warnings(sensor, truth) + _motion_notes(system),
+        warnings=saturation_warnings(sensor, truth),
         otf2d=_SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names)),
         noise_sigma=sensor_noise_reflectance(sensor),
     )

@@ -145,7 +145,7 @@ def simulate_image(
     images, valids = [], []
     for i, src in enumerate(srcs):
         s = system.for_band(idx[i] - 1)
-        sim = Simulator(s, input_pixel_m=px, input_shape=src.shape_px)
+        sim = Simulator(s, input_pixel_m=px, input_shape=src.shape_px, motion_seed=seed)  # one motion, every band
         check_simulation_memory(sim)
         sensor = sensor_from_system(s) if (units != "reflectance" or noise) else None
         img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=g._seed(seed, i))

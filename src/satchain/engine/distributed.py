@@ -207,7 +207,7 @@ def simulate_distributed(
         _require("zarr")
     _require("dask")
     src = as_ground_truth(source, pixel_m=pixel_m)
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, motion_seed=seed)
     sim.check_frame()  # before stage 1
     coarse = decimate_distributed(sim, src, scheduler=scheduler, progress=progress)
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)

@@ -212,7 +212,7 @@ def simulate_file(
         raise ConfigError(f"{name('band')} {band!r}: applies to a GDAL raster input (one of "
                           f"{', '.join(GDAL_SUFFIXES)}) without {name('focal_plane')}")  # fmt: skip
     src, _ = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
-    sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None)
+    sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None, seed)
     if min(src.shape_px) < MIN_INPUT_PX:
         raise ConfigError(
             f"{name('input')} {str(input_)!r} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x "
@@ -243,9 +243,9 @@ def _check_paths(input_: str | os.PathLike, out: Path, fp_path: Path | None, nam
     check_sidecars(preview)  # a user's .png of that name is not replaced
 
 
-def _plan(system: ImagingSystem, src: SceneSource, fp_grid: str | None) -> tuple[Simulator, bool]:
+def _plan(system: ImagingSystem, src: SceneSource, fp_grid: str | None, seed: int = 0) -> tuple[Simulator, bool]:
     """The simulator and whether it streams; the full-frame path is refused up front when it cannot fit."""
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, motion_seed=seed)
     streamed = choose_streamed(sim, focal_plane=fp_grid)
     if not streamed:
         check_simulation_memory(sim, focal_plane=fp_grid)

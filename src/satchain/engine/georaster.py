@@ -357,7 +357,7 @@ def simulate_raster(
     sources = [_band_source(plan, b, input_scale) for b in bands]
     _check_output_disk(plan, system, len(bands), units, out)  # before planning, which grows with the input
     budget = min(float(memory_bytes or WORK_BYTES), float(memory_limit_bytes()))
-    planned = [_simulator(s, plan, budget) for s in systems]
+    planned = [_simulator(s, plan, budget, seed) for s in systems]  # one line-of-sight motion for every band
     sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
     sim0 = sims[0]
     sensor = sensor_from_system(systems[0]) if (units != "reflectance" or noise) else None
@@ -425,14 +425,14 @@ def _in_memory(sim, budget: float) -> bool:
     return simulation_bytes(sim) <= budget and sim.frame_bytes <= sim.params.max_frame_bytes
 
 
-def _simulator(system, plan: _Plan, budget: float):
+def _simulator(system, plan: _Plan, budget: float, seed: int = 0):
     """``(simulator, streamed)`` of a band: in memory when its estimate fits ``budget``, else streamed in tiles
     that fit."""
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.stream import stream_bytes
     from satchain.errors import ResourceLimitError
 
-    sim = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape)
+    sim = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, motion_seed=seed)
     if _in_memory(sim, budget):
         return sim, False
     if min(sim.k) < 1:  # an output finer than the input is not a streaming job: in memory, if it fits at all
@@ -448,7 +448,8 @@ def _simulator(system, plan: _Plan, budget: float):
     for b in sorted({budget, max(budget, float(memory_limit_bytes()))}):
         for t in (2048, 1024, 512, 256, 128):
             p = SimParams(stream_tile_px=t, max_tile_bytes=int(min(640 * 2**20, b / 3)))
-            s = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, params=p, otf=sim.otf)
+            s = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, params=p, otf=sim.otf,
+                          motion_seed=seed)  # fmt: skip
             if stream_bytes(s) <= b:
                 return s, True
         budget = b

@@ -34,7 +34,7 @@ from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
 
-__all__ = ["SimParams", "Simulator", "simulate"]
+__all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
 
 Progress = Callable[[int, int], None]
 Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -123,6 +123,9 @@ def _int_ratio(k: float) -> int | None:
 class Simulator:
     """Image formation of ``system`` from a ground truth of ``input_shape`` pixels of ``input_pixel_m``.
 
+    A system with pushbroom motion in time (:func:`has_pushbroom_motion`) forms its rows along the line of sight
+    of each instant of their TDI window (:mod:`satchain.engine.timepath`); ``motion_seed`` draws its jitter.
+
     Examples
     --------
     >>> from satchain import load_preset
@@ -139,6 +142,7 @@ class Simulator:
         input_shape: tuple[int, int],
         params: SimParams = SimParams(),  # noqa: B008
         otf: SystemOTF | None = None,
+        motion_seed: int = 0,
     ):
         a = check_range("input_pixel_m", input_pixel_m, 0, None, lo_open=True)
         self.system, self.params, self.input_pixel_m = system, params, a
@@ -162,11 +166,25 @@ class Simulator:
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
+        self.time_path = None  # pushbroom motion in time (set_time_path)
+        self._exclude: tuple[str, ...] = ("detector",)
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
         self.f_cut = self.otf.cutoff_cy_per_mm / min(self.to_cy_per_mm)  # cycles per input pixel, the wider axis
         self._plan_decimation()
         self._plan_frame()
+        if has_pushbroom_motion(system):  # rows formed in time along the line of sight (engine.timepath)
+            from satchain.engine.timepath import time_path
+
+            self.set_time_path(time_path(system, self.output_shape[0], seed=motion_seed))
+
+    def set_time_path(self, path) -> None:
+        """Form the image in time along ``path`` (:func:`satchain.engine.timepath.time_path`): every row at the
+        line of sight of each instant of its TDI window; the exposure-averaged OTF terms of that motion are then
+        left out of the static OTF (the path applies them, with their geometry). None: the static image."""
+        self.time_path = path
+        names = () if path is None else tuple(n for n in self.otf.component_names if _is_pushbroom(n))
+        self._exclude = ("detector", *names)
 
     # ------------------------------------------------------------------ planning
     def _plan_decimation(self) -> None:
@@ -383,7 +401,7 @@ class Simulator:
         ny_f, nx_f = ly * D, lx * D  # block length in input pixels
         fy = spec.my / ny_f * self.to_cy_per_mm[0]
         fx = spec.mx / nx_f * self.to_cy_per_mm[1]
-        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=("detector",))
+        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=self._exclude)
         if weight is not None:
             vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
         c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
@@ -410,6 +428,8 @@ class Simulator:
         vals = self.band_values(spec, weight=weight)
         scale = 1.0 / (ly * lx)
         ky, kx = self.k_int
+        if self.time_path is not None:
+            return self._form_moving(vals, spec, start, rows, cols) * scale
         if fold and ky and kx and not ((start[0] * D) % ky or (start[1] * D) % kx or ny_f % ky or nx_f % kx):
             ay = spectral.footprint_transfer(
                 spec.my, centre=self.ys.centres(0, 1)[0], width_px=self.ys.width_px, n_total=ny_f
@@ -428,6 +448,17 @@ class Simulator:
         if ty * by * bx + ty * bx * tx < by * bx * tx + ty * by * tx:  # the cheaper order of the two products
             return np.real((my @ v) @ mx.T) * scale
         return np.real(my @ (v @ mx.T)) * scale
+
+    def _form_moving(self, vals, spec, start, rows, cols) -> np.ndarray:
+        """:meth:`form_spectrum`'s matrix evaluation with every row moved along the time path (unscaled)."""
+        from satchain.engine.timepath import form_rows
+
+        D = self.D
+        ny_f, nx_f = spec.shape[0] * D, spec.shape[1] * D
+        my = spectral.sampling_matrix(self.ys.centres(*rows) - start[0] * D, self.ys.width_px, 0, ny_f, spec.my)
+        mx = spectral.sampling_matrix(self.xs.centres(*cols) - start[1] * D, self.xs.width_px, 0, nx_f, spec.mx)
+        fy, fx = spec.my * self.k[0] / ny_f, spec.mx * self.k[1] / nx_f  # cycles per detector pixel
+        return form_rows(self.time_path, rows, my, vals * spec.cx[None, :], mx, fy, fx)
 
     def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
         """The focal-plane irradiance image (the paper's Figure 4b, in input units): the ground truth filtered
@@ -493,6 +524,18 @@ class Simulator:
         return img
 
 
+def has_pushbroom_motion(system: ImagingSystem) -> bool:
+    """Whether ``system`` has line-of-sight motion in time (``[[motion.oscillation]]``, ``[motion.jitter_psd]``,
+    ``motion.line_rate_error``, ``orbit.earth_rotation``): its image is then formed in time."""
+    m = system.motion
+    return bool(m.oscillation or m.jitter_psd or m.line_rate_error or system.orbit.earth_rotation)
+
+
+def _is_pushbroom(name: str) -> bool:
+    """The OTF components of pushbroom motion (:class:`satchain.tf.pushbroom.PushbroomTerms`)."""
+    return name.startswith(("oscillation_", "jitter_psd_")) or name == "tdi_drift"
+
+
 def spectral_len(n: int) -> int:
     """The next 5-smooth length >= n (fast for FFTs)."""
     import scipy.fft as sfft
@@ -522,5 +565,5 @@ def simulate(
     ((50, 50), True)
     """
     src = as_ground_truth(ground_truth, pixel_m=pixel_m)
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params)
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, motion_seed=seed)
     return sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, progress=progress)

@@ -194,6 +194,13 @@ class FarField:
         from satchain.engine.spectral import sampling_matrix
 
         sim = self.sim
+        if sim.time_path is not None:  # every row moved along the line of sight of its TDI window
+            from satchain.engine.timepath import form_rows
+
+            my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
+            mx = sampling_matrix(sim.xs.centres(*cols) - self.origin_px[1], sim.xs.width_px, 0, self.n_px[1], self.mx)
+            fy, fx = self.my * sim.k[0] / self.n_px[0], self.mx * sim.k[1] / self.n_px[1]
+            return form_rows(sim.time_path, rows, my, self.values, mx, fy, fx)
         if rows != self._rows:
             my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
             self._rows, self._rows_values = rows, my @ self.values
@@ -342,7 +349,8 @@ def simulate_to_tiff(
     if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
         raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
     src = as_ground_truth(ground_truth, pixel_m=pixel_m)
-    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params or SimParams())
+    sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params or SimParams(),
+                    motion_seed=seed)  # fmt: skip
     path = Path(path)
     with coarse_store(sim, scratch_dir or path.parent, prefix=f".{path.name}.staging-") as coarse:
         sim.decimate(src, out=coarse, progress=progress)

@@ -424,24 +424,3 @@ def _earth_rotation(system) -> dict:
         out["rotation_deg"] = 0.0
         out["tdi_drift_px_per_stage"] = (sigma, y_m / g_alt - 1.0)
     return out
-
-
-def static_path_note(system) -> str | None:
-    """What the static simulation path leaves out of a system with pushbroom motion, as one line, or None.
-
-    Until the time-domain image formation is built, ``simulate`` and ``run`` form the image with the
-    exposure-averaged MTF of every motion term (what ``budget`` predicts) but not their geometry: rows are not
-    displaced by oscillations or jitter, and the Earth's rotation and a line-rate error neither shear nor scale
-    the image.
-    """
-    o, m = system.orbit, system.motion
-    keys = [k for k, on in (("motion.oscillation", bool(m.oscillation)), ("motion.jitter_psd", bool(m.jitter_psd)),
-                            ("motion.line_rate_error", m.line_rate_error != 0),
-                            ("orbit.earth_rotation", o.earth_rotation)) if on]  # fmt: skip
-    if not keys:
-        return None
-    return (
-        f"{', '.join(keys)}: simulated with their exposure-averaged MTF only (the static path); the line-of-sight "
-        "geometry they cause -- row displacements, Earth-rotation shear/rotation, along-track scale -- is not "
-        "formed yet (time-domain image formation is not built); 'satchain budget' reports it under motion_geometry"
-    )
