@@ -153,3 +153,17 @@ def test_the_time_grid_is_fine_enough_and_the_image_does_not_depend_on_the_tilin
 def test_without_motion_keys_the_static_engine_is_untouched():
     sim = Simulator(BASE, input_pixel_m=PX, input_shape=(700, 700))
     assert sim.time_path is None and "detector" in sim._exclude and len(sim._exclude) == 1
+
+
+def test_drifts_on_both_axes_factor_exactly_into_row_shifts_and_one_mean(monkeypatch):
+    import dataclasses
+
+    system = BASE.replace({"orbit.latitude_deg": 30.0, "orbit.inclination_deg": 97.6, "orbit.earth_rotation": True,
+                           "motion.line_rate_error": 0.02})  # fmt: skip
+    img = _grating("act", 700) * _grating("alt", 700)
+    sim = Simulator(system, input_pixel_m=PX, input_shape=img.shape)
+    fast = sim.run(ArraySource(img, pixel_m=PX))
+    assert sim.time_path.moves_x and sim.time_path.moves_y and not sim.time_path.line_of_sight
+    sim.set_time_path(dataclasses.replace(sim.time_path, line_of_sight=True))  # the general mean over time samples
+    general = sim.run(ArraySource(img, pixel_m=PX))
+    assert np.abs(fast - general).max() < 1e-9

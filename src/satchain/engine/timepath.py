@@ -47,7 +47,8 @@ _BLOCK_BYTES = 128 * 2**20  # the sliding sums of one block of rows
 class TimePath:
     """The line of sight over the whole scan on one time grid: ``dy``, ``dx`` (detector pixels, ALT and ACT) at
     ``t_j = (j + 0.5) dt / m`` for ``j = 0 .. (rows + N) m - 1`` (``m = samples_per_line``), drifts included.
-    ``moves_y`` / ``moves_x``: whether that axis moves within a window."""
+    ``moves_y`` / ``moves_x``: whether that axis moves within a window; ``drift_px``: the (ACT, ALT) drift per line
+    time; ``line_of_sight``: whether there is motion besides the drifts (oscillations, jitter)."""
 
     line_time_s: float
     stages: int
@@ -56,6 +57,8 @@ class TimePath:
     dx: np.ndarray
     moves_y: bool
     moves_x: bool
+    drift_px: tuple[float, float] = (0.0, 0.0)
+    line_of_sight: bool = True
 
     @property
     def window_samples(self) -> int:
@@ -146,7 +149,8 @@ def time_path(system, n_rows: int, *, seed: int = 0) -> TimePath | None:
         else:
             dx = dx + r
     moves = [bool(np.ptp(d) > 0) for d in (dy, dx)]
-    return TimePath(dt, n_st, m, dy, dx, moves[0], moves[1])
+    los = bool(system.motion.oscillation or system.motion.jitter_psd)
+    return TimePath(dt, n_st, m, dy, dx, moves[0], moves[1], (float(sigma), float(eps)), los)
 
 
 def form_rows(tp: TimePath, rows: tuple[int, int], my: np.ndarray, v: np.ndarray, mx: np.ndarray, fy: np.ndarray,
@@ -162,6 +166,9 @@ def form_rows(tp: TimePath, rows: tuple[int, int], my: np.ndarray, v: np.ndarray
     for a in range(0, n, step):
         b = min(n, a + step)
         r = (rows[0] + a, rows[0] + b)
+        if tp.moves_y and tp.moves_x and not tp.line_of_sight:
+            out[a:b] = _drifts(tp, r, my[a:b], v, mx, fy, fx)
+            continue
         if tp.moves_y and tp.moves_x:
             out[a:b] = _coupled(tp, r, my[a:b], v, mx, fy, fx)
             continue
@@ -171,6 +178,23 @@ def form_rows(tp: TimePath, rows: tuple[int, int], my: np.ndarray, v: np.ndarray
             res *= tp.row_average("act", r, fx)
         out[a:b] = np.real(res @ mx.T)
     return out
+
+
+def _drifts(tp: TimePath, rows: tuple[int, int], my, v, mx, fy, fx) -> np.ndarray:
+    """Drifts only, on both axes (Earth rotation, a line-rate error): ``d(t) = drift t / dt``. The window mean
+    factors exactly into each row's own shift ``drift i`` and one row-independent mean over ``u = t / dt - i``,
+    taken at the same time samples as the path: the static cost."""
+    sx, sy = tp.drift_px
+    m, k = tp.samples_per_line, tp.window_samples
+    u = (np.arange(k) + 0.5) / m
+    d = np.zeros((fy.size, fx.size), dtype=np.complex128)
+    for uk in u:  # mean over the window of exp(2 pi i u (fy eps + fx sigma)): by x bx, K terms
+        d += np.exp(2j * np.pi * uk * sy * fy)[:, None] * np.exp(2j * np.pi * uk * sx * fx)[None, :]
+    d /= k
+    i = np.arange(rows[0], rows[1], dtype=np.float64)
+    r = (my * np.exp(2j * np.pi * np.outer(i * sy, fy))) @ (v * d)
+    r *= np.exp(2j * np.pi * np.outer(i * sx, fx))
+    return np.real(r @ mx.T)
 
 
 def _coupled(tp: TimePath, rows: tuple[int, int], my, v, mx, fy, fx) -> np.ndarray:
