@@ -139,9 +139,13 @@ def mtf_from_ctf_samples(f_cy_per_px, ctf, *, n_terms: int = 40) -> np.ndarray:
     >>> f = np.array([0.2, 0.4])
     >>> np.round(mtf_from_ctf_samples(f, 4 / np.pi * np.array([0.5, 0.0])), 3)
     array([0.5, 0. ])
+    >>> mtf_from_ctf_samples([], []).size  # no usable group (a run whose bars were all refused)
+    0
     """
     f = np.asarray(f_cy_per_px, dtype=float)
     c = np.asarray(ctf, dtype=float)
+    if f.size == 0:  # no usable group: no MTF
+        return np.zeros(0)
     order = np.argsort(f)
     fs, cs = f[order], c[order]
     out = np.zeros_like(f)
