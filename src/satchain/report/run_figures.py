@@ -127,4 +127,9 @@ def write_run_figures(ctx, curves: dict | None = None) -> dict:
         cp.plot_bars_comparison(b, d / f"bars_{b['id']}.png", tol=tol.bar_ctf)
     for w in curves["wedges"]:
         cp.plot_wedge_comparison(w, d / f"wedge_{w['id']}.png", tol_rel=tol.wedge_resolution_rel)
+    tp = getattr(ctx.simulator, "time_path", None)
+    if tp is not None:  # formed in time: the line of sight and each row's displacement
+        from satchain.report.motion_plot import plot_line_of_sight
+
+        plot_line_of_sight(tp, int(ctx.image.shape[0]), d / "line_of_sight.png")
     return curves

@@ -1,0 +1,64 @@
+"""The line of sight of a run formed in time (:mod:`satchain.engine.timepath`): the path over the scan and what
+each image row saw of it (its window mean: the row's displacement). matplotlib's object API only (no pyplot)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+
+from satchain.report._save import save_figure
+from satchain.report.compare_plots import rc_for
+
+__all__ = ["plot_line_of_sight", "row_displacements"]
+
+_MAX_POINTS = 20000
+
+
+def row_displacements(tp, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """(dy, dx): each output row's window mean of the path, detector pixels (its displacement, drifts included).
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> from satchain.engine.timepath import time_path
+    >>> tp = time_path(load_preset("ankarasat3").replace({"motion.line_rate_error": 0.05}), 10)
+    >>> dy, dx = row_displacements(tp, 10)
+    >>> round(float(dy[1] - dy[0]), 6), float(dx.max())
+    (0.05, 0.0)
+    """
+    k, m = tp.window_samples, tp.samples_per_line
+    out = []
+    for d in (tp.dy, tp.dx):
+        c = np.concatenate([[0.0], np.cumsum(d)])
+        s = np.arange(n_rows) * m
+        out.append((c[s + k] - c[s]) / k)
+    return out[0], out[1]
+
+
+def plot_line_of_sight(tp, n_rows: int, path: Path) -> None:
+    """Two panels: the line of sight (ACT, ALT) against time over the scan, and each row's displacement."""
+    t = (np.arange(tp.dy.size) + 0.5) * tp.line_time_s / tp.samples_per_line * 1e3  # ms
+    step = max(1, tp.dy.size // _MAX_POINTS)
+    dy, dx = row_displacements(tp, n_rows)
+    rows = np.arange(n_rows)
+    with matplotlib.rc_context(rc_for(9)):
+        fig = Figure(figsize=(9, 6), dpi=100, layout="constrained")
+        a, b = fig.subplots(2, 1)
+        a.plot(t[::step], tp.dx[::step], lw=0.8, label="ACT (x)")
+        a.plot(t[::step], tp.dy[::step], lw=0.8, label="ALT (y)")
+        a.set_xlabel("time from the start of row 0's TDI window (ms)")
+        a.set_ylabel("line of sight (px)")
+        a.set_title(f"Line of sight over the scan ({tp.stages} TDI stages x {tp.line_time_s * 1e6:.1f} us lines)")
+        a.grid(alpha=0.3)
+        a.legend()
+        b.plot(rows, dx - rows * tp.drift_px[0], lw=1.0, label="ACT, less the Earth-rotation shear")
+        b.plot(rows, dy - rows * tp.drift_px[1], lw=1.0, label="ALT, less the along-track scale")
+        b.set_xlabel("image row")
+        b.set_ylabel("row displacement (px)")
+        b.set_title("What each row saw: the window mean of the line of sight (rows shift by it; the rest blurs)")
+        b.grid(alpha=0.3)
+        b.legend()
+        save_figure(fig, path, dpi=100)
