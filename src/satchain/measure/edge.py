@@ -49,7 +49,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import uniform_filter
 
 from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
@@ -57,12 +56,8 @@ from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import (
     ResultMixin,
-    crop_roi,
-    fill_invalid,
     first_crossing,
     robust_sigma,
-    valid_mask,
-    zero_fill_mask,
 )
 from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
@@ -78,7 +73,7 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
-from satchain.measure._edge_locate import curvature, locate_edge, project
+from satchain.measure._edge_locate import curvature, edge_region, locate_edge, orient_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
 from satchain.measure._edge_mtf import trim_ends as _trim_ends
@@ -255,9 +250,9 @@ def measure_edge(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
     axis = check_axis(frequency_axis)
-    data, ok, flags = _region(image, roi, valid, nodata)
+    data, ok, flags = edge_region(image, roi, valid, nodata)
     flags += check_saturation(data, full_scale, ok)
-    work, okw, direction, transposed, sign = _orient(data, ok)
+    work, okw, direction, transposed, sign = orient_edge(data, ok)
     line = None if edge_line is None else line_coef(edge_line, roi, transposed)
     q_step = quantisation_step(data if ok is None else data[ok])
     (coef, own), rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
@@ -332,22 +327,6 @@ def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
     if roi is not None:
         x, y = x + int(roi[0]), y + int(roi[1])
     return (x, y)
-
-
-def _region(image, roi, valid, nodata):
-    """(float64 region, its valid mask or None, flags): excluded pixels filled from their nearest valid ones;
-    without ``valid`` and ``nodata``, an integer image's evident zero fill is excluded (flagged)."""
-    mask, flags = valid_mask(image, valid, nodata), []
-    if mask is None and valid is None and nodata is None:
-        mask, note = zero_fill_mask(image)
-        flags = [("nodata_fill" if mask is not None else "nodata_fill_unsure", note)] if note else []
-    if mask is None:
-        return crop_roi(image, roi, min_size=12), None, flags
-    data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
-    ok = crop_roi(mask.astype(np.float64), roi, name="valid", min_size=12) > 0.5
-    if np.count_nonzero(ok) < 64:
-        raise InputError(f"image: the region holds {np.count_nonzero(ok)} valid pixel(s) (< 64); nothing to measure")
-    return data, ok, flags
 
 
 def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):
@@ -508,19 +487,6 @@ def _check_mtf(f, mtf, sig, flags):
         flags.append(("band_limited", f"MTF above {_MTF_MAX:g} beyond {f[k]:.2f} cy/px (noise): output stops there"))
         return f[:k], mtf[:k], sig[:k]
     return f, mtf, sig
-
-
-def _orient(data: np.ndarray, ok=None):
-    """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
-    the ESF rise)."""
-    gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
-    gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
-    transposed = gy > gx
-    work = data.T if transposed else data
-    q = max(2, work.shape[1] // 4)
-    sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
-    okw = None if ok is None else (ok.T if transposed else ok)
-    return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:
