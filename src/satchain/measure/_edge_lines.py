@@ -33,9 +33,9 @@ from scipy.ndimage import median_filter
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
 
-__all__ = ["edge_line_fields", "line_positions"]
+__all__ = ["edge_line_fields", "line_numbers", "line_positions"]
 
-_KNOT_PX = 0.25  # template knot spacing
+_KNOT_PX = 0.5  # template knot spacing (finer knots let noise trade the profile for a phase-locked bias)
 _MAX_GAP_PX = 0.75  # largest gap in the lines' sub-pixel phases the template can bridge
 _CONTRAST_TOL = 0.3  # a line whose step differs more from the median step is not measured
 _RMS_TOL = 3.0  # ... nor one whose residual rms exceeds this x the median line's (plus 0.5 % of the step)
@@ -54,11 +54,16 @@ def edge_line_fields(work, coef, valid, clip, transposed: bool, roi):
     if valid is not None:
         usable = valid if usable is None else usable & valid
     pos, sig = line_positions(work, coef, usable)
+    lines = line_numbers(work.shape[0], transposed, roi)
+    return lines, pos + (line_numbers(1, not transposed, roi)[0]), sig
+
+
+def line_numbers(n: int, transposed: bool, roi) -> np.ndarray:
+    """The image line (row; column when ``transposed``) of each of the region's ``n`` lines."""
     if hasattr(roi, "to_roi"):
         roi = roi.to_roi()
     x0, y0 = (0, 0) if roi is None else (int(roi[0]), int(roi[1]))
-    line0, pos0 = (x0, y0) if transposed else (y0, x0)
-    return np.arange(work.shape[0]) + line0, pos + pos0, sig
+    return np.arange(n) + (x0 if transposed else y0)
 
 
 def line_positions(work: np.ndarray, coef, usable=None):
@@ -85,11 +90,11 @@ def line_positions(work: np.ndarray, coef, usable=None):
     pos = start
     for wide in (True, True, False):
         h = min(half + 2, half_t) if wide else half
-        pos, sig, cols, place = _fit_lines(work, pos, ok_px, spline, h)
+        pos, sig, cols = _fit_lines(work, pos, ok_px, spline, h)
         if np.count_nonzero(np.isfinite(pos)) < 4:
             return nan, nan
         if wide:
-            spline = _template(work, ok_px, cols, place)
+            spline = _template(work, ok_px, cols, np.broadcast_to(pos[:, None], cols.shape))
     return pos + _centre(spline, half), sig
 
 
@@ -162,7 +167,7 @@ def _rise(spline):
     lo_u, hi_u = spline.t[0], spline.t[-1]
     uu = np.arange(lo_u, hi_u, 0.01)
     t = spline(uu)
-    a, b = float(np.mean(t[:100])), float(np.mean(t[-100:]))
+    a, b = float(np.mean(t[:150])), float(np.mean(t[-150:]))
     return uu, ((t - a) / (b - a) if b != a else np.zeros_like(t))
 
 
@@ -175,25 +180,19 @@ def _half_width(spline) -> int:
 
 
 def _centre(spline, half: int) -> float:
-    """The edge's centre in ``u``: the centroid of ``T'`` over +-W about it (from the 50 % crossing)."""
+    """The edge's centre in ``u``: the 50 % crossing of ``T`` between its plateaus (the means of ``T`` over
+    the outer 1.5 px of each side), the centre of a symmetric blur."""
     uu, rel = _rise(spline)
-    c = float(uu[np.argmax(rel >= 0.5)])
-    d = spline.derivative()
-    lo_u, hi_u = spline.t[0], spline.t[-1]
-    for _ in range(3):
-        w = np.arange(max(c - half, lo_u), min(c + half, hi_u), 0.005)
-        lsf = d(w)
-        if np.sum(lsf) == 0:
-            break
-        c = float(np.sum(w * lsf) / np.sum(lsf))
-    return c
+    i = int(np.argmax(rel >= 0.5))
+    if i == 0:
+        return float(uu[0])
+    return float(uu[i - 1] + (0.5 - rel[i - 1]) * (uu[i] - uu[i - 1]) / (rel[i] - rel[i - 1]))
 
 
 def _fit_lines(work, start, ok_px, spline, half: int):
     """Gauss-Newton fit of ``a + c T(k - x)`` to each line over 2 W + 1 pixels around ``start``.
 
-    Returns (x, sigma_x, the pixels' columns, each pixel's leave-one-out position: the line's x fitted
-    without that pixel, so that the profile built from them is not drawn towards each line's own noise)."""
+    Returns (x, sigma_x, the pixels' columns)."""
     ny, nx = work.shape
     lo_u, hi_u = spline.t[0], spline.t[-1]
     k = np.rint(np.nan_to_num(start))[:, None] + np.arange(-half, half + 1)[None, :]
@@ -213,13 +212,7 @@ def _fit_lines(work, start, ok_px, spline, half: int):
         step = _solve(jac, r)
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + np.clip(step[:, 2], -0.5, 0.5)
-    pos, sig, inv = _accept(ok, x, start, (a, c, r, jac), half)
-    # leave-one-out (linearised, exact for linear least squares): x_(-k) = x - (A^-1 J_k)_x r_k / (1 - h_kk)
-    infl = np.einsum("nij,nmj->nmi", inv, jac)
-    lev = np.einsum("nmi,nmi->nm", jac, infl)
-    with np.errstate(all="ignore"):
-        place = pos[:, None] - infl[..., 2] * r / np.clip(1.0 - lev, 1e-3, None)
-    return pos, sig, k, place
+    return (*_accept(ok, x, start, (a, c, r, jac), half), k)
 
 
 def _levels(v, t):
@@ -243,13 +236,13 @@ def _solve(jac, r):
 
 
 def _accept(ok, x, start, fit, half: int):
-    """(x, sigma_x, (J^T J)^-1 per line), x and sigma NaN for the lines whose fit failed or departs from the
-    others; ``fit = (a, c, residuals, Jacobian)``."""
+    """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
+    Jacobian)``."""
     a, c, r, jac = fit
     ok = ok & np.isfinite(x) & (np.abs(x - np.nan_to_num(start)) <= 0.5 * half)
     inv = np.zeros((x.size, 3, 3))
     if np.count_nonzero(ok) < 3:
-        return np.full(x.shape, np.nan), np.full(x.shape, np.nan), inv
+        return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
     c_med = float(np.median(c[ok]))
     rms = np.sqrt(np.mean(r * r, axis=1))
     ok &= np.abs(c - c_med) <= _CONTRAST_TOL * abs(c_med)
@@ -259,4 +252,4 @@ def _accept(ok, x, start, fit, half: int):
     with np.errstate(all="ignore"):
         inv[ok] = np.linalg.pinv(np.einsum("nmi,nmj->nij", jac[ok], jac[ok]))
     pos = np.where(ok, x, np.nan)
-    return pos, np.where(ok, np.sqrt(noise2 * inv[:, 2, 2]), np.nan), inv
+    return pos, np.where(ok, np.sqrt(noise2 * inv[:, 2, 2]), np.nan)

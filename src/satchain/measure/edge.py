@@ -73,6 +73,7 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
+from satchain.measure._edge_lines import edge_line_fields, line_numbers
 from satchain.measure._edge_locate import curvature, edge_region, locate_edge, orient_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
@@ -108,6 +109,12 @@ class EdgeResult(ResultMixin):
     edge at its middle line: with ``angle_deg`` it places the edge line (to join collinear halves).
     ``frequency_axis`` is the axis of every frequency (``"normal"`` or ``"row"``, see :func:`measure_edge`)
     and ``frequency_scale`` = f_row / f_normal (``cos t``; 1 on the normal axis).
+    ``lines`` are the image lines crossing the edge (rows for an ACT edge, columns for an ALT one; image
+    coordinates, ``roi`` offset included) and ``edge_position_px`` where each crosses it (x for ACT, y for ALT;
+    raw, not detrended; NaN / null where a line is not measured: its window leaves the region or touches an
+    excluded or clipped pixel), with its 1-sigma ``edge_position_sigma_px``
+    (:mod:`satchain.measure._edge_lines`): line-of-sight motion from a long straight edge
+    (:func:`satchain.measure.jitter.measure_jitter`).
     """
 
     f_cy_per_px: np.ndarray
@@ -139,6 +146,9 @@ class EdgeResult(ResultMixin):
     edge_point_xy: tuple[float, float] | None = None
     frequency_axis: str = "normal"
     frequency_scale: float = 1.0
+    lines: np.ndarray | None = None
+    edge_position_px: np.ndarray | None = None
+    edge_position_sigma_px: np.ndarray | None = None
 
     @property
     def edge_angle_deg(self) -> float:
@@ -268,16 +278,29 @@ def measure_edge(
     flags += critical_angle_flags(slope, len(rows), mode, w)
     flags += _cnr_flags(contrast, sigma)
     f, mtf, mtf_sig, scale = on_axis(f, mtf, mtf_sig, slope, axis, f_max)
+    lines = _line_positions(work, own, okw, (full_scale, sign), (transposed, roi), flags)
     return _result(
         (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
-        (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m),
+        (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m), lines,
     )  # fmt: skip
 
 
-def _result(curve, esf, fit, stats, scales) -> EdgeResult:
+def _line_positions(work, coef, valid, clip, where, flags):
+    """(lines, edge position, 1-sigma) per line crossing the edge (:mod:`satchain.measure._edge_lines`); all
+    NaN (flag ``lines_unmeasured``) where the lines' profile cannot be estimated."""
+    transposed, roi = where
+    try:
+        return edge_line_fields(work, coef, valid, clip, transposed, roi)
+    except InputError as exc:
+        flags.append(("lines_unmeasured", f"per-line edge positions not measured: {exc}"))
+        nan = np.full(work.shape[0], np.nan)
+        return line_numbers(work.shape[0], transposed, roi), nan, nan
+
+
+def _result(curve, esf, fit, stats, scales, lines) -> EdgeResult:
     """The :class:`EdgeResult`: ``curve = (f, mtf, sigma, axis, scale)``, ``esf = (x, esf)``, ``fit = (coef,
-    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``
-    and ``scales = (pixel_m, pitch_m)``."""
+    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``,
+    ``scales = (pixel_m, pitch_m)`` and ``lines = (lines, edge positions, their 1-sigma)``."""
     f, mtf, mtf_sig, axis, scale = curve
     x, esf_n = esf
     coef, rows, slope, transposed, roi = fit
@@ -314,6 +337,9 @@ def _result(curve, esf, fit, stats, scales) -> EdgeResult:
         edge_point_xy=_edge_point(coef, rows, transposed, roi),
         frequency_axis=axis,
         frequency_scale=float(scale),
+        lines=lines[0],
+        edge_position_px=lines[1],
+        edge_position_sigma_px=lines[2],
     )
 
 
