@@ -38,7 +38,8 @@ _CHUNK = 2_000_000  # samples x frequencies per block of the periodogram
 @dataclass(frozen=True)
 class SineFit:
     """Joint fit: ``freq_hz, amp_px, phase_rad`` (phase at ``t = 0``) and their 1-sigma, the model at the
-    lines, the nuisance part (trend + phase-locked terms), the residuals and the degrees of freedom used."""
+    lines, the nuisance part (trend + phase-locked terms), the residuals, the number of parameters and the
+    nuisance coefficients."""
 
     freq_hz: np.ndarray
     freq_sigma_hz: np.ndarray
@@ -50,6 +51,7 @@ class SineFit:
     nuisance_px: np.ndarray
     residual_px: np.ndarray
     n_params: int
+    basis_coef: np.ndarray
 
 
 def nuisance_basis(lines: np.ndarray, positions: np.ndarray) -> np.ndarray:
@@ -85,8 +87,14 @@ def periodogram(t, y, basis, freqs):
         c -= q @ (q.T @ c)
         ss, cc, sc = (s * s).sum(0), (c * c).sum(0), (s * c).sum(0)
         bs, bc = r @ s, r @ c
-        det = np.maximum(ss * cc - sc * sc, 1e-300)
-        a_s, a_c = (cc * bs - sc * bc) / det, (ss * bc - sc * bs) / det
+        det = ss * cc - sc * sc
+        tot = ss + cc
+        # near 0 or the Nyquist frequency one column vanishes: fit the other alone
+        two = (det > 1e-9 * ss * cc) & (np.minimum(ss, cc) > 1e-6 * tot)
+        det = np.where(two, det, 1.0)
+        s_only = ~two & (ss > cc)
+        a_s = np.where(two, (cc * bs - sc * bc) / det, np.where(s_only, bs / np.maximum(ss, 1e-300), 0.0))
+        a_c = np.where(two, (ss * bc - sc * bs) / det, np.where(s_only, 0.0, bc / np.maximum(cc, 1e-300)))
         z[i : i + block] = (a_s * bs + a_c * bc) / max(rss0, 1e-300)
         amp[i : i + block] = np.hypot(a_s, a_c)
     return np.clip(z, 0.0, 1.0), amp, rss0
@@ -174,4 +182,4 @@ def _summarise(p, j, res, ctx) -> SineFit:
         amp_sig[i], ph_sig[i], f_sig[i] = np.sqrt(np.maximum(np.diag(cc), 0.0))
     arg = 2 * np.pi * tc[:, None] * fs[None, :]
     sines = np.sin(arg) @ a + np.cos(arg) @ b
-    return SineFit(fs, f_sig, amp, amp_sig, phase0, ph_sig, sines, basis @ p[:nb], res, n_par)
+    return SineFit(fs, f_sig, amp, amp_sig, phase0, ph_sig, sines, basis @ p[:nb], res, n_par, p[:nb])

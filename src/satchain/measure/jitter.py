@@ -179,13 +179,11 @@ def measure_jitter(
     if np.count_nonzero(use) < MIN_LINES:
         raise InputError(f"image: {np.count_nonzero(use)} line(s) measured across the edge (< {MIN_LINES})")
     t, y = lines[use] * dt, pos[use]
-    basis = nuisance_basis(lines[use].astype(float), y)
     freqs = frequency_grid(t, dt)
-    fit, fap, first = _find_peaks(t, y, basis, freqs, (n_max, alpha, a_min))
+    fit, fap, first, basis = _find_peaks(t, y, lines[use].astype(float), freqs, (n_max, alpha, a_min))
     z_thr = threshold_z(alpha, t, freqs[-1], basis.shape[1] + 3 * (0 if fit is None else fit.freq_hz.size))
     return _result(
-        (lines, pos, sig, use), (t, y, basis, fit, fap), (freqs, first, z_thr),
-        (dt, alpha, direction, float(np.degrees(np.arctan(np.polyfit(t / dt, y, 1)[0]))), flags),
+        (lines, pos, sig, use), (t, y, basis, fit, fap), (freqs, first, z_thr), (dt, alpha, direction, flags),
     )  # fmt: skip
 
 
@@ -200,11 +198,14 @@ def _check_args(line_time_s, max_peaks, false_alarm, min_amplitude_px):
     return dt, int(n), alpha, a_min
 
 
-def _find_peaks(t, y, basis, freqs, opts):
-    """Prewhitening: (joint fit or None, false-alarm probability of each peak, first periodogram amplitude)."""
+def _find_peaks(t, y, lines, freqs, opts):
+    """Prewhitening: (joint fit or None, false-alarm probability of each peak, first periodogram amplitude, the
+    nuisance basis).  The phase-locked terms follow the model's positions (the tilt, then with the peaks found),
+    never the measured ones: terms built from the noise would absorb it and make noise peaks significant."""
     n_max, alpha, a_min = opts
     fit, faps, first = None, [], None
     found: list[float] = []
+    basis = nuisance_basis(lines, np.polyval(np.polyfit(lines, y, 1), lines))
     for _ in range(n_max):
         null = basis if fit is None else np.concatenate([basis, _sines(t, fit)], axis=1)
         z, amp, _ = periodogram(t, y, null, freqs)
@@ -219,9 +220,15 @@ def _find_peaks(t, y, basis, freqs, opts):
         fs = np.sort(trial.freq_hz)
         if np.any(np.diff(fs) < 0.5 / span) or trial.amp_px[-1] < a_min:
             break
-        fit, found = trial, [float(f) for f in trial.freq_hz]
+        basis = nuisance_basis(lines, y - trial.residual_px - _phase_part(trial, basis))
+        fit, found = fit_sinusoids(t, y, basis, trial.freq_hz), [float(f) for f in trial.freq_hz]
         faps.append(fap)
-    return fit, faps, first
+    return fit, faps, first, basis
+
+
+def _phase_part(fit, basis) -> np.ndarray:
+    """The phase-locked part of a fit's nuisance model (all but its first two columns, offset and tilt)."""
+    return basis[:, 2:] @ fit.basis_coef[2:]
 
 
 def _sines(t, fit) -> np.ndarray:
@@ -268,13 +275,15 @@ _PEAK_WORDS = {
 def _result(posn, model, spec, meta) -> JitterResult:
     """Assemble the :class:`JitterResult`: ``posn = (lines, positions, sigma, used)``, ``model = (t, y, basis,
     fit, peak false-alarm probabilities)``, ``spec = (freqs, first periodogram amplitude, threshold z)``,
-    ``meta = (line time, false alarm, direction, angle, flags)``."""
+    ``meta = (line time, false alarm, direction, flags)``."""
     lines, pos, sig, use = posn
     t, y, basis, fit, faps = model
     freqs, first, z_thr = spec
-    dt, alpha, direction, angle, flags = meta
+    dt, alpha, direction, flags = meta
     n = y.size
-    nuis = np.linalg.lstsq(basis, y, rcond=None)[0] @ basis.T if fit is None else fit.nuisance_px
+    coef = np.linalg.lstsq(basis, y, rcond=None)[0] if fit is None else fit.basis_coef
+    nuis = basis @ coef
+    angle = float(np.degrees(np.arctan(coef[1] / max(np.ptp(t) / dt, 1.0))))  # the tilt term of the joint fit
     sines = np.zeros(n) if fit is None else fit.sines_px
     resid = y - nuis - sines
     span = float(np.ptp(t))
