@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 from _render_jitter import render_wobbly_edge
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
@@ -48,6 +48,8 @@ def _wrap(a):
     phase=st.floats(0.0, 2 * np.pi),
     blur=st.floats(0.5, 1.2),
 )
+@example(angle=1.0, amp=1.0, cycles_per_line=1 / 3, phase=0.5, blur=1.0)  # three tracks of phases
+@example(angle=1.0, amp=1.0, cycles_per_line=0.421875, phase=0.0, blur=1.0)
 def test_noise_free_positions_equal_the_renderers_truth(angle, amp, cycles_per_line, phase, blur):
     img, truth = _render(300, angle, amp=[amp], freq=[cycles_per_line / DT], phase=[phase], blur=blur)
     r = measure_jitter(img, line_time_s=DT)
@@ -124,6 +126,7 @@ def test_issue_acceptance_2px_at_20hz_over_800_lines_with_a_3_deg_edge():
     noise=st.floats(0.0, 0.02),
     seed=st.integers(0, 2**16),
 )
+@example(angle=1.0, amp=3.0, cycles_per_line=0.125, phase=0.0, noise=0.0, seed=0)  # a zigzag: more y than x steps
 def test_amplitude_frequency_and_phase_within_their_stated_sigma(angle, amp, cycles_per_line, phase, noise, seed):
     f = cycles_per_line / DT
     img, _ = _render(400, angle, amp=[amp], freq=[f], phase=[phase], noise=noise, seed=seed)
@@ -189,6 +192,12 @@ def test_false_alarm_rate_on_white_noise_is_at_most_the_stated_probability():
 
 
 # --------------------------------------------------------------------------------------------- bad input, CLI
+
+
+def test_no_edge_is_refused():
+    noise = np.random.default_rng(3).normal(0.5, 0.01, (200, 40))
+    with pytest.raises(InputError, match="no edge"):
+        measure_jitter(noise, line_time_s=DT)
 
 
 @pytest.mark.parametrize(

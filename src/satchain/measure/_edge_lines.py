@@ -28,12 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import make_lsq_spline
-from scipy.ndimage import median_filter
 
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
 
-__all__ = ["edge_line_fields", "line_numbers", "line_positions"]
+__all__ = ["edge_line_fields", "line_numbers", "line_positions", "rough_line"]
 
 _KNOT_PX = 0.5  # template knot spacing (finer knots let noise trade the profile for a phase-locked bias)
 _MAX_GAP_PX = 0.75  # largest gap in the lines' sub-pixel phases the template can bridge
@@ -56,6 +55,23 @@ def edge_line_fields(work, coef, valid, clip, transposed: bool, roi):
     pos, sig = line_positions(work, coef, usable)
     lines = line_numbers(work.shape[0], transposed, roi)
     return lines, pos + (line_numbers(1, not transposed, roi)[0]), sig
+
+
+def rough_line(work: np.ndarray, usable=None) -> np.ndarray:
+    """A straight line ``x = coef[0] y + coef[1]`` through the lines' derivative peaks (least squares, then once
+    more without the peaks off it by more than 5 robust sigma + 3 px): only where to search for the edge, for
+    an edge that wobbles too much for :func:`satchain.measure._edge_locate.locate_edge`'s robust fit."""
+    ny, nx = work.shape
+    g = np.zeros_like(work)
+    g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
+    if usable is not None:
+        g[:, 1:-1] *= usable[:, 2:] & usable[:, :-2]
+    rows = np.arange(ny, dtype=float)
+    peak = np.argmax(g, axis=1).astype(float)
+    coef = np.polyfit(rows, peak, 1)
+    off = peak - np.polyval(coef, rows)
+    keep = np.abs(off) <= 5.0 * robust_sigma(off) + 3.0
+    return np.polyfit(rows[keep], peak[keep], 1) if np.count_nonzero(keep) >= 2 else coef
 
 
 def line_numbers(n: int, transposed: bool, roi) -> np.ndarray:
@@ -100,8 +116,7 @@ def line_positions(work: np.ndarray, coef, usable=None):
 
 def _first_positions(work, coef, ok_px, half_t: int) -> np.ndarray:
     """Derivative centroid per line near the derivative's peak (searched around the fitted edge); NaN where the
-    window leaves the region or touches an unusable pixel; a line far off its neighbours starts from their
-    median."""
+    window leaves the region or touches an unusable pixel."""
     ny, nx = work.shape
     cols = np.arange(nx, dtype=float)
     g = np.zeros_like(work)
@@ -124,13 +139,6 @@ def _first_positions(work, coef, ok_px, half_t: int) -> np.ndarray:
     good = inside & clean & (tot > 0)
     cen = np.full(ny, np.nan)
     cen[good] = (gw * cols).sum(axis=1)[good] / tot[good]
-    if np.count_nonzero(good) >= 3:
-        rows = np.arange(ny)
-        filled = np.interp(rows, rows[good], cen[good])
-        med = median_filter(filled, size=min(7, ny), mode="nearest")
-        off = np.abs(filled - med)
-        far = good & (off > max(6.0 * robust_sigma(off[good]), 1.0))
-        cen[far] = med[far]
     return cen
 
 

@@ -29,8 +29,8 @@ from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, to_jsonable
 from satchain.measure._edge_checks import check_saturation
-from satchain.measure._edge_lines import edge_line_fields
-from satchain.measure._edge_locate import edge_region, locate_edge, orient_edge
+from satchain.measure._edge_lines import edge_line_fields, rough_line
+from satchain.measure._edge_locate import edge_region
 from satchain.measure._jitter_fit import baluev_fap as _fap
 from satchain.measure._jitter_fit import (
     fit_sinusoids,
@@ -149,8 +149,8 @@ def measure_jitter(
     Raises
     ------
     InputError
-        A near-horizontal (ALT) edge (its crossing columns are imaged at one instant), fewer than 16 lines
-        measured, no edge, or bad options.
+        A near-horizontal (ALT) edge (its crossing columns are imaged at one instant), no edge (the two sides of
+        the lines do not differ), fewer than 16 lines measured.
 
     Examples
     --------
@@ -166,15 +166,9 @@ def measure_jitter(
     fs = resolve_full_scale(image, full_scale, None)
     data, ok, flags = edge_region(image, roi, valid, nodata)
     flags += check_saturation(data, fs, ok)
-    work, okw, direction, transposed, sign = orient_edge(data, ok)
-    if transposed:
-        raise InputError(
-            "image: the edge is near-horizontal (ALT): the columns crossing it are imaged at the same instants, "
-            "so their positions do not sample the motion in time; give a near-vertical (ACT) edge"
-        )
-    coef, _, loc_flags, _ = locate_edge(work, None, okw)
-    flags += [f for f in loc_flags if f[0] == "short_edge"]
-    lines, pos, sig = edge_line_fields(work, coef, okw, (fs, sign), False, roi)
+    sign = _act_sign(data)
+    work = data * sign
+    lines, pos, sig = edge_line_fields(work, rough_line(work, ok), ok, (fs, sign), False, roi)
     use = np.isfinite(pos)
     if np.count_nonzero(use) < MIN_LINES:
         raise InputError(f"image: {np.count_nonzero(use)} line(s) measured across the edge (< {MIN_LINES})")
@@ -183,7 +177,7 @@ def measure_jitter(
     fit, fap, first, basis = _find_peaks(t, y, lines[use].astype(float), freqs, (n_max, alpha, a_min))
     z_thr = threshold_z(alpha, t, freqs[-1], basis.shape[1] + 3 * (0 if fit is None else fit.freq_hz.size))
     return _result(
-        (lines, pos, sig, use), (t, y, basis, fit, fap), (freqs, first, z_thr), (dt, alpha, direction, flags),
+        (lines, pos, sig, use), (t, y, basis, fit, fap), (freqs, first, z_thr), (dt, alpha, "ACT", flags),
     )  # fmt: skip
 
 
@@ -224,6 +218,25 @@ def _find_peaks(t, y, lines, freqs, opts):
         fit, found = fit_sinusoids(t, y, basis, trial.freq_hz), [float(f) for f in trial.freq_hz]
         faps.append(fap)
     return fit, faps, first, basis
+
+
+def _act_sign(data: np.ndarray) -> float:
+    """+1 / -1 making the edge rise along +x; refuses a region whose two sides (the outer eighths of each line)
+    do not differ, and a near-horizontal edge (its rows' ends differ less, on average, than its columns')."""
+    q = max(2, min(data.shape) // 8)
+    rows = data[:, -q:].mean(axis=1) - data[:, :q].mean(axis=1)
+    cols = data[-q:, :].mean(axis=0) - data[:q, :].mean(axis=0)
+    def significant(d):
+        return abs(float(np.mean(d))) > 5.0 * float(np.std(d)) / np.sqrt(d.size)
+
+    if not (significant(rows) or significant(cols)):
+        raise InputError("image: no edge found (the two sides of the region's lines do not differ)")
+    if np.mean(np.abs(cols)) > abs(float(np.mean(rows))):
+        raise InputError(
+            "image: the edge is near-horizontal (ALT): the columns crossing it are imaged at the same instants, "
+            "so their positions do not sample the motion in time; give a near-vertical (ACT) edge"
+        )
+    return 1.0 if np.mean(rows) >= 0 else -1.0
 
 
 def _phase_part(fit, basis) -> np.ndarray:
