@@ -226,6 +226,7 @@ def _act_sign(data: np.ndarray) -> float:
     q = max(2, min(data.shape) // 8)
     rows = data[:, -q:].mean(axis=1) - data[:, :q].mean(axis=1)
     cols = data[-q:, :].mean(axis=0) - data[:q, :].mean(axis=0)
+
     def significant(d):
         return abs(float(np.mean(d))) > 5.0 * float(np.std(d)) / np.sqrt(d.size)
 
