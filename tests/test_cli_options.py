@@ -48,7 +48,7 @@ def _infos(fn) -> dict:
 
 
 def test_every_command_is_registered_once_on_the_measure_app():
-    assert list(_click_commands()) == list(COMMANDS) == ["edge", "star", "bars", "wedge", "auto", "find"]
+    assert list(_click_commands()) == list(COMMANDS) == ["edge", "star", "bars", "wedge", "auto", "find", "jitter"]
     assert [c.callback.__wrapped__ for c in measure_app.registered_commands] == [
         inspect.unwrap(f) for f in COMMANDS.values()
     ]
@@ -66,7 +66,7 @@ def test_a_shared_option_is_the_same_object_in_every_command():
             if long in shared_infos:
                 assert any(info is s for s in shared_infos[long]), f"{cmd}: {long} is redefined locally"
                 users[long].append(cmd)
-    assert users["--roi"] == ["edge", "star", "bars", "wedge"]
+    assert users["--roi"] == ["edge", "star", "bars", "wedge", "jitter"]
     assert users["--pixel-m"] == users["--json"] == users["--out"] == list(COMMANDS)
     assert users["--truth"] == users["--origin-m"] == users["--threshold"] == ["wedge", "auto"]
 
@@ -116,6 +116,7 @@ REQUIRED = {
     "wedge": ["--line-width-start-px", "1", "--line-width-end-px", "4"],
     "auto": ["--truth", "{truth}"],
     "find": [],
+    "jitter": ["--line-time", "1e-3"],
 }
 
 

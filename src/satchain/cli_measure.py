@@ -1,15 +1,16 @@
 """``satchain measure``: image-quality measurements from image files (a typer sub-app, mounted by cli.py).
 
 Commands: ``edge``, ``star``, ``bars``, ``wedge`` (one target in a region; :mod:`satchain.cli_targets`),
-``auto`` (every target of a scene, from its truth file; :mod:`satchain.cli_auto`) and ``find`` (the slanted
-edges found in an image, no truth file; :mod:`satchain.cli_find`).  Images: TIFF (float or integer), PNG
+``auto`` (every target of a scene, from its truth file; :mod:`satchain.cli_auto`), ``find`` (the slanted
+edges found in an image, no truth file; :mod:`satchain.cli_find`) and ``jitter`` (line-of-sight motion from a
+long straight edge; :mod:`satchain.cli_jitter`).  Images: TIFF (float or integer), PNG
 (8/16-bit) and NPY, read by :func:`satchain.io.read_image`; the ground pixel size comes from ``--pixel-m`` or
 the file's metadata.  Regions are ``X0,Y0,X1,Y1`` in pixels (x = column, y = row), half-open.  ``--json``
 prints the result as JSON; ``-o DIR`` writes ``<command>.json`` and a figure there.  Bad input: one line on
 stderr, exit status 2.  The options the commands share are defined once, in :mod:`satchain.cli_options`.
 
 This module is where the commands are registered (the one place): imports flow one way,
-``cli -> cli_measure -> cli_targets, cli_auto, cli_find -> cli_options, cli_output``.
+``cli -> cli_measure -> cli_targets, cli_auto, cli_find, cli_jitter -> cli_options, cli_output``.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from satchain._cli_common import handle_errors as _handle_errors
 from satchain._cli_common import parse_numbers as _numbers
 from satchain.cli_auto import auto
 from satchain.cli_find import find
+from satchain.cli_jitter import jitter
 from satchain.cli_options import ImageArg, JsonOpt, OutOpt, PixelOpt, RoiOpt
 from satchain.cli_options import load_image as _load
 from satchain.cli_options import parse_origin as _origin
@@ -37,14 +39,15 @@ __all__ = ["COMMANDS", "measure_app"]
 
 measure_app = typer.Typer(
     name="measure",
-    help="Measure image quality (slanted edge, Siemens star, bar targets, hyperbolic wedge) from images.",
+    help="Measure image quality (slanted edge, Siemens star, bar targets, hyperbolic wedge) and line-of-sight "
+    "motion (jitter, from a long edge) from images.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
 
 #: The ``measure`` commands, in the order ``--help`` lists them.
-COMMANDS = {"edge": edge, "star": star, "bars": bars, "wedge": wedge, "auto": auto, "find": find}
+COMMANDS = {"edge": edge, "star": star, "bars": bars, "wedge": wedge, "auto": auto, "find": find, "jitter": jitter}
 for _name, _command in COMMANDS.items():
     measure_app.command(_name)(_command)
 

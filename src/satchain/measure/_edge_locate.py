@@ -1,6 +1,7 @@
 """Slanted-edge location (used by :mod:`satchain.measure.edge`): the edge position per line from windowed
 derivative centroids and a robust (Tukey bisquare) polynomial fit whose degree (1-3) is chosen from the data,
-and the projection of every pixel onto the fitted edge's local normal."""
+and the projection of every pixel onto the fitted edge's local normal; the region and its orientation
+(:func:`edge_region`, :func:`orient_edge`), shared with :mod:`satchain.measure.jitter`."""
 
 from __future__ import annotations
 
@@ -8,14 +9,43 @@ import numpy as np
 from scipy.ndimage import uniform_filter
 
 from satchain.errors import InputError
-from satchain.measure._common import robust_sigma
+from satchain.measure._common import crop_roi, fill_invalid, robust_sigma, valid_mask, zero_fill_mask
 
-__all__ = ["MIN_ROWS", "curvature", "locate_edge", "project"]
+__all__ = ["MIN_ROWS", "curvature", "edge_region", "locate_edge", "orient_edge", "project"]
 
 MIN_ROWS = 8
 SHORT_ROWS = 20
 F_DEGREE = 30.0  # F statistic a higher fit degree must beat ...
 SAGITTA_PX = 0.1  # ... while moving the edge by more than this (px)
+
+
+def edge_region(image, roi, valid, nodata):
+    """(float64 region, its valid mask or None, flags): excluded pixels filled from their nearest valid ones;
+    without ``valid`` and ``nodata``, an integer image's evident zero fill is excluded (flagged)."""
+    mask, flags = valid_mask(image, valid, nodata), []
+    if mask is None and valid is None and nodata is None:
+        mask, note = zero_fill_mask(image)
+        flags = [("nodata_fill" if mask is not None else "nodata_fill_unsure", note)] if note else []
+    if mask is None:
+        return crop_roi(image, roi, min_size=12), None, flags
+    data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
+    ok = crop_roi(mask.astype(np.float64), roi, name="valid", min_size=12) > 0.5
+    if np.count_nonzero(ok) < 64:
+        raise InputError(f"image: the region holds {np.count_nonzero(ok)} valid pixel(s) (< 64); nothing to measure")
+    return data, ok, flags
+
+
+def orient_edge(data: np.ndarray, ok=None):
+    """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
+    the ESF rise)."""
+    gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
+    gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
+    transposed = gy > gx
+    work = data.T if transposed else data
+    q = max(2, work.shape[1] // 4)
+    sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
+    okw = None if ok is None else (ok.T if transposed else ok)
+    return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
 def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):

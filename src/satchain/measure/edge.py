@@ -49,7 +49,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import uniform_filter
 
 from satchain._deprecate import warn_renamed
 from satchain._validate import check_positive, check_range
@@ -57,12 +56,8 @@ from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import (
     ResultMixin,
-    crop_roi,
-    fill_invalid,
     first_crossing,
     robust_sigma,
-    valid_mask,
-    zero_fill_mask,
 )
 from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
@@ -78,7 +73,8 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
-from satchain.measure._edge_locate import curvature, locate_edge, project
+from satchain.measure._edge_lines import edge_line_fields, line_numbers
+from satchain.measure._edge_locate import curvature, edge_region, locate_edge, orient_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
 from satchain.measure._edge_mtf import trim_ends as _trim_ends
@@ -113,6 +109,12 @@ class EdgeResult(ResultMixin):
     edge at its middle line: with ``angle_deg`` it places the edge line (to join collinear halves).
     ``frequency_axis`` is the axis of every frequency (``"normal"`` or ``"row"``, see :func:`measure_edge`)
     and ``frequency_scale`` = f_row / f_normal (``cos t``; 1 on the normal axis).
+    ``lines`` are the image lines crossing the edge (rows for an ACT edge, columns for an ALT one; image
+    coordinates, ``roi`` offset included) and ``edge_position_px`` where each crosses it (x for ACT, y for ALT;
+    raw, not detrended; NaN / null where a line is not measured: its window leaves the region or touches an
+    excluded or clipped pixel), with its 1-sigma ``edge_position_sigma_px``
+    (:mod:`satchain.measure._edge_lines`): line-of-sight motion from a long straight edge
+    (:func:`satchain.measure.jitter.measure_jitter`).
     """
 
     f_cy_per_px: np.ndarray
@@ -144,6 +146,9 @@ class EdgeResult(ResultMixin):
     edge_point_xy: tuple[float, float] | None = None
     frequency_axis: str = "normal"
     frequency_scale: float = 1.0
+    lines: np.ndarray | None = None
+    edge_position_px: np.ndarray | None = None
+    edge_position_sigma_px: np.ndarray | None = None
 
     @property
     def edge_angle_deg(self) -> float:
@@ -255,9 +260,9 @@ def measure_edge(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
     axis = check_axis(frequency_axis)
-    data, ok, flags = _region(image, roi, valid, nodata)
+    data, ok, flags = edge_region(image, roi, valid, nodata)
     flags += check_saturation(data, full_scale, ok)
-    work, okw, direction, transposed, sign = _orient(data, ok)
+    work, okw, direction, transposed, sign = orient_edge(data, ok)
     line = None if edge_line is None else line_coef(edge_line, roi, transposed)
     q_step = quantisation_step(data if ok is None else data[ok])
     (coef, own), rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
@@ -273,16 +278,29 @@ def measure_edge(
     flags += critical_angle_flags(slope, len(rows), mode, w)
     flags += _cnr_flags(contrast, sigma)
     f, mtf, mtf_sig, scale = on_axis(f, mtf, mtf_sig, slope, axis, f_max)
+    lines = _line_positions(work, own, okw, (full_scale, sign), (transposed, roi), flags)
     return _result(
         (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
-        (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m),
+        (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m), lines,
     )  # fmt: skip
 
 
-def _result(curve, esf, fit, stats, scales) -> EdgeResult:
+def _line_positions(work, coef, valid, clip, where, flags):
+    """(lines, edge position, 1-sigma) per line crossing the edge (:mod:`satchain.measure._edge_lines`); all
+    NaN (flag ``lines_unmeasured``) where the lines' profile cannot be estimated."""
+    transposed, roi = where
+    try:
+        return edge_line_fields(work, coef, valid, clip, transposed, roi)
+    except InputError as exc:
+        flags.append(("lines_unmeasured", f"per-line edge positions not measured: {exc}"))
+        nan = np.full(work.shape[0], np.nan)
+        return line_numbers(work.shape[0], transposed, roi), nan, nan
+
+
+def _result(curve, esf, fit, stats, scales, lines) -> EdgeResult:
     """The :class:`EdgeResult`: ``curve = (f, mtf, sigma, axis, scale)``, ``esf = (x, esf)``, ``fit = (coef,
-    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``
-    and ``scales = (pixel_m, pitch_m)``."""
+    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``,
+    ``scales = (pixel_m, pitch_m)`` and ``lines = (lines, edge positions, their 1-sigma)``."""
     f, mtf, mtf_sig, axis, scale = curve
     x, esf_n = esf
     coef, rows, slope, transposed, roi = fit
@@ -319,6 +337,9 @@ def _result(curve, esf, fit, stats, scales) -> EdgeResult:
         edge_point_xy=_edge_point(coef, rows, transposed, roi),
         frequency_axis=axis,
         frequency_scale=float(scale),
+        lines=lines[0],
+        edge_position_px=lines[1],
+        edge_position_sigma_px=lines[2],
     )
 
 
@@ -332,22 +353,6 @@ def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
     if roi is not None:
         x, y = x + int(roi[0]), y + int(roi[1])
     return (x, y)
-
-
-def _region(image, roi, valid, nodata):
-    """(float64 region, its valid mask or None, flags): excluded pixels filled from their nearest valid ones;
-    without ``valid`` and ``nodata``, an integer image's evident zero fill is excluded (flagged)."""
-    mask, flags = valid_mask(image, valid, nodata), []
-    if mask is None and valid is None and nodata is None:
-        mask, note = zero_fill_mask(image)
-        flags = [("nodata_fill" if mask is not None else "nodata_fill_unsure", note)] if note else []
-    if mask is None:
-        return crop_roi(image, roi, min_size=12), None, flags
-    data = crop_roi(fill_invalid(image, mask), roi, min_size=12)
-    ok = crop_roi(mask.astype(np.float64), roi, name="valid", min_size=12) > 0.5
-    if np.count_nonzero(ok) < 64:
-        raise InputError(f"image: the region holds {np.count_nonzero(ok)} valid pixel(s) (< 64); nothing to measure")
-    return data, ok, flags
 
 
 def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):
@@ -508,19 +513,6 @@ def _check_mtf(f, mtf, sig, flags):
         flags.append(("band_limited", f"MTF above {_MTF_MAX:g} beyond {f[k]:.2f} cy/px (noise): output stops there"))
         return f[:k], mtf[:k], sig[:k]
     return f, mtf, sig
-
-
-def _orient(data: np.ndarray, ok=None):
-    """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
-    the ESF rise)."""
-    gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
-    gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
-    transposed = gy > gx
-    work = data.T if transposed else data
-    q = max(2, work.shape[1] // 4)
-    sign = 1.0 if work[:, -q:].mean() >= work[:, :q].mean() else -1.0
-    okw = None if ok is None else (ok.T if transposed else ok)
-    return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
 def _angle_deg(slope: float, transposed: bool) -> float:

@@ -1,4 +1,5 @@
-"""Figures of image-quality measurements: edge ESF/LSF/MTF, star MTF per direction, bars CTF/MTF, wedge scan.
+"""Figures of image-quality measurements: edge ESF/LSF/MTF, star MTF per direction, bars CTF/MTF, wedge scan,
+line-of-sight motion from an edge (jitter).
 
 Each function takes the result object of :mod:`satchain.measure` and writes one PNG atomically.
 
@@ -23,7 +24,7 @@ from matplotlib.figure import Figure
 
 from satchain.report._save import save_figure
 
-__all__ = ["plot_bars", "plot_edge", "plot_star", "plot_wedge"]
+__all__ = ["plot_bars", "plot_edge", "plot_jitter", "plot_star", "plot_wedge"]
 
 _DIRECTION_STYLE = {
     "ACT": dict(color="tab:blue"),
@@ -143,5 +144,44 @@ def plot_wedge(result, path: str | Path, *, title: str = "", pixel_m: float | No
     ax.set_title(_title(title, f"hyperbolic wedge contrast scan ({result.direction} resolution)"))
     ax.grid(alpha=0.3)
     ax.legend()
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+
+
+def plot_jitter(result, path: str | Path, *, title: str = "", pixel_m: float | None = None) -> None:
+    """Edge positions against the line (the tilt removed) with the fitted sinusoids, and the periodogram with the
+    detection limit, of a :class:`~satchain.measure.jitter.JitterResult` (``pixel_m``: the common signature)."""
+    fig = Figure(figsize=(14, 4.4))
+    axes = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1.0]})
+    lines = np.asarray(result.lines, dtype=float)
+    det = np.asarray(result.detrended_px, dtype=float)
+    mdl = np.asarray(result.model_px, dtype=float)
+    ok = np.isfinite(det)
+    axes[0].plot(lines[ok], det[ok], ".", ms=2, color="0.45", label="edge position - tilt (px)")
+    if result.peaks:
+        axes[0].plot(lines[ok], mdl[ok], color="tab:red", lw=1.2, label="fitted sinusoids")
+    axes[0].set_xlabel(f"image line (row; line time {result.line_time_s:.4g} s)")
+    axes[0].set_ylabel(f"{result.direction} position, detrended (px)")
+    axes[0].legend(fontsize=8, loc="upper right")
+    f = np.asarray(result.periodogram_frequency_hz, dtype=float)
+    axes[1].plot(f, np.asarray(result.periodogram_amplitude_px, dtype=float), color="black", lw=0.8)
+    limit = f"detection limit {result.detection_limit_px:.3g} px (false alarm {result.false_alarm:g})"
+    axes[1].axhline(result.detection_limit_px, color="tab:orange", ls="--", lw=1, label=limit)
+    for p in result.peaks:
+        axes[1].plot([p.frequency_hz], [p.amplitude_px], "v", color="tab:red")
+        text = f"{p.frequency_hz:.4g} Hz\n{p.amplitude_px:.3g} px"
+        axes[1].annotate(text, (p.frequency_hz, p.amplitude_px), fontsize=7, xytext=(4, 4), textcoords="offset points")
+    axes[1].set_xlim(0, result.nyquist_hz)
+    axes[1].set_yscale("log")
+    top = max([result.detection_limit_px, *(p.amplitude_px for p in result.peaks)])
+    if top > 0:  # near 0 Hz a sinusoid is nearly the tilt: its amplitude there is not a measurement
+        axes[1].set_ylim(top=3.0 * top)
+    axes[1].set_xlabel("frequency (Hz; right edge = line-rate Nyquist)")
+    axes[1].set_ylabel("least-squares sinusoid amplitude (px)")
+    axes[1].legend(fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    head = ", ".join(f"{p.amplitude_px:.3g} px at {p.frequency_hz:.4g} Hz" for p in result.peaks) or "no peak"
+    fig.suptitle(_title(title, f"line-of-sight motion from an edge ({result.direction}): {head}"))
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
