@@ -97,11 +97,15 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, def
             "may be off by a few %"
         )
     if period < 2.5:
-        flags.append(
-            f"group {index}: period {period:g} px < 2.5 px: the CTF depends on the sampling phase "
-            "(near 2 px: the sampled modulation, a lower bound)"
-        )
+        flags.append(_short_period_flag(index, period))
     return flags
+
+
+def _short_period_flag(index: int, period: float) -> str:
+    return (
+        f"group {index}: period {period:g} px < 2.5 px: the CTF depends on the sampling phase "
+        "(near 2 px: the sampled modulation, a lower bound)"
+    )
 
 
 def _misfit_on_hump(prof: np.ndarray, period: float, fit: GroupFit) -> float:
@@ -152,6 +156,8 @@ def validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars,
             f"misfit for a periodic profile); the target's MTF model renders the group within {misfit / amp:.0%}: "
             "measured, with the square-wave correction"
         )
+        if periods[i] < 2.5:  # kept on the model: its sampling caveat holds as for any measured group
+            flags.append(_short_period_flag(i, float(periods[i])))
     return flags, refused
 
 
