@@ -64,7 +64,7 @@ def test_a_dark_target_clipped_at_0_is_never_a_fill(kind, angle, blur, depth, of
     )  # fmt: skip
     assume((img == 0).mean() > 0.02)  # a large set of zeros (a wide blur can lift a thin bar off 0)
     ev = zero_fill_evidence(img)
-    assert ev is not None and ev.verdict != "fill"
+    assert ev is None or ev.verdict != "fill"  # None: the zeros cannot be a fill (e.g. none on the border)
     assert zero_fill_mask(img)[0] is None
 
 
