@@ -311,8 +311,8 @@ def _result(posn, model, spec, meta) -> JitterResult:
     rss = float(resid @ resid)
     n_par = basis.shape[1] if fit is None else fit.n_params
     res_rms = float(np.sqrt(rss / max(n - n_par, 1)))
-    # phase frequencies |h tan(theta)| / dt folded into [0, Nyquist]
-    f_ph = np.array([h * abs(np.tan(np.radians(angle))) / dt for h in range(1, 4)])
+    # phase frequencies |h tan(theta)| / dt (harmonics 1-10) folded into [0, Nyquist]
+    f_ph = np.array([h * abs(np.tan(np.radians(angle))) / dt for h in range(1, 11)])  # a staircase: up to 10
     f_ph = np.abs(f_ph - np.round(f_ph * dt) / dt)
     peaks = () if fit is None else tuple(_peak(fit, i, faps[i], (dt, span, f_ph)) for i in range(len(faps)))
     flags = list(flags) + _result_flags(peaks, (res_rms, noise, n), np.sqrt(2 * z_thr * rss / n), dt)
