@@ -175,7 +175,9 @@ def test_a_pixel_size_does_not_mend_a_sheared_or_non_square_grid(bad, tmp_path):
     for case in ("sheared", "non_square"):
         out = tmp_path / "OUT.tif"
         args = ["simulate", str(bad[case]), "--preset", "ankarasat3", "--scene-pixel-m", "0.1", "-o", str(out)]
-        _refused(runner.invoke(app, args), bad[case], ["--scene-pixel-m sets a pixel size, not the grid"], tmp_path)
+        r = runner.invoke(app, args)
+        _refused(r, bad[case], ["--scene-pixel-m sets a pixel size, not the grid"], tmp_path)
+        assert r.exit_code == 2 and not out.exists()
 
 
 def test_values_that_are_not_reflectance_simulate_with_the_scale_they_need(bad, tmp_path):
