@@ -50,11 +50,11 @@ def test_signal_during_run_removes_staging_and_keeps_previous_results(tmp_path, 
         assert p.poll() is None, "the run ended before it could be interrupted: " + p.stderr.read()
         assert staging, "no staging folder appeared"
         p.send_signal(sig)
-        _, err = p.communicate(timeout=120)
+        stdout, err = p.communicate(timeout=120)
     finally:
         if p.poll() is None:
             p.kill()
-    assert p.returncode == 128 + sig, (p.returncode, err[-800:])  # 143 for SIGTERM, 130 for SIGINT
+    assert p.returncode == 128 + sig, (p.returncode, err[-800:], stdout[-800:])  # 143 for SIGTERM, 130 for SIGINT
     assert not list(tmp_path.glob(".res.*")), "staging folder left behind"
     assert {q.name: q.read_bytes() for q in out.iterdir()} == before
     assert f"interrupted ({signal.Signals(sig).name})" in err
@@ -116,3 +116,33 @@ def test_clean_stale_never_touches_a_live_or_foreign_folder(tmp_path):
     plain.mkdir()
     assert clean_stale(tmp_path / "res") == []
     assert live.exists() and plain.exists()
+
+
+def test_a_signal_whose_exception_library_code_swallows_still_stops_the_run(tmp_path, reduced_scene_toml):
+    """Code between the handler and the run (a library's ``except BaseException: pass``, an ignored callback
+    error) may swallow the Interrupted; the run checks for a received signal before it commits its results."""
+    import satchain
+    from satchain._safety import Interrupted
+
+    (tmp_path / "scene.toml").write_text(reduced_scene_toml)
+    cfg = satchain.RunConfig.from_dict({"scene": {"layout": str(tmp_path / "scene.toml"), "pixel_m": 0.49}})
+    out = tmp_path / "res"
+    before = _previous_results(out)
+    swallowed = []
+
+    def progress(stage, done, total):
+        if stage == "scene" and not swallowed:
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(1.0)  # the handler runs here
+            except BaseException as exc:  # what a careless library does
+                swallowed.append(exc)
+
+    with pytest.raises(Interrupted) as info:
+        satchain.run(cfg, out_dir=out, progress=progress)
+    assert swallowed and isinstance(swallowed[0], Interrupted)
+    assert info.value.signum == signal.SIGTERM
+    assert {q.name: q.read_bytes() for q in out.iterdir()} == before
+    assert not list(tmp_path.glob(".res.*"))
+    assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

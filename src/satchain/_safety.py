@@ -248,26 +248,53 @@ class Interrupted(KeyboardInterrupt):
         return signal.Signals(self.signum).name
 
 
+class _Received:
+    """What :func:`terminate_as_interrupt` saw: the first signal received (``signum``), if any."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    def check(self) -> None:
+        """Raise :class:`Interrupted` when a signal arrived, even one whose exception some library code
+        swallowed (an ``except BaseException`` that goes on, a callback whose error is ignored): call it before
+        committing results."""
+        if self.signum is not None:
+            raise Interrupted(self.signum)
+
+
 @contextlib.contextmanager
-def terminate_as_interrupt() -> Iterator[None]:
+def terminate_as_interrupt() -> Iterator[_Received]:
     """Within the block, SIGTERM raises :class:`Interrupted` (as Ctrl-C raises KeyboardInterrupt), so
     ``finally`` / ``except BaseException`` clean-ups run. Only in the main thread, and only where SIGTERM has
-    its default action (a handler the caller installed is left alone); the previous handler is restored."""
-    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGTERM) not in (
-        signal.SIG_DFL,
-        None,
-    ):
-        yield
+    its default action (a handler the caller installed is left alone); the previous handler is restored.
+
+    Yields a record of the signals seen (SIGINT too, while Python's default SIGINT handler is in place); its
+    ``check()`` re-raises one that was swallowed before it could stop the block."""
+    received = _Received()
+    if threading.current_thread() is not threading.main_thread():
+        yield received
         return
+    handlers = {}
 
     def _raise(signum, frame):
+        if received.signum is None:
+            received.signum = int(signum)
         raise Interrupted(signum)
 
-    previous = signal.signal(signal.SIGTERM, _raise)
+    def _sigint(signum, frame):
+        if received.signum is None:
+            received.signum = int(signum)
+        raise KeyboardInterrupt
+
+    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+        handlers[signal.SIGTERM] = signal.signal(signal.SIGTERM, _raise)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        handlers[signal.SIGINT] = signal.signal(signal.SIGINT, _sigint)
     try:
-        yield
+        yield received
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, previous in handlers.items():
+            signal.signal(signum, previous)
 
 
 # ---------------------------------------------------------------------------------------------- resources

@@ -328,7 +328,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
     _check_out_dir(out)
     _check_overview(config)
     out.parent.mkdir(parents=True, exist_ok=True)
-    with terminate_as_interrupt():
+    with terminate_as_interrupt() as received:
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
         try:
             _claim_run_dir(staging)
@@ -341,6 +341,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
             from satchain.report._save import write_text
 
             write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
+            received.check()  # a signal whose exception library code swallowed still stops the run here
             _swap_in(staging, out)
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
