@@ -40,7 +40,9 @@ def test_signal_during_run_removes_staging_and_keeps_previous_results(tmp_path, 
     before = _previous_results(out)
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
     cmd = [sys.executable, "-m", "satchain.cli", "run", "--config", str(tmp_path / "run.toml"), "-o", str(out)]
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    # SIGTERM's default action in the child, whatever the harness running the tests ignores (SIG_IGN is inherited)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))  # fmt: skip
     try:
         for _ in range(1200):  # the staging folder appears once the run has started writing
             staging = list(tmp_path.glob(".res.staging-*"))
