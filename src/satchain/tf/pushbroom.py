@@ -317,6 +317,28 @@ class PushbroomTerms:
             )
         return comps
 
+    def image_affine(self):
+        """The mean map from ground metres (x ACT, y ALT, from the scene's origin) to image pixel coordinates
+        ``(col, row)`` with pixel centres at integers, as ``affine.Affine``: the static grid (pixel ``(i, j)``
+        centred on ``((j + 0.5) gsd_act, (i + 0.5) gsd_alt)``), moved by the drifts averaged over each row's TDI
+        window (``(sigma, eps) (i + N / 2)`` px; :mod:`satchain.engine.timepath`) and, with yaw steering, turned
+        by ``rotation_deg`` about the first pixel's window-mean position. Oscillations and jitter average to
+        zero over the scan and are left out (they are the line-to-line displacement of :meth:`geometry`)."""
+        from affine import Affine
+
+        sys_ = self.system
+        g_x, g_y = sys_.gsd_act_m, sys_.gsd_alt_m
+        n_half = self.stages / 2.0
+        sigma, eps = self.drift_px if self.drift_px is not None else (0.0, 0.0)
+        rot = self.earth["rotation_deg"] if self.earth is not None else 0.0
+        # ground px (x, y) of the window-mean position of pixel (col j, row i), before any rotation:
+        #   y = i + 0.5 + eps (i + N/2),  x = j + 0.5 + sigma (i + N/2)
+        fwd = Affine(1.0, sigma, 0.5 + sigma * n_half, 0.0, 1.0 + eps, 0.5 + eps * n_half)
+        if rot:
+            x0, y0 = fwd * (0.0, 0.0)
+            fwd = Affine.rotation(-rot, pivot=(x0, y0)) * fwd
+        return ~(Affine.scale(g_x, g_y) * fwd)
+
     def geometry(self) -> dict | None:
         """What the terms do to the image's geometry (JSON-ready), or None without any term."""
         if not self.active:
