@@ -237,18 +237,21 @@ def _write_images(result: RunResult, out: Path) -> None:
 def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None) -> None:
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
     from satchain.report import curves, html, run_figures
+    from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
     from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
-    _write_budget_and_scene(result, out)
-    _write_images(result, out)
     view = ReportInputs(result, out, results)
-    curves.write_curves(run_figures.write_run_figures(view), out / "curves")
-    write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
-    write_summary_csv(results, out / "summary.csv")
+    with FigureJobs() as jobs:  # figures of plain data in helper processes, the rest here meanwhile
+        shown = run_figures.write_run_figures(view, jobs=jobs)
+        _write_budget_and_scene(result, out)
+        _write_images(result, out)
+        curves.write_curves(shown, out / "curves")
+        write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
+        write_summary_csv(results, out / "summary.csv")
     html.write_report(view, out / "report.html")
     report("report", 1, 1)
     write_text(out / "config.toml", config_to_toml(result.config))
