@@ -195,19 +195,20 @@ class ReportInputs:
         return self.result.scene.truth_dict
 
 
-def _write_budget_and_scene(result: RunResult, out: Path) -> None:
+def _write_budget_and_scene(result: RunResult, out: Path, jobs) -> None:
+    """The budget's tables and figures and the scene overview, submitted to ``jobs``
+    (:class:`satchain.report._jobs.FigureJobs`: all their inputs pickle; the OTF is rebuilt from the system)."""
     from satchain.report import run_figures
     from satchain.report._save import write_text
     from satchain.report.budget import write_budget_outputs
 
     b, sc = result.budget, result.scene
-    write_budget_outputs(b.system, dict(b.budget), out / "budget", otf=b.otf)
+    jobs.submit(write_budget_outputs, b.system, dict(b.budget), out / "budget")
     (out / "images").mkdir(parents=True, exist_ok=True)
     truth = sc.truth_dict
     write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
     p = result.config.scene.overview_pixel_m
-    overview = sc.scene.render(pixel_m=p)
-    run_figures.plot_scene_overview(overview, truth, p, out / "figures" / "fig1_scene.png")
+    jobs.submit(run_figures.render_scene_overview, sc.scene, truth, p, out / "figures" / "fig1_scene.png")
 
 
 def _write_images(result: RunResult, out: Path) -> None:
@@ -246,8 +247,8 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     results = result.to_json_dict()
     view = ReportInputs(result, out, results)
     with FigureJobs() as jobs:  # figures of plain data in helper processes, the rest here meanwhile
+        _write_budget_and_scene(result, out, jobs)
         shown = run_figures.write_run_figures(view, jobs=jobs)
-        _write_budget_and_scene(result, out)
         _write_images(result, out)
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))

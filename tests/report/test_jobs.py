@@ -26,9 +26,10 @@ def test_a_helper_draws_the_same_figure_as_this_process(tmp_path):
 
 
 def test_a_failing_figure_is_reported_with_its_error(tmp_path):
-    with pytest.raises(SatchainError, match="figure could not be drawn.*AttributeError"):
-        with FigureJobs(1) as jobs:
-            jobs.submit(plot_line_of_sight, None, 60, tmp_path / "c.png")
+    for n in (0, 1):  # drawn here or by the helper (whichever takes it first): the same error
+        with pytest.raises(SatchainError, match="figure could not be drawn: AttributeError"):
+            with FigureJobs(n) as jobs:
+                jobs.submit(plot_line_of_sight, None, 60, tmp_path / "c.png")
     assert not (tmp_path / "c.png").exists()
 
 

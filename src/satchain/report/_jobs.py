@@ -14,10 +14,13 @@ every figure in this process, as on a one-CPU machine).
 
 from __future__ import annotations
 
+import collections
+import contextlib
 import os
 import pickle
 import subprocess
 import sys
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -46,25 +49,38 @@ def figure_processes() -> int:
 
 class FigureJobs:
     """``submit(fn, *args, **kwargs)`` queues a call (``fn`` a module-level function, the arguments picklable);
-    ``start()`` hands the queue to the helper processes (or runs it here, with none); ``wait()`` waits and raises
-    a :class:`~satchain.errors.SatchainError` with a helper's error. As a context manager: ``start()`` on entry of
-    the first :meth:`wait`, and on an error the helpers are killed."""
+    ``start()`` starts the helper processes on the queue; ``wait()`` draws what the helpers have not taken yet
+    here, waits for them and raises a :class:`~satchain.errors.SatchainError` with a helper's error. The queue is
+    shared: each helper takes the next call from the front when it is free, this process takes from the back
+    once its own work is done, so neither waits while calls are left. As a context manager: leaving it waits,
+    or on an error kills the helpers."""
 
     def __init__(self, processes: int | None = None) -> None:
         self.processes = figure_processes() if processes is None else int(processes)
-        self._queue: list[tuple[Callable[..., Any], tuple, dict]] = []
+        self._calls: list[tuple[Callable[..., Any], tuple, dict]] = []
+        self._todo: collections.deque[int] = collections.deque()
+        self._lock = threading.Lock()
         self._procs: list[subprocess.Popen] = []
+        self._feeders: list[threading.Thread] = []
+        self._errors: list[str] = []
 
     def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
         if self.processes <= 0:
-            fn(*args, **kwargs)
-        else:
-            self._queue.append((fn, args, kwargs))
+            _draw(fn, args, kwargs)
+            return
+        with self._lock:
+            self._todo.append(len(self._calls))
+            self._calls.append((fn, args, kwargs))
+
+    def _take(self, front: bool) -> int | None:
+        with self._lock:
+            if not self._todo:
+                return None
+            return self._todo.popleft() if front else self._todo.pop()
 
     def start(self) -> None:
-        """Start the helpers on the calls queued so far (round-robin)."""
-        queue, self._queue = self._queue, []
-        if not queue:
+        """Start the helpers on the calls queued so far (no-op when they run or nothing is queued)."""
+        if self._procs or not self._todo:
             return
         import satchain
 
@@ -72,42 +88,68 @@ class FigureJobs:
         root = str(Path(satchain.__file__).resolve().parents[1])
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         env["MPLBACKEND"] = "Agg"
-        n = min(self.processes, len(queue))
-        for k in range(n):
+        payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
+        for _ in range(min(self.processes, len(self._todo))):
             p = subprocess.Popen(
                 [sys.executable, "-m", "satchain.report._jobs"],
                 stdin=subprocess.PIPE,
-                stdout=subprocess.DEVNULL,
+                stdout=subprocess.PIPE,
                 stderr=subprocess.PIPE,
                 env=env,
             )
             self._procs.append(p)
-            try:
-                p.stdin.write(pickle.dumps(queue[k::n], protocol=pickle.HIGHEST_PROTOCOL))
-                p.stdin.close()
-            except BrokenPipeError:
-                pass  # the helper died at start: wait() reports its error
+            t = threading.Thread(target=self._feed, args=(p, payload), daemon=True)
+            self._feeders.append(t)
+            t.start()
+
+    def _feed(self, p: subprocess.Popen, payload: bytes) -> None:
+        """Hand the helper ``p`` one call at a time from the front of the queue, until none is left."""
+        try:
+            p.stdin.write(b"%d\n" % len(payload) + payload)
+            p.stdin.flush()
+            while (i := self._take(front=True)) is not None:
+                p.stdin.write(b"%d\n" % i)
+                p.stdin.flush()
+                if p.stdout.readline().strip() != b"ok":
+                    with self._lock:
+                        self._todo.append(i)  # not drawn: this process draws it
+                    raise BrokenPipeError
+            p.stdin.close()
+        except (BrokenPipeError, OSError, ValueError):
+            pass  # the helper died (its error is read in wait) or was killed
 
     def wait(self) -> None:
         self.start()
-        procs, self._procs = self._procs, []
+        while (i := self._take(front=False)) is not None:
+            try:
+                _draw(*self._calls[i])
+            except SatchainError:
+                self.kill()
+                raise
+        for t in self._feeders:
+            t.join()
+        procs, self._procs, self._feeders = self._procs, [], []
         errors = []
         for p in procs:
-            err = p.stderr.read().decode(errors="replace")
-            p.stderr.close()
+            err = p.stderr.read().decode(errors="replace").strip()
             if p.wait() != 0:
-                errors.append(err.strip().splitlines()[-1] if err.strip() else f"exit status {p.returncode}")
+                errors.append(err.splitlines()[-1] if err else f"exit status {p.returncode}")
+            _close(p)
         if errors:
-            raise SatchainError(f"a figure could not be drawn (helper process): {errors[0]}")
+            raise SatchainError(f"a figure could not be drawn: {errors[0]}")
 
     def kill(self) -> None:
+        with self._lock:
+            self._todo.clear()
         procs, self._procs = self._procs, []
         for p in procs:
             p.kill()
             p.wait()
-            for f in (p.stdin, p.stderr):
-                if f is not None and not f.closed:
-                    f.close()
+        for t in self._feeders:
+            t.join()
+        self._feeders = []
+        for p in procs:
+            _close(p)
 
     def __enter__(self) -> FigureJobs:
         return self
@@ -116,17 +158,37 @@ class FigureJobs:
         if exc_type is None:
             self.wait()
         else:
-            self._queue.clear()
             self.kill()
 
 
+def _draw(fn: Callable[..., Any], args: tuple, kwargs: dict) -> None:
+    """One call here; its failure reads as a helper's does."""
+    try:
+        fn(*args, **kwargs)
+    except Exception as exc:
+        raise SatchainError(f"a figure could not be drawn: {type(exc).__name__}: {exc}") from exc
+
+
+def _close(p: subprocess.Popen) -> None:
+    for f in (p.stdin, p.stdout, p.stderr):
+        if f is not None and not f.closed:
+            with contextlib.suppress(OSError):
+                f.close()
+
+
 def _main() -> int:
-    """The helper: run the pickled calls from standard input; a failure's traceback on standard error."""
+    """The helper: read the pickled calls, then run call ``i`` for each line ``i`` on standard input, answering
+    ``ok`` when it is drawn; a failure's traceback goes to standard error (exit status 1)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    for fn, args, kwargs in pickle.loads(sys.stdin.buffer.read()):
+    stdin = sys.stdin.buffer
+    calls = pickle.loads(stdin.read(int(stdin.readline())))
+    for line in stdin:
+        fn, args, kwargs = calls[int(line)]
         fn(*args, **kwargs)
+        sys.stdout.write("ok\n")
+        sys.stdout.flush()
     return 0
 
 

@@ -16,7 +16,18 @@ from satchain.report._save import save_figure
 from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import EDGES, REPORT_KINDS, WEDGES
 
-__all__ = ["plot_edges_overview", "plot_scene_overview", "plot_target_chain", "write_run_figures"]
+__all__ = [
+    "plot_edges_overview",
+    "plot_scene_overview",
+    "plot_target_chain",
+    "render_scene_overview",
+    "write_run_figures",
+]
+
+
+def render_scene_overview(scene, truth: dict, pixel_m: float, path: Path) -> None:
+    """:func:`plot_scene_overview` of ``scene`` rendered at ``pixel_m`` (a job for a helper process)."""
+    plot_scene_overview(scene.render(pixel_m=pixel_m), truth, pixel_m, path)
 
 
 def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Path) -> None:
