@@ -27,7 +27,8 @@ the region or touches an excluded or clipped pixel, and where its fit fails or d
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import make_lsq_spline
+from scipy.interpolate import BSpline
+from scipy.linalg import solveh_banded
 
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
@@ -158,16 +159,49 @@ def _template(work, ok_px, cols, place):
             "too close to a pixel axis for its length: tilt it by 2-10 deg or use more lines"
         )
     step = max(_KNOT_PX, 1.25 * gap)
-    order = np.argsort(u, kind="stable")
-    u, v = u[order], v[order]
-    lo_u, hi_u = float(u[0]), float(u[-1])
+    lo_u, hi_u = float(u.min()), float(u.max())
     inner = np.arange(np.ceil(lo_u / step) * step, hi_u, step)
     inner = inner[(inner > lo_u + 0.5 * step) & (inner < hi_u - 0.5 * step)]
     knots = np.concatenate([[lo_u] * 4, inner, [hi_u] * 4])
     try:
-        return make_lsq_spline(u, v, knots, k=3)
+        return _lsq_spline(u, v, knots)
     except (np.linalg.LinAlgError, ValueError):
         raise InputError("image: the edge's line profile cannot be estimated (too few lines or phases)") from None
+
+
+def _lsq_spline(u, v, knots) -> BSpline:
+    """Least-squares cubic B-spline on ``knots`` through (u, v): the banded normal equations (each sample
+    touches 4 basis functions) solved by Cholesky; the B-spline basis is well conditioned, so this agrees with
+    a QR solution (scipy's ``make_lsq_spline``) to rounding.  Refuses (LinAlgError) a singular system."""
+    b = BSpline.design_matrix(u, knots, 3)
+    vals = b.data.reshape(-1, 4)
+    first = b.indices.reshape(-1, 4)[:, 0]
+    nc = len(knots) - 4
+    ab = np.zeros((4, nc))  # upper band storage: ab[3 + i - j, j] = A[i, j]
+    for d in range(4):
+        w = (vals[:, : 4 - d] * vals[:, d:]).ravel()
+        idx = (first[:, None] + np.arange(4 - d)[None, :]).ravel()
+        ab[3 - d, d:] = np.bincount(idx, weights=w, minlength=nc)[: nc - d]
+    rhs = np.bincount(b.indices, weights=(vals * v[:, None]).ravel(), minlength=nc)
+    if np.any(ab[3] <= 0.0):
+        raise np.linalg.LinAlgError("a basis function holds no sample")
+    return BSpline(knots, solveh_banded(ab, rhs), 3)
+
+
+class _Cubic:
+    """A cubic spline as polynomials on its knot intervals: value and derivative in one pass."""
+
+    def __init__(self, spline):
+        t = spline.t
+        self.bx = np.unique(t[3:-3])
+        left = self.bx[:-1]
+        self.c = [spline(left, nu=k) / f for k, f in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))]
+
+    def __call__(self, u):
+        i = np.clip(np.searchsorted(self.bx, u, side="right") - 1, 0, self.bx.size - 2)
+        dx = u - self.bx[i]
+        c0, c1, c2, c3 = (c[i] for c in self.c)
+        return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
 
 
 def _rise(spline):
@@ -209,17 +243,25 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
     x = np.nan_to_num(start).copy()
-    deriv = spline.derivative()
-    a, c = _levels(v, spline(np.clip(k - x[:, None], lo_u, hi_u)))
+    cubic = _Cubic(spline)
+    a, c = _levels(v, cubic(np.clip(k - x[:, None], lo_u, hi_u))[0])
+    scale = np.abs(c) + np.abs(a) + 1e-300
     for it in range(9):
-        u = np.clip(k - x[:, None], lo_u, hi_u)
-        jac = np.stack([np.ones_like(u), spline(u), -c[:, None] * deriv(u)], axis=-1)
-        r = v - (a[:, None] + c[:, None] * jac[..., 1])
+        t, dt = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+        j2 = -c[:, None] * dt
+        r = v - (a[:, None] + c[:, None] * t)
         if it == 8:
             break
-        step = _solve(jac, r)
+        step = _solve(t, j2, r)
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + np.clip(step[:, 2], -0.5, 0.5)
+        # converged (every measurable line's step at rounding level): the next steps change nothing
+        if np.all(np.abs(step[ok, 2]) < 1e-12) and np.all(np.abs(step[ok, :2]) < 1e-12 * scale[ok, None]):
+            t, dt = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+            j2 = -c[:, None] * dt
+            r = v - (a[:, None] + c[:, None] * t)
+            break
+    jac = np.stack([np.ones_like(t), t, j2], axis=-1)
     return (*_accept(ok, x, start, (a, c, r, jac), half), k)
 
 
@@ -231,16 +273,32 @@ def _levels(v, t):
     return vm - c * tm, c
 
 
-def _solve(jac, r):
-    """Per line least-squares step of ``jac step = r`` (lines with a singular system: no step)."""
-    a = np.einsum("nmi,nmj->nij", jac, jac)
-    b = np.einsum("nmi,nm->ni", jac, r)
-    det = np.linalg.det(a)
+def _normal(t, j2):
+    """The per-line 3 x 3 normal matrix of the Jacobian columns (1, t, j2): its six distinct entries."""
+    return (
+        float(t.shape[1]) * np.ones(t.shape[0]), t.sum(axis=1), j2.sum(axis=1),
+        (t * t).sum(axis=1), (t * j2).sum(axis=1), (j2 * j2).sum(axis=1),
+    )  # fmt: skip
+
+
+def _solve(t, j2, r):
+    """Per line least-squares step of ``[1 t j2] step = r`` (lines with a singular system: no step), by the
+    adjugate of the 3 x 3 normal matrix."""
+    a00, a01, a02, a11, a12, a22 = _normal(t, j2)
+    b = np.stack([r.sum(axis=1), (t * r).sum(axis=1), (j2 * r).sum(axis=1)], axis=1)
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
     good = np.abs(det) > 1e-300
-    out = np.zeros(b.shape)
-    if np.any(good):
-        out[good] = np.linalg.solve(a[good], b[good][..., None])[..., 0]
-    return out
+    inv_det = np.where(good, 1.0 / np.where(good, det, 1.0), 0.0)
+    return np.stack(
+        [
+            (c00 * b[:, 0] + c01 * b[:, 1] + c02 * b[:, 2]) * inv_det,
+            (c01 * b[:, 0] + c11 * b[:, 1] + c12 * b[:, 2]) * inv_det,
+            (c02 * b[:, 0] + c12 * b[:, 1] + c22 * b[:, 2]) * inv_det,
+        ],
+        axis=1,
+    )
 
 
 def _accept(ok, x, start, fit, half: int):
