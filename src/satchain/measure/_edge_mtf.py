@@ -142,11 +142,12 @@ class _Lsf:
     def fourier(self, f: np.ndarray) -> np.ndarray:
         """``exp(-2 pi i f xm)``, shape (f, K - 1); on a uniform grid of ``f`` from 0 by powers of one row."""
         f = np.asarray(f, dtype=float)
-        if f.size > 8 and f[0] == 0.0 and np.allclose(np.diff(f), f[1], rtol=0.0, atol=1e-12):
-            z = np.empty((f.size, self.xm.size), dtype=complex)
-            z[0] = 1.0
-            z[1:] = np.exp(-2j * np.pi * f[1] * self.xm)
-            return np.cumprod(z, axis=0)  # relative error ~ f.size x 1e-16
+        n, b = f.size, 16
+        if n > 2 * b and f[0] == 0.0 and np.allclose(np.diff(f), f[1], rtol=0.0, atol=1e-12):
+            # f_j = (b p + q) df: exp(-2 pi i b p df xm) exp(-2 pi i q df xm), 1 / b of the exponentials
+            lo = np.exp(-2j * np.pi * np.outer(np.arange(b) * f[1], self.xm))
+            hi = np.exp(-2j * np.pi * np.outer(np.arange(-(-n // b)) * (b * f[1]), self.xm))
+            return (hi[:, None, :] * lo[None, :, :]).reshape(-1, self.xm.size)[:n]
         return np.exp(-2j * np.pi * np.outer(f, self.xm))
 
     def spectrum(self, lsf: np.ndarray, f: np.ndarray, e: np.ndarray | None = None) -> np.ndarray:
@@ -179,19 +180,23 @@ class _Lsf:
         spectrum is the adjoint of the (real) LSF map applied to the Fourier kernel, so the real part can be
         taken first: one real pass ``win q + (1 - win) S(q)`` then the adjoint of the difference.
         """
-        m0 = spec[0].real
-        mag = np.abs(spec)
-        u = np.where(mag > 0, np.conj(spec) / np.maximum(mag, 1e-300), 1.0) * (self.w / m0)
-        p = u.real[:, None] * e.real - u.imag[:, None] * e.imag  # Re(u e) w / m0
-        y = self.win * p + (1 - self.win) * self._s_fourier(p, f)
-        y0 = self.win * self.w + (1 - self.win) * self._s(np.full(self.xm.size, self.w))  # sensitivity at f = 0
-        y -= (mag / m0**2)[:, None] * y0
+        spec2 = np.atleast_2d(spec)  # (windows, f)
+        win = self.win if self.win.ndim == 2 else self.win[None]
+        m0 = spec2[:, :1].real
+        mag = np.abs(spec2)
+        u = np.where(mag > 0, np.conj(spec2) / np.maximum(mag, 1e-300), 1.0) * (self.w / m0)
+        p = u.real[..., None] * e.real - u.imag[..., None] * e.imag  # Re(u e) w / m0
+        sp = self._s_fourier(p.reshape(-1, p.shape[-1]), np.tile(f, spec2.shape[0])).reshape(p.shape)
+        y = win[:, None, :] * p + (1 - win[:, None, :]) * sp
+        y0 = win * self.w + (1 - win) * self._s(np.full(self.xm.size, self.w))  # sensitivity at f = 0
+        y -= (mag / m0**2)[..., None] * y0[:, None, :]
         # c = adjoint of diff(.) / w applied to y: c_k = (y_{k-1} - y_k) / w with zero ends
-        d = np.empty((y.shape[0], y.shape[1] + 1))
-        d[:, 0] = -y[:, 0]
-        d[:, -1] = y[:, -1]
-        np.subtract(y[:, :-1], y[:, 1:], out=d[:, 1:-1])
-        return np.sqrt(np.einsum("ij,ij,j->i", d, d, var_bins)) / abs(self.w) / corr
+        d = np.empty(y.shape[:-1] + (y.shape[-1] + 1,))
+        d[..., 0] = -y[..., 0]
+        d[..., -1] = y[..., -1]
+        np.subtract(y[..., :-1], y[..., 1:], out=d[..., 1:-1])
+        out = np.sqrt(np.einsum("bij,bij,j->bi", d, d, var_bins)) / abs(self.w) / corr
+        return out if spec.ndim == 2 else out[0]
 
 
 def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
@@ -221,11 +226,7 @@ def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
     lsfs = np.atleast_2d(ops.apply(esf))
     e_nyq = ops.fourier(nyq)
     specs = ops.spectrum(lsfs, nyq, e_nyq)
-    corr_nyq = np.sinc(nyq * w)
-    noise = np.empty(len(ws))
-    for k in range(len(ws)):
-        op = _row(ops, k)
-        noise[k] = op.mtf_sigma(specs[k], nyq, e_nyq, var_bins, corr_nyq)[1]
+    noise = ops.mtf_sigma(specs, nyq, e_nyq, var_bins, np.sinc(nyq * w))[:, 1]
 
     def meets(k: int) -> bool:
         return bool(noise[k] <= noise_target)
