@@ -262,23 +262,24 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     cubic = _Cubic(spline)
     a, c = _levels(v, cubic(np.clip(k - x[:, None], lo_u, hi_u))[0])
     scale = np.abs(c) + np.abs(a) + 1e-300
+    q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
+    q[..., 0] = 1.0
     for it in range(9):
-        t, dt = cubic(np.clip(k - x[:, None], lo_u, hi_u))
-        j2 = -c[:, None] * dt
-        r = v - (a[:, None] + c[:, None] * t)
+        q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+        np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
+        gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
         if it == 8:
             break
-        step = _solve(t, j2, r)
+        step = _solve(gram, c)
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + np.clip(step[:, 2], -0.5, 0.5)
-        # converged (every measurable line's step below 1e-10 px): the next steps move it by less still
-        if np.all(np.abs(step[ok, 2]) < 1e-10) and np.all(np.abs(step[ok, :2]) < 1e-10 * scale[ok, None]):
-            t, dt = cubic(np.clip(k - x[:, None], lo_u, hi_u))
-            j2 = -c[:, None] * dt
-            r = v - (a[:, None] + c[:, None] * t)
+        # converged (every measurable line's step below 1e-9 px): the next steps move it by ~1e-10 px
+        if np.all(np.abs(step[ok, 2]) < 1e-9) and np.all(np.abs(step[ok, :2]) < 1e-9 * scale[ok, None]):
+            q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+            np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
+            gram = np.matmul(q.transpose(0, 2, 1), q)
             break
-    jac = np.stack([np.ones_like(t), t, j2], axis=-1)
-    return (*_accept(ok, x, start, (a, c, r, jac), half), k)
+    return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
 
 
 def _levels(v, t):
@@ -289,40 +290,33 @@ def _levels(v, t):
     return vm - c * tm, c
 
 
-def _normal(t, j2):
-    """The per-line 3 x 3 normal matrix of the Jacobian columns (1, t, j2): its six distinct entries."""
-    return (
-        float(t.shape[1]) * np.ones(t.shape[0]), t.sum(axis=1), j2.sum(axis=1),
-        (t * t).sum(axis=1), (t * j2).sum(axis=1), (j2 * j2).sum(axis=1),
-    )  # fmt: skip
+def _normal(gram, c):
+    """The normal matrix and right-hand side of the Jacobian ``(1, T, -c T')`` from the Gram matrix of
+    ``(1, T, T', r)``: ((lines, 3, 3), (lines, 3))."""
+    s = np.array([1.0, 1.0, -1.0])[None, :] * np.stack([np.ones_like(c), np.ones_like(c), c], axis=1)
+    a = gram[:, :3, :3] * s[:, :, None] * s[:, None, :]
+    return a, gram[:, :3, 3] * s
 
 
-def _solve(t, j2, r):
-    """Per line least-squares step of ``[1 t j2] step = r`` (lines with a singular system: no step), by the
-    adjugate of the 3 x 3 normal matrix."""
-    a00, a01, a02, a11, a12, a22 = _normal(t, j2)
-    b = np.stack([r.sum(axis=1), (t * r).sum(axis=1), (j2 * r).sum(axis=1)], axis=1)
+def _solve(gram, c):
+    """Per line least-squares Gauss-Newton step (lines with a singular system: no step), by the adjugate of
+    the 3 x 3 normal matrix."""
+    a, b = _normal(gram, c)
+    a00, a01, a02, a11, a12, a22 = (a[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
     c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
     c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
     det = a00 * c00 + a01 * c01 + a02 * c02
     good = np.abs(det) > 1e-300
+    adj = np.stack([c00, c01, c02, c01, c11, c12, c02, c12, c22], axis=1).reshape(-1, 3, 3)
     inv_det = np.where(good, 1.0 / np.where(good, det, 1.0), 0.0)
-    return np.stack(
-        [
-            (c00 * b[:, 0] + c01 * b[:, 1] + c02 * b[:, 2]) * inv_det,
-            (c01 * b[:, 0] + c11 * b[:, 1] + c12 * b[:, 2]) * inv_det,
-            (c02 * b[:, 0] + c12 * b[:, 1] + c22 * b[:, 2]) * inv_det,
-        ],
-        axis=1,
-    )
+    return np.matmul(adj, b[:, :, None])[:, :, 0] * inv_det[:, None]
 
 
 def _accept(ok, x, start, fit, half: int):
     """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
-    Jacobian)``."""
-    a, c, r, jac = fit
+    normal matrices J^T J)``."""
+    a, c, r, jtj = fit
     ok = ok & np.isfinite(x) & (np.abs(x - np.nan_to_num(start)) <= 0.5 * half)
-    inv = np.zeros((x.size, 3, 3))
     if np.count_nonzero(ok) < 3:
         return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
     c_med = float(np.median(c[ok]))
@@ -331,7 +325,20 @@ def _accept(ok, x, start, fit, half: int):
     ok &= rms <= _RMS_TOL * float(np.median(rms[ok])) + 0.005 * abs(c_med)
     n_ok = np.count_nonzero(ok)
     noise2 = float(np.sum(r[ok] ** 2)) / max(n_ok * (r.shape[1] - 3), 1)
-    with np.errstate(all="ignore"):
-        inv[ok] = np.linalg.pinv(np.einsum("nmi,nmj->nij", jac[ok], jac[ok]))
     pos = np.where(ok, x, np.nan)
-    return pos, np.where(ok, np.sqrt(noise2 * inv[:, 2, 2]), np.nan)
+    return pos, np.where(ok, np.sqrt(noise2 * _inv22(jtj, ok)), np.nan)
+
+
+def _inv22(a, ok):
+    """Element (2, 2) of the inverse of each 3 x 3 symmetric ``a`` (its cofactor over the determinant); the
+    pseudo-inverse's for the ``ok`` lines whose matrix is near singular."""
+    det = np.linalg.det(a)
+    cof = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
+    diag = np.abs(a[:, 0, 0] * a[:, 1, 1] * a[:, 2, 2])
+    with np.errstate(all="ignore"):
+        out = cof / det
+    weak = ok & ~(np.abs(det) > 1e-10 * diag)
+    if np.any(weak):
+        with np.errstate(all="ignore"):
+            out[weak] = np.linalg.pinv(a[weak])[:, 2, 2]
+    return out
