@@ -27,7 +27,8 @@ the region or touches an excluded or clipped pixel, and where its fit fails or d
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import make_lsq_spline
+from scipy.interpolate import BSpline
+from scipy.linalg import solveh_banded
 
 from satchain.errors import InputError
 from satchain.measure._common import robust_sigma
@@ -158,16 +159,65 @@ def _template(work, ok_px, cols, place):
             "too close to a pixel axis for its length: tilt it by 2-10 deg or use more lines"
         )
     step = max(_KNOT_PX, 1.25 * gap)
-    order = np.argsort(u, kind="stable")
-    u, v = u[order], v[order]
-    lo_u, hi_u = float(u[0]), float(u[-1])
+    lo_u, hi_u = float(u.min()), float(u.max())
     inner = np.arange(np.ceil(lo_u / step) * step, hi_u, step)
     inner = inner[(inner > lo_u + 0.5 * step) & (inner < hi_u - 0.5 * step)]
     knots = np.concatenate([[lo_u] * 4, inner, [hi_u] * 4])
     try:
-        return make_lsq_spline(u, v, knots, k=3)
+        return _lsq_spline(u, v, knots)
     except (np.linalg.LinAlgError, ValueError):
         raise InputError("image: the edge's line profile cannot be estimated (too few lines or phases)") from None
+
+
+def _lsq_spline(u, v, knots) -> BSpline:
+    """Least-squares cubic B-spline on ``knots`` through (u, v): the banded normal equations (each sample
+    touches 4 basis functions) solved by Cholesky; the B-spline basis is well conditioned, so this agrees with
+    a QR solution (scipy's ``make_lsq_spline``) to rounding.  Refuses (LinAlgError) a singular system."""
+    nc = len(knots) - 4
+    first, vals = _basis(u, knots, nc)
+    ab = np.zeros((4, nc))  # upper band storage: ab[3 + i - j, j] = A[i, j]
+    for d in range(4):
+        w = (vals[:, : 4 - d] * vals[:, d:]).ravel()
+        idx = (first[:, None] + np.arange(4 - d)[None, :]).ravel()
+        ab[3 - d, d:] = np.bincount(idx, weights=w, minlength=nc)[: nc - d]
+    idx = (first[:, None] + np.arange(4)[None, :]).ravel()
+    rhs = np.bincount(idx, weights=(vals * v[:, None]).ravel(), minlength=nc)
+    if np.any(ab[3] <= 0.0):
+        raise np.linalg.LinAlgError("a basis function holds no sample")
+    return BSpline(knots, solveh_banded(ab, rhs), 3)
+
+
+def _basis(u, t, nc: int):
+    """The 4 cubic B-splines nonzero at each ``u`` (Cox-de Boor, de Boor's triangle; the NURBS Book A2.2):
+    (index of the first, values (n, 4))."""
+    i = np.clip(np.searchsorted(t, u, side="right") - 1, 3, nc - 1)
+    left = [None] + [u - t[i + 1 - j] for j in (1, 2, 3)]
+    right = [None] + [t[i + j] - u for j in (1, 2, 3)]
+    n = [np.ones_like(u)]
+    for j in (1, 2, 3):
+        saved = 0.0
+        for r in range(j):
+            temp = n[r] / (right[r + 1] + left[j - r])
+            n[r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        n.append(saved)
+    return i - 3, np.stack(n, axis=1)
+
+
+class _Cubic:
+    """A cubic spline as polynomials on its knot intervals: value and derivative in one pass."""
+
+    def __init__(self, spline):
+        t = spline.t
+        self.bx = np.unique(t[3:-3])
+        left = self.bx[:-1]
+        self.c = [spline(left, nu=k) / f for k, f in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))]
+
+    def __call__(self, u):
+        i = np.clip(np.searchsorted(self.bx, u, side="right") - 1, 0, self.bx.size - 2)
+        dx = u - self.bx[i]
+        c0, c1, c2, c3 = (c[i] for c in self.c)
+        return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
 
 
 def _rise(spline):
@@ -209,18 +259,27 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
     x = np.nan_to_num(start).copy()
-    deriv = spline.derivative()
-    a, c = _levels(v, spline(np.clip(k - x[:, None], lo_u, hi_u)))
+    cubic = _Cubic(spline)
+    a, c = _levels(v, cubic(np.clip(k - x[:, None], lo_u, hi_u))[0])
+    scale = np.abs(c) + np.abs(a) + 1e-300
+    q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
+    q[..., 0] = 1.0
     for it in range(9):
-        u = np.clip(k - x[:, None], lo_u, hi_u)
-        jac = np.stack([np.ones_like(u), spline(u), -c[:, None] * deriv(u)], axis=-1)
-        r = v - (a[:, None] + c[:, None] * jac[..., 1])
+        q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+        np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
+        gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
         if it == 8:
             break
-        step = _solve(jac, r)
+        step = _solve(gram, c)
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + np.clip(step[:, 2], -0.5, 0.5)
-    return (*_accept(ok, x, start, (a, c, r, jac), half), k)
+        # converged (every measurable line's step below 1e-9 px): the next steps move it by ~1e-10 px
+        if np.all(np.abs(step[ok, 2]) < 1e-9) and np.all(np.abs(step[ok, :2]) < 1e-9 * scale[ok, None]):
+            q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+            np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
+            gram = np.matmul(q.transpose(0, 2, 1), q)
+            break
+    return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
 
 
 def _levels(v, t):
@@ -231,24 +290,33 @@ def _levels(v, t):
     return vm - c * tm, c
 
 
-def _solve(jac, r):
-    """Per line least-squares step of ``jac step = r`` (lines with a singular system: no step)."""
-    a = np.einsum("nmi,nmj->nij", jac, jac)
-    b = np.einsum("nmi,nm->ni", jac, r)
-    det = np.linalg.det(a)
+def _normal(gram, c):
+    """The normal matrix and right-hand side of the Jacobian ``(1, T, -c T')`` from the Gram matrix of
+    ``(1, T, T', r)``: ((lines, 3, 3), (lines, 3))."""
+    s = np.array([1.0, 1.0, -1.0])[None, :] * np.stack([np.ones_like(c), np.ones_like(c), c], axis=1)
+    a = gram[:, :3, :3] * s[:, :, None] * s[:, None, :]
+    return a, gram[:, :3, 3] * s
+
+
+def _solve(gram, c):
+    """Per line least-squares Gauss-Newton step (lines with a singular system: no step), by the adjugate of
+    the 3 x 3 normal matrix."""
+    a, b = _normal(gram, c)
+    a00, a01, a02, a11, a12, a22 = (a[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
     good = np.abs(det) > 1e-300
-    out = np.zeros(b.shape)
-    if np.any(good):
-        out[good] = np.linalg.solve(a[good], b[good][..., None])[..., 0]
-    return out
+    adj = np.stack([c00, c01, c02, c01, c11, c12, c02, c12, c22], axis=1).reshape(-1, 3, 3)
+    inv_det = np.where(good, 1.0 / np.where(good, det, 1.0), 0.0)
+    return np.matmul(adj, b[:, :, None])[:, :, 0] * inv_det[:, None]
 
 
 def _accept(ok, x, start, fit, half: int):
     """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
-    Jacobian)``."""
-    a, c, r, jac = fit
+    normal matrices J^T J)``."""
+    a, c, r, jtj = fit
     ok = ok & np.isfinite(x) & (np.abs(x - np.nan_to_num(start)) <= 0.5 * half)
-    inv = np.zeros((x.size, 3, 3))
     if np.count_nonzero(ok) < 3:
         return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
     c_med = float(np.median(c[ok]))
@@ -257,7 +325,20 @@ def _accept(ok, x, start, fit, half: int):
     ok &= rms <= _RMS_TOL * float(np.median(rms[ok])) + 0.005 * abs(c_med)
     n_ok = np.count_nonzero(ok)
     noise2 = float(np.sum(r[ok] ** 2)) / max(n_ok * (r.shape[1] - 3), 1)
-    with np.errstate(all="ignore"):
-        inv[ok] = np.linalg.pinv(np.einsum("nmi,nmj->nij", jac[ok], jac[ok]))
     pos = np.where(ok, x, np.nan)
-    return pos, np.where(ok, np.sqrt(noise2 * inv[:, 2, 2]), np.nan)
+    return pos, np.where(ok, np.sqrt(noise2 * _inv22(jtj, ok)), np.nan)
+
+
+def _inv22(a, ok):
+    """Element (2, 2) of the inverse of each 3 x 3 symmetric ``a`` (its cofactor over the determinant); the
+    pseudo-inverse's for the ``ok`` lines whose matrix is near singular."""
+    det = np.linalg.det(a)
+    cof = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
+    diag = np.abs(a[:, 0, 0] * a[:, 1, 1] * a[:, 2, 2])
+    with np.errstate(all="ignore"):
+        out = cof / det
+    weak = ok & ~(np.abs(det) > 1e-10 * diag)
+    if np.any(weak):
+        with np.errstate(all="ignore"):
+            out[weak] = np.linalg.pinv(a[weak])[:, 2, 2]
+    return out

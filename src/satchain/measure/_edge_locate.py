@@ -9,7 +9,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter
 
 from satchain.errors import InputError
-from satchain.measure._common import crop_roi, fill_invalid, robust_sigma, valid_mask, zero_fill_mask
+from satchain.measure._common import crop_roi, fill_invalid, valid_mask, zero_fill_mask
 
 __all__ = ["MIN_ROWS", "curvature", "edge_region", "locate_edge", "orient_edge", "project"]
 
@@ -48,18 +48,57 @@ def orient_edge(data: np.ndarray, ok=None):
     return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
+def _median(v: np.ndarray) -> float:
+    """``np.median`` of a 1-D float array (the same value: the mean of the two middle elements)."""
+    n = v.size
+    if n == 0:
+        return float("nan")
+    lo, hi = (n - 1) // 2, n // 2
+    p = np.partition(v, [lo, hi]) if lo != hi else np.partition(v, lo)
+    return float((p[lo] + p[hi]) / 2)
+
+
+def _robust_sigma(v: np.ndarray) -> float:
+    """:func:`satchain.measure._common.robust_sigma` of a 1-D float array (1.4826 MAD), without its overhead."""
+    if v.size == 0:
+        return 0.0
+    return float(1.482602218505602 * _median(np.abs(v - _median(v))))
+
+
+def _polyfit(t: np.ndarray, y: np.ndarray, deg: int, w=None) -> np.ndarray:
+    """``np.polyfit(t, y, deg, w=w)``: the same scaled least squares, without its argument checks."""
+    lhs = np.vander(t, deg + 1)
+    rhs = y
+    if w is not None:
+        lhs = lhs * w[:, None]
+        rhs = rhs * w
+    scale = np.sqrt((lhs * lhs).sum(axis=0))
+    c = np.linalg.lstsq(lhs / scale, rhs, rcond=len(t) * np.finfo(float).eps)[0]
+    return c / scale
+
+
 def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
-    """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights)."""
+    """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights).
+
+    Up to 10 reweightings; it stops once the fit no longer moves (by < 1e-12 px), where more change nothing."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
     w = np.ones_like(y)
-    coef = np.polyfit(t, y, deg)
+    coef = _polyfit(t, y, deg)
+    fit = np.polyval(coef, t)
     for _ in range(10):
-        r = y - np.polyval(coef, t)
-        s = max(robust_sigma(r), scale_floor)
+        r = y - fit
+        s = max(_robust_sigma(r), scale_floor)
         u = r / (4.685 * s)
         w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
         if np.count_nonzero(w) <= deg + 2:
             raise InputError("image: no straight edge found (edge positions do not line up)")
-        coef = np.polyfit(t, y, deg, w=np.sqrt(w))
+        coef = _polyfit(t, y, deg, np.sqrt(w))
+        new = np.polyval(coef, t)
+        moved = float(np.max(np.abs(new - fit)))
+        fit = new
+        if moved < 1e-12:
+            break
     return coef, w
 
 
@@ -69,7 +108,7 @@ def pick_degree(t, y, w):
     t, y = t[use], y[use]
     tc = (t - t.mean()) / max(np.ptp(t), 1.0)
     best = 1
-    fits = {k: np.polyfit(tc, y, k) for k in (1, 2, 3)}
+    fits = {k: _polyfit(tc, y, k) for k in (1, 2, 3)}
     rss = {k: float(np.sum((y - np.polyval(fits[k], tc)) ** 2)) for k in (1, 2, 3)}
     for k in (2, 3):
         dof = t.size - k - 1
@@ -134,9 +173,12 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
         r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half, valid)
-        coef, w = robust_polyfit(r_used, cen, cur)
+        prev, coef, w = coef, *robust_polyfit(r_used, cen, cur)
+        last = cur
         if deg is None and it < 3:
             cur = pick_degree(r_used, cen, w)
+        if cur == last and prev.shape == coef.shape and np.array_equal(prev, coef):
+            break  # the same fit again: further passes repeat it exactly
     inl = w > 0
     med = float(np.median(step[inl]))
     odd = inl & (np.abs(step - med) > 0.3 * abs(med))

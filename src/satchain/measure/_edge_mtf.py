@@ -102,15 +102,6 @@ def _tukey(x: np.ndarray, half_width: float) -> np.ndarray:
     return 0.5 * (1.0 + np.cos(np.pi * a))
 
 
-def _diff_adjoint(y: np.ndarray, w: float) -> np.ndarray:
-    """Transpose of ``e -> diff(e) / w`` along the last axis (length K-1 -> K)."""
-    shape = y.shape[:-1] + (y.shape[-1] + 1,)
-    out = np.zeros(shape, dtype=y.dtype)
-    out[..., 1:] += y
-    out[..., :-1] -= y
-    return out / w
-
-
 def _gauss_kernel(sigma_bins: float) -> np.ndarray:
     """Normalised Gaussian kernel truncated at 4 sigma (odd length)."""
     r = max(1, int(4.0 * sigma_bins + 0.5))
@@ -119,7 +110,7 @@ def _gauss_kernel(sigma_bins: float) -> np.ndarray:
 
 
 class _Lsf:
-    """The linear map bin ESF -> windowed LSF at the bin midpoints, and its spectrum's sensitivities.
+    """The linear map bin ESF -> windowed LSF at the bin midpoints, and its spectrum's noise.
 
     ``lsf = win g + S((1 - win) g)`` with ``g`` the first difference of the ESF, ``win`` the Tukey window and
     ``S`` a Gaussian smoothing with mirror ends (it keeps the mass of what it smooths).  Only the tails are
@@ -127,42 +118,85 @@ class _Lsf:
     form, spread the core's mass into the tails whenever the window was short: at SNR <= 100 the window
     shrank to 5 px and a Gaussian-like PSF read 0.02 low at 0.1-0.15 cy/px.)  The total mass, the MTF's
     normalisation at f = 0, is that of the raw LSF, long (diffraction) tails included.
+
+    ``half_w`` may be an array of half-widths (one map per row of ``win``: :meth:`apply` then gives one LSF per
+    half-width).
     """
 
-    def __init__(self, x: np.ndarray, half_w: float, w: float):
+    def __init__(self, x: np.ndarray, half_w, w: float):
         self.w = w
         self.xm = 0.5 * (x[1:] + x[:-1])
-        self.win = _tukey(self.xm, half_w)
+        self.win = _tukey(self.xm, np.asarray(half_w, dtype=float)[..., None])
+        if self.win.ndim == 2 and self.win.shape[0] == 1:
+            self.win = self.win[0]
         self.kernel = _gauss_kernel(_TAIL_SMOOTH_PX / w)
 
     def _s(self, y: np.ndarray) -> np.ndarray:
         """Gaussian smoothing along the last axis, mirror ends (symmetric: its own transpose)."""
-        if np.iscomplexobj(y):
-            return self._s(y.real) + 1j * self._s(y.imag)
         return convolve1d(y, self.kernel, axis=-1, mode="reflect")
 
     def apply(self, esf: np.ndarray) -> np.ndarray:
         g = np.diff(esf) / self.w
         return self.win * g + self._s((1 - self.win) * g)
 
-    def spectrum(self, lsf: np.ndarray, f: np.ndarray) -> np.ndarray:
-        return np.exp(-2j * np.pi * np.outer(f, self.xm)) @ lsf * self.w
+    def fourier(self, f: np.ndarray) -> np.ndarray:
+        """``exp(-2 pi i f xm)``, shape (f, K - 1); on a uniform grid of ``f`` from 0 by powers of one row."""
+        f = np.asarray(f, dtype=float)
+        n, b = f.size, 16
+        if n > 2 * b and f[0] == 0.0 and np.allclose(np.diff(f), f[1], rtol=0.0, atol=1e-12):
+            # f_j = (b p + q) df: exp(-2 pi i b p df xm) exp(-2 pi i q df xm), 1 / b of the exponentials
+            lo = np.exp(-2j * np.pi * np.outer(np.arange(b) * f[1], self.xm))
+            hi = np.exp(-2j * np.pi * np.outer(np.arange(-(-n // b)) * (b * f[1]), self.xm))
+            return (hi[:, None, :] * lo[None, :, :]).reshape(-1, self.xm.size)[:n]
+        return np.exp(-2j * np.pi * np.outer(f, self.xm))
 
-    def sensitivity(self, f: np.ndarray) -> np.ndarray:
-        """d spectrum(f) / d esf_k, shape (f, K): the adjoint of the map applied to the Fourier kernel."""
-        e = np.exp(-2j * np.pi * np.outer(np.atleast_1d(f), self.xm)) * self.w
-        return _diff_adjoint(self.win * e + (1 - self.win) * self._s(e), self.w)
+    def spectrum(self, lsf: np.ndarray, f: np.ndarray, e: np.ndarray | None = None) -> np.ndarray:
+        e = self.fourier(f) if e is None else e
+        if lsf.ndim > 1:
+            return (lsf @ e.real.T + 1j * (lsf @ e.imag.T)) * self.w
+        return (e.real @ lsf + 1j * (e.imag @ lsf)) * self.w  # real products: complex BLAS is far slower here
 
+    def _s_fourier(self, p: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """``S`` of rows ``p_f = Re(c_f exp(-2 pi i f xm))``: inside the kernel's reach of the ends a complex
+        exponential goes through the convolution multiplied by the kernel's (real) transfer ``H(f)``; the
+        ``r`` samples at each end, where the mirror enters, are convolved directly."""
+        k = self.kernel
+        r = k.size // 2
+        m = p.shape[-1]
+        if m <= 4 * r + 2:
+            return self._s(p)
+        t = np.arange(1, r + 1) * self.w
+        h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, t)) @ k[r + 1 :]
+        out = h[:, None] * p
+        out[:, :r] = self._s(p[:, : 2 * r + 1])[:, :r]
+        out[:, -r:] = self._s(p[:, -(2 * r + 1) :])[:, -r:]
+        return out
 
-def _mtf_sigma(op: _Lsf, lsf, f, var_bins, corr):
-    """First-order standard deviation of the normalised MTF at ``f`` (magnitude and normalisation noise)."""
-    spec = op.spectrum(lsf, f)
-    m0 = spec[0].real
-    a = op.sensitivity(f)
-    a0 = op.sensitivity(np.array([0.0]))[0].real
-    u = np.where(np.abs(spec) > 0, np.conj(spec) / np.maximum(np.abs(spec), 1e-300), 1.0)
-    c = (u[:, None] * a).real / m0 - (np.abs(spec) / m0**2)[:, None] * a0[None, :]
-    return np.sqrt(np.sum(c * c * var_bins[None, :], axis=1)) / corr
+    def mtf_sigma(self, spec: np.ndarray, f: np.ndarray, e: np.ndarray, var_bins, corr) -> np.ndarray:
+        """First-order standard deviation of the normalised MTF ``|spec(f)| / spec(0) / corr`` (magnitude and
+        normalisation noise) from independent bin noise ``var_bins``; ``e`` = :meth:`fourier` of ``f``.
+
+        ``d |spec(f)| / d esf = Re(u d spec / d esf)`` with ``u = conj(spec) / |spec|``; the derivative of the
+        spectrum is the adjoint of the (real) LSF map applied to the Fourier kernel, so the real part can be
+        taken first: one real pass ``win q + (1 - win) S(q)`` then the adjoint of the difference.
+        """
+        spec2 = np.atleast_2d(spec)  # (windows, f)
+        win = self.win if self.win.ndim == 2 else self.win[None]
+        m0 = spec2[:, :1].real
+        mag = np.abs(spec2)
+        u = np.where(mag > 0, np.conj(spec2) / np.maximum(mag, 1e-300), 1.0) * (self.w / m0)
+        p = u.real[..., None] * e.real - u.imag[..., None] * e.imag  # Re(u e) w / m0
+        sp = self._s_fourier(p.reshape(-1, p.shape[-1]), np.tile(f, spec2.shape[0])).reshape(p.shape)
+        y = win[:, None, :] * p + (1 - win[:, None, :]) * sp
+        y0 = win * self.w + (1 - win) * self._s(np.full(self.xm.size, self.w))  # sensitivity at f = 0
+        y -= (mag / m0**2)[..., None] * y0[:, None, :]
+        # c = adjoint of diff(.) / w applied to y: c_k = (y_{k-1} - y_k) / w with zero ends
+        d = np.empty(y.shape[:-1] + (y.shape[-1] + 1,))
+        d[..., 0] = -y[..., 0]
+        d[..., -1] = y[..., -1]
+        np.subtract(y[..., :-1], y[..., 1:], out=d[..., 1:-1])
+        out = np.sqrt(np.einsum("bij,bij,j->bi", d, d, var_bins)) / abs(self.w) / corr
+        return out if spec.ndim == 2 else out[0]
 
 
 def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
@@ -182,19 +216,20 @@ def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
     w_max = float(min(-x[0], x[-1]))
     w_min = min(max(_W_MIN_PX, _W_MIN_RISE * rise_width(x, esf)), w_max)
     # candidate half-widths w_max * 0.85^k down to w_min; the first meeting the target, found by bisection
-    # (the predicted noise falls monotonically as the window shrinks)
+    # (the predicted noise falls monotonically as the window shrinks) over the noise of all candidates at once
     ws = [w_max]
     while ws[-1] * 0.85 > w_min:
         ws.append(ws[-1] * 0.85)
     if ws[-1] > w_min:
         ws.append(w_min)
-    cache = {}
+    ops = _Lsf(x, np.array(ws), w)
+    lsfs = np.atleast_2d(ops.apply(esf))
+    e_nyq = ops.fourier(nyq)
+    specs = ops.spectrum(lsfs, nyq, e_nyq)
+    noise = ops.mtf_sigma(specs, nyq, e_nyq, var_bins, np.sinc(nyq * w))[:, 1]
 
     def meets(k: int) -> bool:
-        op = _Lsf(x, ws[k], w)
-        lsf = op.apply(esf)
-        cache[k] = (op, lsf)
-        return float(_mtf_sigma(op, lsf, nyq, var_bins, np.sinc(nyq * w))[1]) <= noise_target
+        return bool(noise[k] <= noise_target)
 
     lo, hi = -1, len(ws) - 1
     if meets(0):
@@ -204,15 +239,22 @@ def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
         while hi - lo > 1:
             mid = (lo + hi) // 2
             lo, hi = (lo, mid) if meets(mid) else (mid, hi)
-    if hi not in cache:
-        meets(hi)
-    op, lsf = cache[hi]
+    op, lsf = _row(ops, hi), lsfs[hi]
     half_w = ws[hi]
-    spec = op.spectrum(lsf, f)
+    e = op.fourier(f)
+    spec = op.spectrum(lsf, f, e)
     m0 = spec[0].real
     mtf = np.abs(spec) / abs(m0) / corr
-    sig = _mtf_sigma(op, lsf * np.sign(m0), f, var_bins, corr)
+    sig = op.mtf_sigma(spec * np.sign(m0), f, e, var_bins, corr)
     return mtf, sig, half_w, lsf / abs(m0), op.xm
+
+
+def _row(ops: _Lsf, k: int) -> _Lsf:
+    """The single-window map of row ``k`` of a batched :class:`_Lsf`."""
+    op = object.__new__(_Lsf)
+    op.w, op.xm, op.kernel = ops.w, ops.xm, ops.kernel
+    op.win = ops.win[k] if ops.win.ndim == 2 else ops.win
+    return op
 
 
 def window_mtf(x, esf, half_w: float, f) -> np.ndarray:

@@ -1,0 +1,217 @@
+"""Slanted-edge and ``measure find`` speed (issue 21, point 2): ratios to a lean ISO 12233 e-SFR in the same run.
+
+ROI (rendered here, independently of satchain.measure): a 100 x 100 px edge tilted by 5 deg, the exact ESF of a
+Gaussian blur (sigma 0.5 px) integrated over the square pixel, levels 0.2 -> 0.8, signal-dependent noise
+(sigma^2 = 1e-5 + 2e-5 x signal: SNR ~ 100 at the edge), fixed seed.  Each ROI of the timing set has its own
+noise realisation (8 of them, cycled).
+
+Printed:
+* ``measure_edge`` median time per ROI (of ``--repeats`` runs), the lean e-SFR's median on the same ROIs, and
+  their ratio (target <= 20 x);
+* with ``SATCHAIN_OLD_SRC=/path/to/old/src`` set: the same for the old code, imported side by side in this
+  process and timed interleaved with the new one, and the largest |difference| of the MTF, its sigma and the
+  angle between the two;
+* ``measure find`` on a 4000 x 4000 float32 chart (tests/measure/_render_chart.py tiled, fresh noise):
+  ``find_edges`` throughput (Mpx/s; target >= 4) and the time per measured edge of ``measure_found_edges`` on
+  the 200 longest edges (ms; target <= 20), for the new (and old) code.
+
+Run:  PYTHONPATH=src python benchmarks/bench_edge_speed.py [--quick] [--repeats N] [--no-find]
+      SATCHAIN_OLD_SRC=/work/main/src PYTHONPATH=src python benchmarks/bench_edge_speed.py   (side by side)
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.special import erf
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "measure"))
+from _render_chart import render_chart  # noqa: E402
+
+ANGLE_DEG, BLUR_PX, N_PX = 5.0, 0.5, 100
+
+
+# ------------------------------------------------------------------------------------------------ rendering
+
+
+def _esf_pixel(d: np.ndarray, s: float) -> np.ndarray:
+    """Gaussian-blurred unit step integrated over one pixel width along the normal (closed form)."""
+
+    def prim(z):  # integral of Phi(z / s) dz
+        return z * 0.5 * (1 + erf(z / (s * np.sqrt(2)))) + s / np.sqrt(2 * np.pi) * np.exp(-0.5 * (z / s) ** 2)
+
+    return prim(d + 0.5) - prim(d - 0.5)
+
+
+def render_roi(seed: int, angle_deg: float = ANGLE_DEG, n: int = N_PX) -> np.ndarray:
+    """A noisy slanted edge: exact blurred step, sub-sampled 4 x 4 over each pixel's area."""
+    t = np.deg2rad(angle_deg)
+    sub = (np.arange(4) + 0.5) / 4 - 0.5
+    yy, xx = np.mgrid[0:n, 0:n].astype(float)
+    acc = np.zeros((n, n))
+    for dy in sub:  # the pixel's extent along the edge (the ESF is already integrated across it)
+        d = (xx - (n / 2 + 0.3) - (yy + dy - n / 2) * np.tan(t)) * np.cos(t)
+        acc += _esf_pixel(d, BLUR_PX)
+    sig = 0.2 + 0.6 * acc / 4
+    rng = np.random.default_rng(seed)
+    return sig + rng.normal(0.0, 1.0, sig.shape) * np.sqrt(1e-5 + 2e-5 * sig)
+
+
+# -------------------------------------------------------------------------------------------- lean e-SFR
+
+
+def lean_esfr(img: np.ndarray, oversampling: int = 4):
+    """Minimal ISO 12233 e-SFR: per-row Hamming-windowed derivative centroid, line fit, projection, 4x bins,
+    derivative, Hamming window, FFT.  Returns (f cy/px, MTF)."""
+    ny, nx = img.shape
+    cols = np.arange(nx, dtype=float)
+    g = np.zeros_like(img)
+    g[:, 1:-1] = 0.5 * (img[:, 2:] - img[:, :-2])
+    ham = np.hamming(nx)
+    cen = (g * ham * cols).sum(axis=1) / (g * ham).sum(axis=1)
+    rows = np.arange(ny, dtype=float)
+    coef = np.polyfit(rows, cen, 1)
+    ham = 0.54 + 0.46 * np.cos(2 * np.pi * np.clip((cols[None, :] - np.polyval(coef, rows)[:, None]) / nx, -0.5, 0.5))
+    cen = (g * ham * cols).sum(axis=1) / (g * ham).sum(axis=1)
+    coef = np.polyfit(rows, cen, 1)
+    cos_t = 1.0 / np.hypot(1.0, coef[0])
+    d = ((cols[None, :] - np.polyval(coef, rows)[:, None]) * cos_t).ravel()
+    k = np.floor(d * oversampling).astype(int)
+    k -= k.min()
+    cnt = np.bincount(k)
+    esf = np.bincount(k, weights=img.ravel()) / np.maximum(cnt, 1)
+    if np.any(cnt == 0):
+        ok = cnt > 0
+        esf[~ok] = np.interp(np.nonzero(~ok)[0], np.nonzero(ok)[0], esf[ok])
+    lsf = np.diff(esf) * np.hamming(esf.size - 1)
+    m = np.abs(np.fft.rfft(lsf))
+    f = np.fft.rfftfreq(lsf.size, 1.0 / oversampling)
+    return f, m / m[0]
+
+
+# --------------------------------------------------------------------------------------------- importing
+
+
+def load_satchain(src: str | None):
+    """(measure_edge, find_edges, measure_found_edges) from ``src`` (None: the satchain on sys.path), imported
+    as a separate copy of the package (its modules are kept apart in sys.modules)."""
+    saved = {k: v for k, v in sys.modules.items() if k == "satchain" or k.startswith("satchain.")}
+    for k in saved:
+        del sys.modules[k]
+    if src:
+        sys.path.insert(0, src)
+    try:
+        edge = importlib.import_module("satchain.measure.edge")
+        find = importlib.import_module("satchain.measure.find")
+        find_mtf = importlib.import_module("satchain.measure.find_mtf")
+        out = (edge.measure_edge, find.find_edges, find_mtf.measure_found_edges)
+    finally:
+        if src:
+            sys.path.remove(src)
+        for k in [k for k in sys.modules if k == "satchain" or k.startswith("satchain.")]:
+            del sys.modules[k]
+        sys.modules.update(saved)
+    return out
+
+
+def median_time(fn, args_list, repeats: int) -> float:
+    ts = []
+    for i in range(repeats):
+        a = args_list[i % len(args_list)]
+        t0 = time.perf_counter()
+        fn(a)
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts))
+
+
+# ----------------------------------------------------------------------------------------------- figures
+
+
+def edge_figures(impls: dict, repeats: int) -> None:
+    rois = [render_roi(s) for s in range(8)]
+    for fn in impls.values():  # warm up (imports, caches)
+        fn[0](rois[0])
+    lean_esfr(rois[0])
+    t = {name: [] for name in impls}
+    t_lean = []
+    for _ in range(3):  # interleaved rounds, each a median of repeats
+        t_lean.append(median_time(lean_esfr, rois, repeats))
+        for name, fn in impls.items():
+            t[name].append(median_time(fn[0], rois, repeats))
+    lean = float(np.median(t_lean))
+    print(f"slanted edge, {N_PX} x {N_PX} px ROI at {ANGLE_DEG:g} deg, median of 3 x {repeats} runs:")
+    print(f"  lean ISO 12233 e-SFR: {lean * 1e3:.2f} ms")
+    for name in impls:
+        m = float(np.median(t[name]))
+        print(f"  measure_edge ({name}): {m * 1e3:.1f} ms = {m / lean:.0f} x the lean e-SFR (target <= 20 x)")
+    if len(impls) == 2:
+        (_, a), (_, b) = impls.items()
+        dm = ds = da = 0.0
+        for roi in rois:
+            ra, rb = a[0](roi), b[0](roi)
+            dm = max(dm, float(np.max(np.abs(ra.mtf - rb.mtf))))
+            ds = max(ds, float(np.max(np.abs(ra.mtf_sigma - rb.mtf_sigma))))
+            da = max(da, abs(ra.angle_deg - rb.angle_deg))
+        print(f"  new vs old on the {len(rois)} ROIs: max |dMTF| {dm:.2e}, |dsigma| {ds:.2e}, |dangle| {da:.2e} deg")
+
+
+def make_chart(size: int, seed: int = 12345) -> np.ndarray:
+    """A ``size`` x ``size`` float32 chart: 5 x 5 squares (as benchmarks/bench_find.py) tiled, fresh noise."""
+    rng = np.random.default_rng(seed)
+    squares = []
+    for i in range(5):
+        for j in range(5):
+            rot = rng.uniform(3.0, 12.0) * rng.choice([-1, 1])
+            squares.append((100 + 200 * j + rng.uniform(0, 1), 100 + 200 * i + rng.uniform(0, 1), 100, rot))
+    tile = render_chart((1000, 1000), squares, sx=0.45, sy=0.6, noise=0.004, rng=rng)
+    reps = int(np.ceil(size / tile.shape[0]))
+    big = np.tile(tile, (reps, reps))[:size, :size]
+    return (big + rng.normal(0.0, 0.004, big.shape)).astype(np.float32)
+
+
+def find_figures(impls: dict, size: int, n_find: int) -> None:
+    big = make_chart(size)
+    mpx = big.size / 1e6
+    print(f"measure find on a {size} x {size} float32 chart ({mpx:.0f} Mpx):")
+    for name, (_, find_edges, measure_found) in impls.items():
+        ts = []
+        for _ in range(n_find):
+            t0 = time.perf_counter()
+            s = find_edges(big)
+            ts.append(time.perf_counter() - t0)
+        t_find = float(np.median(ts))
+        s200 = find_edges(big, max_edges=200)
+        t0 = time.perf_counter()
+        res = measure_found(big, search=s200)
+        t_meas = time.perf_counter() - t0
+        print(
+            f"  ({name}) find_edges: {t_find:.2f} s = {mpx / t_find:.1f} Mpx/s (target >= 4), {len(s)} edges; "
+            f"measuring the 200 longest: {t_meas:.2f} s = {t_meas / max(len(res.edges), 1) * 1e3:.1f} ms per "
+            f"measured edge ({len(res.edges)} measured; target <= 20 ms)"
+        )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--repeats", type=int, default=None)
+    ap.add_argument("--no-find", action="store_true")
+    args = ap.parse_args()
+    repeats = args.repeats or (10 if args.quick else 30)
+    impls = {"new": load_satchain(None)}
+    old = os.environ.get("SATCHAIN_OLD_SRC")
+    if old:
+        impls["old"] = load_satchain(old)
+    edge_figures(impls, repeats)
+    if not args.no_find:
+        find_figures(impls, 2000 if args.quick else 4000, 1 if args.quick else 3)
+
+
+if __name__ == "__main__":
+    main()
