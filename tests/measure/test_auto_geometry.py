@@ -187,7 +187,9 @@ def test_a_star_made_elliptical_is_skipped_and_a_turned_one_measured_at_its_mapp
 
 
 _affines = st.builds(
-    lambda g, sig, eps, rot, ox, oy: pushbroom_affine(sig, eps, g=g, n_half=ox, rot_deg=rot) @ Affine.translation(0, oy),
+    lambda g, sig, eps, rot, nh, oy: (
+        pushbroom_affine(sig, eps, g=g, n_half=nh, rot_deg=rot) @ Affine.translation(0, oy)
+    ),
     st.floats(0.2, 2.0),
     st.floats(-0.2, 0.2),
     st.floats(-0.1, 0.1),
