@@ -105,10 +105,23 @@ def main() -> None:
     print(f"Earth rotation (lat 0, i 97.6, descending): vertical edge {av:.4f} deg (predicted {pv:.4f}, "
           f"|d| {abs(av - pv):.4f}); horizontal edge {ah:.4f} deg (predicted {ph:.4f}, "
           f"|d| {abs(ah - ph):.4f})")  # fmt: skip
+    yaw_s = s.replace({"orbit.yaw_steering": True})
+    yv = satchain.simulate_image(v, yaw_s, pixel_m=PX).image
+    yh = satchain.simulate_image(h, yaw_s, pixel_m=PX).image
+    lin = PushbroomTerms(yaw_s).image_affine(yv.shape)
+    dv, dh = (lin.a * t5 + lin.b, lin.d * t5 + lin.e), (lin.a + lin.b * t5, lin.d + lin.e * t5)
+    pv, ph = math.degrees(math.atan2(dv[0], dv[1])), math.degrees(math.atan2(dh[1], dh[0]))
+    av = measure_edge(yv[k - 100 : k + 100, k - 30 : k + 30]).angle_deg
+    ah = 90 - measure_edge(yh[k - 30 : k + 30, k - 100 : k + 100]).angle_deg
+    print(f"yaw steering (rotation {PushbroomTerms(yaw_s).geometry()['rotation_deg']:.4f} deg): vertical edge "
+          f"{av:.4f} deg (predicted {pv:.4f}, |d| {abs(av - pv):.4f}); horizontal edge {ah:.4f} deg (predicted "
+          f"{ph:.4f}, |d| {abs(ah - ph):.4f})")  # fmt: skip
     wobble(tau)
     big = edges(a.speed_n)[0]
     for name, keys in [("ACT oscillation (one axis)", cases[0][2]), ("Earth rotation (both axes)", {
-            "orbit.latitude_deg": 0.0, "orbit.inclination_deg": 97.6, "orbit.earth_rotation": True})]:  # fmt: skip
+            "orbit.latitude_deg": 0.0, "orbit.inclination_deg": 97.6, "orbit.earth_rotation": True}),
+            ("yaw steering (frame rotated)", {"orbit.latitude_deg": 0.0, "orbit.inclination_deg": 97.6,
+             "orbit.earth_rotation": True, "orbit.yaw_steering": True})]:  # fmt: skip
         t = time.perf_counter()
         satchain.simulate_image(big, BASE, pixel_m=PX)
         t_static = time.perf_counter() - t

@@ -1,7 +1,8 @@
 """What the Python API costs: ``satchain.run`` in memory vs the same run writing its run directory.
 
-The scene is the end-to-end test's (tests/test_pipeline.py: two slanted edges, a Siemens star and a wedge on
-170 m x 140 m, 7 cm ground-truth pixels, the paper's camera). Printed: wall time of ``satchain.run(config)``
+The run is ``satchain run``'s built-in default (the reference paper's camera and scene), or with ``--reduced`` the
+end-to-end tests' reduced scene (tests/conftest.py ``REDUCED_SCENE_TOML``: edges, a star, bars and wedges on 170 m x
+140 m, 7 cm ground-truth pixels). Printed: wall time of ``satchain.run(config)``
 (budget, scene, simulation, measurement, prediction, comparison; nothing written), of
 ``satchain.run(config, out_dir=...)`` (the same plus figures, report.html, results.json, images), their
 ratio, and the stage timings; best of ``--repeat`` runs (default 2).
@@ -25,11 +26,16 @@ ROOT = Path(__file__).resolve().parents[1]
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=2)
-    n = ap.parse_args().repeat
-    scene = re.search(r'SCENE_TOML = """(.*?)"""', (ROOT / "tests" / "test_pipeline.py").read_text(), re.S).group(1)
+    ap.add_argument("--reduced", action="store_true", help="the tests' reduced scene instead of the default run")
+    a = ap.parse_args()
+    n = a.repeat
+    text = (ROOT / "tests" / "conftest.py").read_text()
+    scene = re.search(r'REDUCED_SCENE_TOML = """(.*?)"""', text, re.S).group(1)
     with tempfile.TemporaryDirectory() as d:
         (Path(d) / "scene.toml").write_text(scene)
         config = {"scene": {"layout": str(Path(d) / "scene.toml"), "pixel_m": 0.07}, "simulation": {"seed": 11}}
+        if not a.reduced:
+            config = None
         mem, disk = [], []
         for i in range(n):
             t0 = time.perf_counter()

@@ -40,12 +40,14 @@ from satchain.errors import (
     SatchainError,
     SatchainIOError,
 )
-from satchain.system import ImagingSystem, load_preset, load_system
 
 __version__ = "0.1.0"
 
 #: public name -> module it lives in (imported on first use, PEP 562).
 _LAZY = {
+    "ImagingSystem": "satchain.system",
+    "load_preset": "satchain.system",
+    "load_system": "satchain.system",
     "run": "satchain.api",
     "RunResult": "satchain.api",
     "RunConfig": "satchain.runconfig",
@@ -85,15 +87,12 @@ _CHECKED = {"simulate", "measure_edge", "measure_star", "measure_bars", "measure
 
 __all__ = [
     "ConfigError",
-    "ImagingSystem",
     "InputError",
     "ParameterTypeError",
     "ResourceLimitError",
     "SatchainError",
     "SatchainIOError",
     "__version__",
-    "load_preset",
-    "load_system",
     *sorted(_LAZY),
 ]
 
@@ -134,4 +133,5 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.runconfig import RunConfig, Tolerances, load_run_config  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
+    from satchain.system import ImagingSystem, load_preset, load_system  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401

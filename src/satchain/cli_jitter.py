@@ -13,7 +13,6 @@ from rich.table import Table
 
 from satchain._cli_common import handle_errors, print_warning
 from satchain._safety import check_dir_outputs
-from satchain._validate import check_positive, check_range
 from satchain.cli_options import (
     BandOpt,
     FullScaleOpt,
@@ -98,6 +97,8 @@ def jitter(
     from satchain.report.measure_plots import plot_jitter
 
     check_dir_outputs(out, ["jitter.json", "jitter.png"], {"IMAGE": image})
+    from satchain._validate import check_positive, check_range
+
     check_positive("--line-time", line_time)
     check_range("--max-peaks", max_peaks, 1, 10)
     check_range("--false-alarm", false_alarm, 0.0, 0.5, lo_open=True, hi_open=True)

@@ -17,13 +17,15 @@ from __future__ import annotations
 import contextlib
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 
 from satchain._cli_common import parse_numbers
 from satchain.errors import ConfigError, SatchainIOError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = [
     "SHARED_OPTIONS",
@@ -189,6 +191,8 @@ def parse_full_scale(value: float | None, image, meta: dict) -> float | None:
     >>> parse_full_scale(None, np.zeros(2, np.uint16), {"bit_depth": 12}), parse_full_scale(None, np.zeros(2), {})
     (4095.0, None)
     """
+    import numpy as np
+
     from satchain._validate import check_range
     from satchain.io import integer_scale
 
@@ -227,6 +231,7 @@ def parse_valid(image, nodata: float | None, meta: dict, path: Path | None = Non
 
     Examples
     --------
+    >>> import numpy as np
     >>> parse_valid(np.array([[0, 3]]), 0.0, {}).tolist()
     [[False, True]]
     >>> parse_valid(np.array([[0, 3]]), None, {}) is None
@@ -307,6 +312,8 @@ def measuring(path: Path, valid: np.ndarray | None):
         msg = str(exc)
         for prefix in ("image: ", "IMAGE: ", "image "):
             msg = msg.removeprefix(prefix)
+        import numpy as np
+
         if valid is not None and not np.all(valid):
             msg += (f" (the mask / nodata excludes {100 * (1 - np.count_nonzero(valid) / valid.size):.0f} % of "
                     "the pixels)")  # fmt: skip

@@ -116,7 +116,7 @@ def _stage_measure(
     from satchain.measure.snr import measure_snr
 
     full_scale = sim.sensor.full_scale(sim.units, noise=noise)
-    geo = _image_affine(system, scene.truth_dict)
+    geo = _image_affine(system, scene.truth_dict, sim.image.shape)
     auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m, full_scale=full_scale,
                         **({} if geo is None else {"image_affine": geo}))  # fmt: skip
     cal = auto.calibration  # its gain models the diffraction tail that pulls the plateaus' medians
@@ -126,11 +126,11 @@ def _stage_measure(
     return Measurements(auto, snr)
 
 
-def _image_affine(system: ImagingSystem, truth: dict):
+def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):
     """The simulated image's geometry for :func:`~satchain.measure.auto.measure_auto` when the system's pushbroom
     terms shear or scale it (Earth rotation, a line-rate error): scene metres -> image pixels, the engine's mean
-    map (:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine`) from the corner the measurement uses; None for
-    a static system (its plain grid)."""
+    map (:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine`; a yaw turns the image of ``shape`` about its
+    centre) from the corner the measurement uses; None for a static system (its plain grid)."""
     from affine import Affine
 
     from satchain.measure.auto import truth_origin_m
@@ -140,7 +140,7 @@ def _image_affine(system: ImagingSystem, truth: dict):
     if not terms.active:
         return None
     ox, oy = truth_origin_m(truth)
-    return terms.image_affine() @ Affine.translation(-ox, -oy)
+    return terms.image_affine(tuple(shape)) @ Affine.translation(-ox, -oy)
 
 
 def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
@@ -214,19 +214,20 @@ class ReportInputs:
         return self.result.scene.truth_dict
 
 
-def _write_budget_and_scene(result: RunResult, out: Path) -> None:
+def _write_budget_and_scene(result: RunResult, out: Path, jobs) -> None:
+    """The budget's tables and figures and the scene overview, submitted to ``jobs``
+    (:class:`satchain.report._jobs.FigureJobs`: all their inputs pickle; the OTF is rebuilt from the system)."""
     from satchain.report import run_figures
     from satchain.report._save import write_text
     from satchain.report.budget import write_budget_outputs
 
     b, sc = result.budget, result.scene
-    write_budget_outputs(b.system, dict(b.budget), out / "budget", otf=b.otf)
+    jobs.submit(write_budget_outputs, b.system, dict(b.budget), out / "budget")
     (out / "images").mkdir(parents=True, exist_ok=True)
     truth = sc.truth_dict
     write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
     p = result.config.scene.overview_pixel_m
-    overview = sc.scene.render(pixel_m=p)
-    run_figures.plot_scene_overview(overview, truth, p, out / "figures" / "fig1_scene.png")
+    jobs.submit(run_figures.render_scene_overview, sc.scene, truth, p, out / "figures" / "fig1_scene.png")
 
 
 def _write_images(result: RunResult, out: Path) -> None:
@@ -256,18 +257,21 @@ def _write_images(result: RunResult, out: Path) -> None:
 def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None) -> None:
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
     from satchain.report import curves, html, run_figures
+    from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
     from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
-    _write_budget_and_scene(result, out)
-    _write_images(result, out)
     view = ReportInputs(result, out, results)
-    curves.write_curves(run_figures.write_run_figures(view), out / "curves")
-    write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
-    write_summary_csv(results, out / "summary.csv")
+    with FigureJobs() as jobs:  # figures of plain data in helper processes, the rest here meanwhile
+        _write_budget_and_scene(result, out, jobs)
+        shown = run_figures.write_run_figures(view, jobs=jobs)
+        _write_images(result, out)
+        curves.write_curves(shown, out / "curves")
+        write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
+        write_summary_csv(results, out / "summary.csv")
     html.write_report(view, out / "report.html")
     report("report", 1, 1)
     write_text(out / "config.toml", config_to_toml(result.config))

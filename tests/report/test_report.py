@@ -50,6 +50,7 @@ def run(tmp_path_factory, reduced_scene_toml):
         _save.save_figure(fig, path, **kw)
 
     with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SATCHAIN_FIGURE_PROCESSES", "0")  # every figure drawn here, where it is captured
         for mod in FIGURE_MODULES:
             mp.setattr(mod, "save_figure", capture)
         res = run_pipeline(load_run_config(d / "run.toml"), d / "out")

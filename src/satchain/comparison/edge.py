@@ -66,8 +66,8 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
         if geometric:
             label = f"edge {e['id']} angle (deg, through the pushbroom image geometry)"
             note = (
-                f"measured vs the truth's {a_true:.3f} deg mapped through the pushbroom image geometry (the shear "
-                "and along-track scale of Earth rotation and a line-rate error): the angle the image should show"
+                f"measured vs the truth's {a_true:.3f} deg mapped through the pushbroom image geometry (Earth "
+                "rotation's shear or yaw, the along-track scale): the angle the image should show"
                 if a_true is not None
                 else "measured vs the truth mapped through the image geometry"
             )

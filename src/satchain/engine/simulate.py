@@ -171,6 +171,9 @@ class Simulator:
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
         self.f_cut = self.otf.cutoff_cy_per_mm / min(self.to_cy_per_mm)  # cycles per input pixel, the wider axis
+        from satchain.engine.yaw import yaw_rotation_deg
+
+        self.yaw_deg = yaw_rotation_deg(system)  # the detector turned: the ground truth rotated (engine.yaw)
         self._plan_decimation()
         self._plan_frame()
         if has_pushbroom_motion(system):  # rows formed in time along the line of sight (engine.timepath)
@@ -222,9 +225,16 @@ class Simulator:
     def _plan_frame(self) -> None:
         """Coarse frame: the coarse scene plus an extension on each side; with an integer ratio k the frame
         is a whole number of output pixels and its first output pixel sits on the scene's grid."""
+        from satchain.engine.yaw import yaw_margin
+
         D, p = self.D, self.params
         self.k_int = (_int_ratio(self.ys.k), _int_ratio(self.xs.k))
         ext, length = [], []
+        if p.border == "periodic" and self.yaw_deg:
+            raise ConfigError(
+                "border = 'periodic' with orbit.yaw_steering: a rotated scene is not periodic on its grid; use "
+                "'symmetric' or 'constant'"
+            )
         if p.border == "periodic":  # the coarse scene is itself the period: no extension
             self.frame_ext, self.frame_shape = (0, 0), self.n_coarse
             self.k_int = tuple(
@@ -233,7 +243,7 @@ class Simulator:
             return
         for ax, (kk, ki, nc) in enumerate(zip(self.k, self.k_int, self.n_coarse, strict=True)):
             nc -= 2 * self.coarse_ext[ax]  # the ground truth's own coarse samples
-            e = int(math.ceil(p.far_margin_px * kk / D))
+            e = int(math.ceil(p.far_margin_px * kk / D)) + yaw_margin(self.n_coarse, self.yaw_deg)
             q = ki // math.gcd(ki, D) if ki else 1  # coarse samples per aligned output period
             e = -(-e // q) * q
             n = q * spectral_len(-(-(nc + 2 * e) // q))  # a multiple of q with a fast cofactor
@@ -386,12 +396,30 @@ class Simulator:
         """Output pixels ``rows x cols`` of the periodic extension of ``block``, whose sample 0 is the ground
         truth's coarse sample ``start``: OTF, footprints and sampling in frequency."""
         f_band = self.f_cut * self.D  # cycles per coarse sample
+        if self.yaw_deg:
+            block = self._yawed(block, start)
         ly, lx = block.shape
         spec = spectral.tile_band_spectrum(
             block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=self.params.workers
         )
         del block
         return self.form_spectrum(spec, start, rows, cols, weight=weight)
+
+    def _yawed(self, block: np.ndarray, start: tuple[int, int]) -> np.ndarray:
+        """The whole coarse frame rotated about the output grid's centre (:mod:`satchain.engine.yaw`)."""
+        from satchain.engine.yaw import check_band, rotate_frame
+
+        if tuple(block.shape) != tuple(self.frame_shape):
+            raise ResourceLimitError(
+                "orbit.yaw_steering is simulated on the whole coarse frame in memory; this input streams in tiles "
+                f"(frame {self.frame_shape[0]} x {self.frame_shape[1]}): crop it or raise the memory limit"
+            )
+        check_band(self.f_cut * self.D, self.f_stop * self.D, self.yaw_deg)
+        pivot = []
+        for ax, s in enumerate((self.ys, self.xs)):  # the output grid's centre, in block samples
+            centre_in = s.phase_px + s.n_output * s.k / 2.0  # input-grid coordinate
+            pivot.append(centre_in / self.D - 0.5 - start[ax])
+        return rotate_frame(block, self.yaw_deg, (pivot[0], pivot[1]), workers=self.params.workers)
 
     def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
         """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse

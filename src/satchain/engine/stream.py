@@ -155,6 +155,13 @@ class FarField:
 
         from satchain.engine import spectral
 
+        if sim.yaw_deg:
+            from satchain.errors import ResourceLimitError
+
+            raise ResourceLimitError(
+                "orbit.yaw_steering is simulated on the whole coarse frame in memory, not streamed: crop the input "
+                "or raise the memory limit (SATCHAIN_MEMORY_LIMIT)"
+            )
         self.sim = sim
         self.f_split = far_split(sim, margin_px)
         ly, lx = sim.frame_shape

@@ -122,13 +122,6 @@ def time_path(system, n_rows: int, *, seed: int = 0) -> TimePath | None:
     terms = PushbroomTerms(system)
     if not terms.active:
         return None
-    if system.orbit.yaw_steering:
-        from satchain.errors import ConfigError
-
-        raise ConfigError(
-            "orbit.yaw_steering = true: the budget predicts it, but the simulation in time does not form a rotated "
-            "detector line yet; simulate without yaw steering"
-        )
     dt, n_st = terms.line_time_s, terms.stages
     m = _samples_per_line(system, dt, n_st)
     j = np.arange((int(n_rows) + n_st) * m, dtype=np.float64)

@@ -41,17 +41,42 @@ def save_figure(fig, path: str | Path, **kwargs) -> None:
             plt.close(fig)
 
 
-def _save_palette_png(fig, path: Path, **kwargs) -> None:
-    """Render ``fig`` to PNG and write it quantised to a palette of :data:`PNG_COLOURS` colours."""
-    import io
-
+def _render_rgb(fig, dpi: float | None):
+    """``fig`` drawn by Agg at ``dpi`` (the figure's own when None) on white, as a PIL RGB image: no PNG
+    encoded and decoded on the way."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", **kwargs)
-    buf.seek(0)
-    with Image.open(buf) as im:
-        rgba = im.convert("RGBA")
-    rgb = Image.alpha_composite(Image.new("RGBA", rgba.size, "white"), rgba).convert("RGB")
+    old_dpi = fig.dpi
+    if dpi is not None:
+        fig.set_dpi(dpi)
+    try:
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        rgba = np.asarray(canvas.buffer_rgba())
+    finally:
+        if dpi is not None:
+            fig.set_dpi(old_dpi)
+    a = rgba[..., 3:4].astype(np.float32) / 255.0  # composite on white
+    rgb = rgba[..., :3].astype(np.float32) * a + 255.0 * (1.0 - a)
+    return Image.fromarray(np.rint(rgb).astype(np.uint8), "RGB")
+
+
+def _save_palette_png(fig, path: Path, **kwargs) -> None:
+    """Render ``fig`` and write it as a PNG quantised to a palette of :data:`PNG_COLOURS` colours."""
+    from PIL import Image
+
+    if set(kwargs) - {"dpi"}:  # savefig's other options (bbox_inches, ...): through savefig
+        import io
+
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", **kwargs)
+        buf.seek(0)
+        with Image.open(buf) as im:
+            rgba = im.convert("RGBA")
+        rgb = Image.alpha_composite(Image.new("RGBA", rgba.size, "white"), rgba).convert("RGB")
+    else:
+        rgb = _render_rgb(fig, kwargs.get("dpi"))
     q = rgb.quantize(colors=PNG_COLOURS, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-    q.save(path, format="PNG", optimize=True)
+    q.save(path, format="PNG", compress_level=6)

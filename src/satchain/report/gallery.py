@@ -102,7 +102,7 @@ def _png(arr: np.ndarray) -> tuple[bytes, int, int]:
         arr = arr[:h, :w].reshape(h // k, k, w // k, k).mean(axis=(1, 3))
     u8 = np.clip(np.round(np.nan_to_num(arr) * 255.0), 0, 255).astype(np.uint8)
     buf = io.BytesIO()
-    Image.fromarray(u8, mode="L").save(buf, format="PNG", optimize=True)
+    Image.fromarray(u8, mode="L").save(buf, format="PNG", compress_level=6)
     return buf.getvalue(), u8.shape[1], u8.shape[0]
 
 

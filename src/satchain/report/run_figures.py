@@ -16,7 +16,18 @@ from satchain.report._save import save_figure
 from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import EDGES, REPORT_KINDS, WEDGES
 
-__all__ = ["plot_edges_overview", "plot_scene_overview", "plot_target_chain", "write_run_figures"]
+__all__ = [
+    "plot_edges_overview",
+    "plot_scene_overview",
+    "plot_target_chain",
+    "render_scene_overview",
+    "write_run_figures",
+]
+
+
+def render_scene_overview(scene, truth: dict, pixel_m: float, path: Path) -> None:
+    """:func:`plot_scene_overview` of ``scene`` rendered at ``pixel_m`` (a job for a helper process)."""
+    plot_scene_overview(scene.render(pixel_m=pixel_m), truth, pixel_m, path)
 
 
 def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Path) -> None:
@@ -103,33 +114,41 @@ def plot_edges_overview(edges: list[dict], path: Path) -> None:
         save_figure(fig, path, dpi=100)
 
 
-def write_run_figures(ctx, curves: dict | None = None) -> dict:
+def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
     """All run figures into ``ctx.out / "figures"``; returns the curves they show
-    (:func:`satchain.report.curves.build_curves`, built here when not given)."""
+    (:func:`satchain.report.curves.build_curves`, built here when not given). ``jobs``: a
+    :class:`satchain.report._jobs.FigureJobs` that draws the figures made of plain data in helper processes (the
+    caller waits for it); without it every figure is drawn here."""
+    from satchain.report._jobs import FigureJobs
     from satchain.report.curves import build_curves
     from satchain.report.gallery import plot_image_with_rois
 
+    if jobs is None:
+        with FigureJobs(0) as inline:
+            return write_run_figures(ctx, curves, jobs=inline)
     d = ctx.out / "figures"
     r = ctx.comparison["results"]
     curves = build_curves(ctx) if curves is None else curves
     tol = ctx.config.tolerances
-    plot_image_with_rois(ctx, d / "image_rois.png")
-    for item in ctx.truth["items"]:
-        if item["kind"] == WEDGES.kind and any(w["id"] == item["id"] for w in r.get(WEDGES.key, [])):
-            plot_target_chain(ctx, item, d / f"fig4_wedge_{item['id']}.png")
-    if r.get(EDGES.key):
-        plot_edges_overview(r[EDGES.key], d / "edges_mtf.png")
+    # plain data first: the helper processes start on them while the figures of live objects are drawn here
     for c in curves["edges"]:
-        cp.plot_edge_comparison(c, d / f"edge_{c['id']}.png", tol=tol.edge_mtf_at_nyquist)
+        jobs.submit(cp.plot_edge_comparison, c, d / f"edge_{c['id']}.png", tol=tol.edge_mtf_at_nyquist)
     for st in curves["stars"]:
-        cp.plot_star_comparison(st, d / f"star_{st['id']}.png", tol=tol.star_mtf)
+        jobs.submit(cp.plot_star_comparison, st, d / f"star_{st['id']}.png", tol=tol.star_mtf)
     for b in curves["bars"]:
-        cp.plot_bars_comparison(b, d / f"bars_{b['id']}.png", tol=tol.bar_ctf)
+        jobs.submit(cp.plot_bars_comparison, b, d / f"bars_{b['id']}.png", tol=tol.bar_ctf)
     for w in curves["wedges"]:
-        cp.plot_wedge_comparison(w, d / f"wedge_{w['id']}.png", tol_rel=tol.wedge_resolution_rel)
+        jobs.submit(cp.plot_wedge_comparison, w, d / f"wedge_{w['id']}.png", tol_rel=tol.wedge_resolution_rel)
+    if r.get(EDGES.key):
+        jobs.submit(plot_edges_overview, r[EDGES.key], d / "edges_mtf.png")
     tp = getattr(ctx.simulator, "time_path", None)
     if tp is not None:  # formed in time: the line of sight and each row's displacement
         from satchain.report.motion_plot import plot_line_of_sight
 
-        plot_line_of_sight(tp, int(ctx.image.shape[0]), d / "line_of_sight.png")
+        jobs.submit(plot_line_of_sight, tp, int(ctx.image.shape[0]), d / "line_of_sight.png")
+    jobs.start()
+    plot_image_with_rois(ctx, d / "image_rois.png")
+    for item in ctx.truth["items"]:
+        if item["kind"] == WEDGES.kind and any(w["id"] == item["id"] for w in r.get(WEDGES.key, [])):
+            plot_target_chain(ctx, item, d / f"fig4_wedge_{item['id']}.png")
     return curves

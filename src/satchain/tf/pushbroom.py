@@ -317,13 +317,14 @@ class PushbroomTerms:
             )
         return comps
 
-    def image_affine(self):
+    def image_affine(self, shape: tuple[int, int] | None = None):
         """The mean map from ground metres (x ACT, y ALT, from the scene's origin) to image pixel coordinates
         ``(col, row)`` with pixel centres at integers, as ``affine.Affine``: the static grid (pixel ``(i, j)``
         centred on ``((j + 0.5) gsd_act, (i + 0.5) gsd_alt)``), moved by the drifts averaged over each row's TDI
         window (``(sigma, eps) (i + N / 2)`` px; :mod:`satchain.engine.timepath`) and, with yaw steering, turned
-        by ``rotation_deg`` about the first pixel's window-mean position. Oscillations and jitter average to
-        zero over the scan and are left out (they are the line-to-line displacement of :meth:`geometry`)."""
+        by ``rotation_deg`` about the centre of the static output grid of ``shape = (rows, cols)`` (required then;
+        :mod:`satchain.engine.yaw`). Oscillations and jitter average to zero over the scan and are left out
+        (they are the line-to-line displacement of :meth:`geometry`)."""
         from affine import Affine
 
         sys_ = self.system
@@ -333,11 +334,13 @@ class PushbroomTerms:
         rot = self.earth["rotation_deg"] if self.earth is not None else 0.0
         # ground px (x, y) of the window-mean position of pixel (col j, row i), before any rotation:
         #   y = i + 0.5 + eps (i + N/2),  x = j + 0.5 + sigma (i + N/2)
-        fwd = Affine(1.0, sigma, 0.5 + sigma * n_half, 0.0, 1.0 + eps, 0.5 + eps * n_half)
+        fwd = Affine.scale(g_x, g_y) @ Affine(1.0, sigma, 0.5 + sigma * n_half, 0.0, 1.0 + eps, 0.5 + eps * n_half)
         if rot:
-            x0, y0 = fwd * (0.0, 0.0)
-            fwd = Affine.rotation(-rot, pivot=(x0, y0)) * fwd
-        return ~(Affine.scale(g_x, g_y) * fwd)
+            if shape is None:
+                raise ValueError("shape: the image's (rows, cols) is needed to place the yaw rotation's centre")
+            pivot = (shape[1] * g_x / 2.0, shape[0] * g_y / 2.0)
+            fwd = Affine.rotation(-rot, pivot=pivot) @ fwd
+        return ~fwd
 
     def geometry(self) -> dict | None:
         """What the terms do to the image's geometry (JSON-ready), or None without any term."""

@@ -1,0 +1,88 @@
+"""Yaw steering in the simulation (issue 20): the detector line turned by ``gamma`` so that its columns follow the
+ground's motion relative to the satellite (``orbit.yaw_steering``, :func:`satchain.tf.pushbroom._earth_rotation`).
+
+The whole system (optics, detector footprints, TDI smear, jitter) lies in the detector's frame, so a turned
+detector sees the ground turned the other way: the engine forms the static image of the ground truth rotated
+about the centre of the output grid,
+
+    B'(q) = B(P + M (q - P)),      M = [[cos g, sin g], [-sin g, cos g]]      (x = column, y = row),
+
+which is the map :meth:`satchain.tf.pushbroom.PushbroomTerms.image_affine` describes (row ``i`` of the image lies
+along the ground direction ``(sin g, cos g)``), and its rows then move along the columns only (the ALT scale of
+the relative speed, in time). The rotation is applied to the coarse frame (the band-limited ground truth) as three
+shears, ``M = Sx(tan(g/2)) Sy(-sin g) Sx(tan(g/2))``, each an exact Fourier shift of every row (column) of the
+frame. The band stays below the coarse Nyquist frequency through the shears (checked), and the frame is widened by
+the rotation's reach so that the shears' wrap-around lies in its far margin, as the frame's own period does.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from satchain.errors import ConfigError
+
+__all__ = ["check_band", "rotate_frame", "yaw_margin", "yaw_rotation_deg"]
+
+
+def yaw_rotation_deg(system) -> float:
+    """The detector's yaw ``gamma`` (degrees) under ``orbit.yaw_steering`` with Earth rotation, else 0."""
+    orb = system.orbit
+    if not (orb.yaw_steering and orb.earth_rotation):
+        return 0.0
+    from satchain.tf.pushbroom import _earth_rotation
+
+    return float(_earth_rotation(system)["rotation_deg"])
+
+
+def yaw_margin(n_coarse: tuple[int, int], angle_deg: float) -> int:
+    """Coarse samples to add on every side of the frame so that the rotated frame's corners stay inside it."""
+    if angle_deg == 0:
+        return 0
+    half = 0.5 * math.hypot(*n_coarse)
+    return int(math.ceil(half * abs(math.sin(math.radians(angle_deg))) * 1.05)) + 8
+
+
+def check_band(f_band: float, f_stop: float, angle_deg: float) -> None:
+    """The shears spread the band ``|f| <= f_band`` (cycles per coarse sample) by at most the factor ``R`` of the
+    three passes (``1 + t``, ``1 + s + t s``, ``1 + 2 t + t s + t^2 s``; ``t = tan(g/2)``, ``s = sin g``): it must
+    stay below Nyquist (0.5), and what the shears alias out of the stopband (up to ``f_stop``) must land above the
+    band, where the OTF is zero."""
+    g = math.radians(angle_deg)
+    t, s = abs(math.tan(g / 2)), abs(math.sin(g))
+    r = max(1 + t, 1 + s + t * s, 1 + 2 * t + t * s + t * t * s)
+    reach = f_band * r
+    folded = 1.0 - f_stop * r  # the lowest frequency a stopband alias lands on
+    if reach >= 0.5 or folded <= f_band:
+        raise ConfigError(
+            f"orbit.yaw_steering: a yaw of {angle_deg:.3g} deg spreads the band ({f_band:.3g} cycles per coarse "
+            "sample) past the coarse grid's Nyquist frequency; this geometry cannot be simulated exactly"
+        )
+
+
+def _shear(a: np.ndarray, axis: int, shift: np.ndarray, workers: int | None) -> np.ndarray:
+    """``out[..] = a[.. + shift]`` along ``axis`` (periodic, band-limited), ``shift`` one value per line."""
+    import scipy.fft as sfft
+
+    n = a.shape[axis]
+    f = sfft.rfft(a, axis=axis, workers=workers)
+    k = np.fft.rfftfreq(n)
+    ph = np.exp(2j * np.pi * np.outer(shift, k)).astype(f.dtype)  # lines x frequencies
+    if n % 2 == 0:
+        ph[:, -1] = 0.0  # the Nyquist term of a real line cannot be shifted; it lies in the stopband
+    f *= ph if axis == 1 else ph.T
+    return sfft.irfft(f, n=n, axis=axis, workers=workers).astype(a.dtype, copy=False)
+
+
+def rotate_frame(frame: np.ndarray, angle_deg: float, pivot: tuple[float, float], *, workers=None) -> np.ndarray:
+    """``B'(q) = B(P + M (q - P))`` (module docstring) of the periodic band-limited ``frame``; ``pivot = (row, col)``
+    in frame samples."""
+    g = math.radians(angle_deg)
+    t, s = math.tan(g / 2), -math.sin(g)
+    py, px = pivot
+    rows = np.arange(frame.shape[0]) - py
+    cols = np.arange(frame.shape[1]) - px
+    out = _shear(frame, 1, t * rows, workers)  # B1(x, y) = B(x + t (y - py), y)
+    out = _shear(out, 0, s * cols, workers)  # B2(x, y) = B1(x, y + s (x - px))
+    return _shear(out, 1, t * rows, workers)  # B3 = B2 sheared as B1

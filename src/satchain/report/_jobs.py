@@ -1,0 +1,196 @@
+"""Figures drawn in a helper process while the run folder's other outputs are written (issue 21, point 3).
+
+matplotlib draws in Python, so threads do not overlap it. A figure whose inputs are plain data (a comparison's
+curves, a list of edge summaries) is therefore drawn by helper processes: ``python -m satchain.report._jobs``, given
+the pickled calls on its standard input. A fresh interpreter, not a fork of this (possibly multi-threaded) one and
+not :mod:`multiprocessing` (which would re-import a user's script that lacks an ``if __name__ == "__main__"``
+guard). The caller goes on with what needs its live objects and calls :meth:`FigureJobs.wait` before anything
+reads the figures. Every figure is written atomically by its own function; on an error or an interruption the
+helpers are killed before the run removes its staging folder.
+
+``SATCHAIN_FIGURE_PROCESSES``: how many helper processes (default: one less than the CPUs, at most 3; 0 draws
+every figure in this process, as on a one-CPU machine).
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import os
+import pickle
+import subprocess
+import sys
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from satchain.errors import ConfigError, SatchainError
+
+__all__ = ["FigureJobs", "figure_processes"]
+
+_ENV = "SATCHAIN_FIGURE_PROCESSES"
+
+
+def figure_processes() -> int:
+    """Helper processes to draw figures with (``SATCHAIN_FIGURE_PROCESSES``, else CPUs - 1, at most 3)."""
+    text = os.environ.get(_ENV)
+    if text is not None and text.strip() != "":
+        try:
+            n = int(text)
+        except ValueError:
+            n = -1
+        if n < 0:
+            raise ConfigError(f"{_ENV} = {text!r}: must be a whole number >= 0 (0: draw in this process)")
+        return n
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(0, min(3, cpus - 1))
+
+
+class FigureJobs:
+    """``submit(fn, *args, **kwargs)`` queues a call (``fn`` a module-level function, the arguments picklable);
+    ``start()`` starts the helper processes on the queue; ``wait()`` draws what the helpers have not taken yet
+    here, waits for them and raises a :class:`~satchain.errors.SatchainError` with a helper's error. The queue is
+    shared: each helper takes the next call from the front when it is free, this process takes from the back
+    once its own work is done, so neither waits while calls are left. As a context manager: leaving it waits,
+    or on an error kills the helpers."""
+
+    def __init__(self, processes: int | None = None) -> None:
+        self.processes = figure_processes() if processes is None else int(processes)
+        self._calls: list[tuple[Callable[..., Any], tuple, dict]] = []
+        self._todo: collections.deque[int] = collections.deque()
+        self._lock = threading.Lock()
+        self._procs: list[subprocess.Popen] = []
+        self._feeders: list[threading.Thread] = []
+        self._errors: list[str] = []
+
+    def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
+        if self.processes <= 0:
+            _draw(fn, args, kwargs)
+            return
+        with self._lock:
+            self._todo.append(len(self._calls))
+            self._calls.append((fn, args, kwargs))
+
+    def _take(self, front: bool) -> int | None:
+        with self._lock:
+            if not self._todo:
+                return None
+            return self._todo.popleft() if front else self._todo.pop()
+
+    def start(self) -> None:
+        """Start the helpers on the calls queued so far (no-op when they run or nothing is queued)."""
+        if self._procs or not self._todo:
+            return
+        import satchain
+
+        env = dict(os.environ)  # the helper imports this very satchain
+        root = str(Path(satchain.__file__).resolve().parents[1])
+        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        env["MPLBACKEND"] = "Agg"
+        payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
+        for _ in range(min(self.processes, len(self._todo))):
+            p = subprocess.Popen(
+                [sys.executable, "-m", "satchain.report._jobs"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                env=env,
+            )
+            self._procs.append(p)
+            t = threading.Thread(target=self._feed, args=(p, payload), daemon=True)
+            self._feeders.append(t)
+            t.start()
+
+    def _feed(self, p: subprocess.Popen, payload: bytes) -> None:
+        """Hand the helper ``p`` one call at a time from the front of the queue, until none is left."""
+        try:
+            p.stdin.write(b"%d\n" % len(payload) + payload)
+            p.stdin.flush()
+            while (i := self._take(front=True)) is not None:
+                p.stdin.write(b"%d\n" % i)
+                p.stdin.flush()
+                if p.stdout.readline().strip() != b"ok":
+                    with self._lock:
+                        self._todo.append(i)  # not drawn: this process draws it
+                    raise BrokenPipeError
+            p.stdin.close()
+        except (BrokenPipeError, OSError, ValueError):
+            pass  # the helper died (its error is read in wait) or was killed
+
+    def wait(self) -> None:
+        self.start()
+        while (i := self._take(front=False)) is not None:
+            try:
+                _draw(*self._calls[i])
+            except SatchainError:
+                self.kill()
+                raise
+        for t in self._feeders:
+            t.join()
+        procs, self._procs, self._feeders = self._procs, [], []
+        errors = []
+        for p in procs:
+            err = p.stderr.read().decode(errors="replace").strip()
+            if p.wait() != 0:
+                errors.append(err.splitlines()[-1] if err else f"exit status {p.returncode}")
+            _close(p)
+        if errors:
+            raise SatchainError(f"a figure could not be drawn: {errors[0]}")
+
+    def kill(self) -> None:
+        with self._lock:
+            self._todo.clear()
+        procs, self._procs = self._procs, []
+        for p in procs:
+            p.kill()
+            p.wait()
+        for t in self._feeders:
+            t.join()
+        self._feeders = []
+        for p in procs:
+            _close(p)
+
+    def __enter__(self) -> FigureJobs:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.wait()
+        else:
+            self.kill()
+
+
+def _draw(fn: Callable[..., Any], args: tuple, kwargs: dict) -> None:
+    """One call here; its failure reads as a helper's does."""
+    try:
+        fn(*args, **kwargs)
+    except Exception as exc:
+        raise SatchainError(f"a figure could not be drawn: {type(exc).__name__}: {exc}") from exc
+
+
+def _close(p: subprocess.Popen) -> None:
+    for f in (p.stdin, p.stdout, p.stderr):
+        if f is not None and not f.closed:
+            with contextlib.suppress(OSError):
+                f.close()
+
+
+def _main() -> int:
+    """The helper: read the pickled calls, then run call ``i`` for each line ``i`` on standard input, answering
+    ``ok`` when it is drawn; a failure's traceback goes to standard error (exit status 1)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    stdin = sys.stdin.buffer
+    calls = pickle.loads(stdin.read(int(stdin.readline())))
+    for line in stdin:
+        fn, args, kwargs = calls[int(line)]
+        fn(*args, **kwargs)
+        sys.stdout.write("ok\n")
+        sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_main())

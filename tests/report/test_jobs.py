@@ -1,0 +1,50 @@
+"""Issue 21, point 3: figures of plain data drawn by helper processes give the same files as drawn here, a
+helper's failure is reported (not a half-written run), and SATCHAIN_FIGURE_PROCESSES is validated."""
+
+import pytest
+
+from satchain import load_preset
+from satchain.engine.timepath import time_path
+from satchain.errors import ConfigError, SatchainError
+from satchain.report._jobs import FigureJobs, figure_processes
+from satchain.report.motion_plot import plot_line_of_sight
+
+
+def _path():
+    system = load_preset("ankarasat3").replace({"motion.oscillation": [{"axis": "act", "amplitude_px": 0.5,
+                                                                         "frequency_hz": 40.0}]})  # fmt: skip
+    return time_path(system, 60, seed=3)
+
+
+def test_a_helper_draws_the_same_figure_as_this_process(tmp_path):
+    tp = _path()
+    with FigureJobs(0) as here:
+        here.submit(plot_line_of_sight, tp, 60, tmp_path / "a.png")
+    with FigureJobs(1) as helper:
+        helper.submit(plot_line_of_sight, tp, 60, tmp_path / "b.png")
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+
+def test_a_failing_figure_is_reported_with_its_error(tmp_path):
+    for n in (0, 1):  # drawn here or by the helper (whichever takes it first): the same error
+        with pytest.raises(SatchainError, match="figure could not be drawn: AttributeError"):
+            with FigureJobs(n) as jobs:
+                jobs.submit(plot_line_of_sight, None, 60, tmp_path / "c.png")
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_an_error_in_the_caller_kills_the_helpers(tmp_path):
+    with pytest.raises(RuntimeError, match="caller"):
+        with FigureJobs(1) as jobs:
+            jobs.submit(plot_line_of_sight, _path(), 60, tmp_path / "d.png")
+            jobs.start()
+            raise RuntimeError("caller failed")
+    assert jobs._procs == []
+
+
+def test_the_process_count_is_validated(monkeypatch):
+    monkeypatch.setenv("SATCHAIN_FIGURE_PROCESSES", "two")
+    with pytest.raises(ConfigError, match="SATCHAIN_FIGURE_PROCESSES = 'two'"):
+        figure_processes()
+    monkeypatch.setenv("SATCHAIN_FIGURE_PROCESSES", "2")
+    assert figure_processes() == 2

