@@ -116,12 +116,31 @@ def _stage_measure(
     from satchain.measure.snr import measure_snr
 
     full_scale = sim.sensor.full_scale(sim.units, noise=noise)
-    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m, full_scale=full_scale)
+    geo = _image_affine(system, scene.truth_dict, sim.image.shape)
+    auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m, full_scale=full_scale,
+                        **({} if geo is None else {"image_affine": geo}))  # fmt: skip
     cal = auto.calibration  # its gain models the diffraction tail that pulls the plateaus' medians
     gain = cal.get("gain") if cal.get("fitted") else None
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m, gain=gain)
     progress("measure", 1, 1)
     return Measurements(auto, snr)
+
+
+def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):
+    """The simulated image's geometry for :func:`~satchain.measure.auto.measure_auto` when the system's pushbroom
+    terms shear or scale it (Earth rotation, a line-rate error): scene metres -> image pixels, the engine's mean
+    map (:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine`; a yaw turns the image of ``shape`` about its
+    centre) from the corner the measurement uses; None for a static system (its plain grid)."""
+    from affine import Affine
+
+    from satchain.measure.auto import truth_origin_m
+    from satchain.tf.pushbroom import PushbroomTerms
+
+    terms = PushbroomTerms(system)
+    if not terms.active:
+        return None
+    ox, oy = truth_origin_m(truth)
+    return terms.image_affine(tuple(shape)) @ Affine.translation(-ox, -oy)
 
 
 def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,

@@ -115,7 +115,8 @@ class EdgeCheck(_Detail):
     """A slanted edge: the measured and predicted MTF along its ``normal`` (x = ACT, y = ALT) at the measured
     frequencies ``f_cy_per_px``, the MTF at Nyquist (0.5 cy/px) both ways and its error, the angle (deg)
     measured and true, the measured RER and MTF50 (cy/px); the measurement's 1-sigma noise (at Nyquist and per
-    frequency) and its quality flags."""
+    frequency) and its quality flags; ``angle_deg_expected``: the true angle through the image geometry (a sheared
+    or scaled pushbroom image), which the angle is checked against when given."""
 
     id: str
     direction: str
@@ -134,6 +135,13 @@ class EdgeCheck(_Detail):
     mtf_at_nyquist_sigma: float | None = None
     mtf_sigma: list | None = None
     flags: list | None = None
+    angle_deg_expected: float | None = None  # the truth through the image geometry (written only when given)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        if d["angle_deg_expected"] is None:
+            del d["angle_deg_expected"]
+        return d
 
 
 @dataclass(frozen=True)

@@ -78,10 +78,10 @@ def _background_region(data: np.ndarray, truth: dict, items: list[dict], frame: 
     keep[y0:y1, x0:x1] = True
     for it in items:
         try:
-            bx0, by0, bx1, by1 = frame.inside(it["bbox_m"])
+            bx0, by0, bx1, by1 = frame.covering(it["bbox_m"])
         except (KeyError, TypeError, ValueError):
             continue
-        g = 1 + ERODE_PX  # inside() gives the inner pixels: widen by one, then by the margin
+        g = ERODE_PX  # every pixel the item touches, widened by the margin
         keep[max(0, by0 - g) : max(0, by1 + g), max(0, bx0 - g) : max(0, bx1 + g)] = False
     step = max(1, int(math.ceil(math.sqrt(np.count_nonzero(keep) / _MAX_SAMPLES))))
     sub = np.zeros_like(keep)

@@ -17,12 +17,19 @@ from satchain.measure.edge import measure_edge
 from satchain.measure.star import measure_star
 from satchain.scene.targets import BarTarget, SiemensStar, SlantedEdge
 
-__all__ = ["bars_item", "edge_item", "star_item"]
+__all__ = ["bars_item", "edge_item", "geometry_text", "star_item"]
 
 _EDGE_MIN_PX = 16
 _EDGE_MARGIN_PX = 3
 _STAR_EDGE_PX = 2.0
 _STAR_MIN_PX = 8.0
+#: Under an image affine the star is measured while ``cycles x anisotropy / 2`` (the largest phase shift, rad, of
+#: its pattern around a circle) stays below this: the fundamental's amplitude is then within ``1 - J0(0.1)``
+#: = 0.25 % and each direction's frequency within ``0.2 / cycles``.
+_STAR_MAX_PHASE_RAD = 0.1
+#: Under an image affine a bar group is measured while the drift of its bars' edges across its region lowers the
+#: fundamental by at most 1 % (``sinc(drift / period) >= 0.99``: drift <= 0.078 period).
+_BAR_MAX_LOSS = 0.01
 
 
 def _wrap_deg(a: float) -> float:
@@ -49,8 +56,9 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
             f"{max(0, side - 2 * margin)} px; need >= {_EDGE_MIN_PX} px"
         )
     frame.check_roi(roi)
-    r = measure_edge(raw, roi=roi, pixel_m=frame.pixel_m, full_scale=ctx.full_scale)
     measures = str(it["measures"]).lower()
+    step = frame.step_m(0 if measures == "act" else 1)  # the ground step along the edge normal's pixel axis
+    r = measure_edge(raw, roi=roi, pixel_m=step, full_scale=ctx.full_scale)
     dx, dy = it["edge_direction"]
     truth_image = _wrap_deg(math.degrees(math.atan2(dx, dy)))
     warnings = list(r.warnings)
@@ -79,7 +87,36 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
         "mtf": r.mtf,
     }
+    if frame.affine is not None:  # the truth's direction through the image geometry: the angle the image shows
+        a, b, d, e = frame.linear
+        expected = _wrap_deg(math.degrees(math.atan2(a * dx + b * dy, d * dx + e * dy)))
+        summary["angle_deg_expected"] = _to_truth_convention(expected, measures)
+        summary["edge_angle_deg_image_expected"] = expected
     return AutoItem(str(it["id"]), SlantedEdge.kind, r, to_jsonable(summary)), []
+
+
+def geometry_text(frame: Frame) -> str:
+    """The image geometry in words: how far scene lines along y and x are turned from the pixel columns and
+    rows, and the ALT ground step relative to the ACT one."""
+    ty, tx = math.degrees(math.atan(frame.tilt(1))), math.degrees(math.atan(frame.tilt(0)))
+    return (
+        f"scene y-lines at {ty:+.2f} deg and x-lines at {tx:+.2f} deg to the pixel columns and rows, ALT/ACT "
+        f"ground step {frame.step_m(1) / frame.step_m(0):.4f}"
+    )
+
+
+def _star_geometry(frame: Frame, cycles: int) -> None:
+    """Refuse a star the image geometry makes elliptical beyond :data:`_STAR_MAX_PHASE_RAD` (see there)."""
+    if frame.affine is None:
+        return
+    aniso = frame.anisotropy()
+    phase = 0.5 * cycles * aniso
+    if phase > _STAR_MAX_PHASE_RAD:
+        raise Skip(
+            f"distorted by the image geometry ({geometry_text(frame)}): the star is imaged as an ellipse, its axes "
+            f"{100 * aniso:.2f} % apart, which shifts its {cycles} cycles by up to {phase:.2f} rad around a circle "
+            f"(> {_STAR_MAX_PHASE_RAD} rad): the star measurement needs a circular star"
+        )
 
 
 def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
@@ -87,9 +124,10 @@ def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     refl, frame, calibrated = ctx.refl, ctx.frame, ctx.calibrated
     p = frame.pixel_m
     cycles = int(it["cycles"])
+    _star_geometry(frame, cycles)
     xc, yc = frame.px(*it["center_m"])
-    radius = float(it["radius_m"]) / p - _STAR_EDGE_PX
-    inner = float(it.get("inner_radius_m", 0.0)) / p + 1.0
+    radius = frame.length_px(float(it["radius_m"])) - _STAR_EDGE_PX
+    inner = frame.length_px(float(it.get("inner_radius_m", 0.0))) + 1.0
     if radius < _STAR_MIN_PX:
         raise Skip(f"too small at {p:g} m pixels: usable radius {radius:.1f} px < {_STAR_MIN_PX:g} px")
     roi = (
@@ -141,10 +179,32 @@ def _group_roi(group: dict, frame: Frame, orientation: str):
     b = float(group["bar_width_m"])
     across, along = (0, 1) if orientation == "act" else (1, 0)
     centres = 0.5 * (bars[:, across] + bars[:, across + 2])
-    a0, a1 = frame.centres(float(centres.min()), float(centres.max()), across)
+    a_lo, a_hi = float(centres.min()), float(centres.max())
     lo, hi = float(bars[:, along].max()) + b, float(bars[:, along + 2].min()) - b
-    l0, l1 = frame.centres(lo, hi, along)
-    return (a0, l0, a1, l1) if orientation == "act" else (l0, a0, l1, a1)
+    return frame.centres_box((a_lo, lo, a_hi, hi) if orientation == "act" else (lo, a_lo, hi, a_hi))
+
+
+def _period_px(frame: Frame, group: dict, orientation: str) -> float:
+    """A group's period in pixels along the pixel axis across its bars."""
+    return float(group["period_m"]) / frame.step_m(0 if orientation == "act" else 1)
+
+
+def _bar_drift(frame: Frame, roi, orientation: str, period_px: float) -> str | None:
+    """Why a group's bars are too tilted by the image geometry to measure (:data:`_BAR_MAX_LOSS`), or None."""
+    if frame.affine is None:
+        return None
+    along = 1 if orientation == "act" else 0  # ACT bars run along y (the columns), ALT bars along x
+    n = (roi[3] - roi[1]) if along == 1 else (roi[2] - roi[0])
+    drift = abs(frame.tilt(along)) * max(n - 1, 0)
+    loss = 1.0 - float(np.sinc(drift / period_px))
+    if loss <= _BAR_MAX_LOSS:
+        return None
+    deg = math.degrees(math.atan(abs(frame.tilt(along))))
+    return (
+        f"sheared {deg:.2f} deg by the image geometry ({geometry_text(frame)}): the bars' edges drift {drift:.2f} px "
+        f"across the group's {n} {'rows' if along == 1 else 'columns'}, lowering its CTF by {100 * loss:.1f} % "
+        f"(> {100 * _BAR_MAX_LOSS:g} %): the bar measurement needs bars aligned with the pixel rows/columns"
+    )
 
 
 def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
@@ -155,12 +215,15 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         raise Skip("a single bar per group has no period to measure a CTF on")
     keep, rois, skipped = _measurable_groups(it, frame, orientation)
     if not keep:
+        geo = [e["reason"] for e in skipped if "by the image geometry" in e["reason"]]
+        if geo:  # (the group entries are not returned with a Skip: the target's reason names the geometry)
+            raise Skip(f"no bar group is measurable ({len(geo)} of {len(skipped)} for the geometry; first: {geo[0]})")
         raise Skip(f"no bar group is measurable at {frame.pixel_m:g} m pixels (see the bar_group entries)")
     levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
     direction = "ACT" if orientation == "act" else "ALT"
     r = _measure_kept(ctx, it, keep, rois, (direction, levels), skipped)
     groups = [it["groups"][k] for k in keep]
-    periods_px = [float(g["period_m"]) / frame.pixel_m for g in groups]
+    periods_px = [_period_px(frame, g, orientation) for g in groups]
     summary = {
         "id": it["id"],
         "direction": direction,
@@ -188,7 +251,7 @@ def _measurable_groups(it: dict, frame: Frame, orientation: str) -> tuple[list, 
     keep, rois, skipped = [], [], []
     for k, g in enumerate(it["groups"]):
         gid = f"{it['id']}/group_{k}"
-        period_px = float(g["period_m"]) / p
+        period_px = _period_px(frame, g, orientation)
         if period_px < 2.0:
             reason = f"period {g['period_m']:g} m = {period_px:.2f} px < 2 px: beyond the Nyquist frequency"
             skipped.append(skip_entry(gid, "bar_group", reason))
@@ -202,6 +265,10 @@ def _measurable_groups(it: dict, frame: Frame, orientation: str) -> tuple[list, 
         except Skip as exc:
             skipped.append(skip_entry(gid, "bar_group", str(exc)))
             continue
+        why = _bar_drift(frame, roi, orientation, period_px)
+        if why is not None:
+            skipped.append(skip_entry(gid, "bar_group", why))
+            continue
         keep.append(k)
         rois.append(roi)
     return keep, rois, skipped
@@ -212,9 +279,10 @@ def _measure_kept(ctx: AutoContext, it: dict, keep: list, rois: list, opts: tupl
     ``skipped``, dropped from ``keep`` and ``rois`` (in place), and the others are measured again.
     ``opts = (direction, levels)``."""
     direction, levels = opts
-    p = ctx.frame.pixel_m
+    orientation = "act" if direction == "ACT" else "alt"
+    p = ctx.frame.step_m(0 if direction == "ACT" else 1)
     while True:
-        periods_px = [float(it["groups"][k]["period_m"]) / p for k in keep]
+        periods_px = [_period_px(ctx.frame, it["groups"][k], orientation) for k in keep]
         try:
             r = measure_bars(
                 ctx.refl,

@@ -21,6 +21,21 @@ its borders, so the surround never enters a measurement:
   the contrast; the others are filled with the median of those rows (which changes neither max nor min).  The
   line width at each column is ``w(s) / pixel_m`` from the truth's hyperbola.
 
+Image geometry.  With ``image_affine`` (a pushbroom image sheared by Earth rotation, scaled along-track by a
+line-rate error, or turned by yaw steering) every region of interest is taken through that map: an edge's
+region is the largest axis-aligned box of pixels inside the square's image (a parallelogram), the star's
+centre is the truth's mapped, and the uniform areas are where the map puts them.  An edge's angle is then
+also given as ``angle_deg_expected``: the truth's direction through the map's linear part, the angle the
+image should show (the comparison checks the measured angle against it).  The targets whose measurement
+assumes the pattern aligned with the pixel grid are measured only while the map leaves them so to a stated
+tolerance, and skipped with the reason otherwise, never measured wrong: a bar group while the drift of its
+bars' edges across its region lowers its CTF by <= 1 % (``sinc(drift / period) >= 0.99``), a horizontal or
+vertical wedge while its stripes drift <= 0.25 px over its length and its position <= 0.25 px down its
+stripes, a Siemens star while its image is round enough that its pattern's phase around a circle moves by
+<= 0.1 rad (``cycles x anisotropy / 2``; the fundamental then within 0.25 %, each direction's frequency
+within ``0.2 / cycles``).  A diagonal wedge is resampled through the map onto its own axes.  Periods and line
+widths are read in pixels of the axis across the pattern (its ground step ``Frame.step_m``).
+
 Radiometry.  The star's input modulation, the bars' large-area levels and the wedge's contrast need image
 values proportional to reflectance.  The image is calibrated to reflectance by a fit of
 ``value = offset + gain * reflectance`` to uniform truth areas (the two sides of every slanted edge, and the
@@ -56,7 +71,16 @@ from satchain.measure._common import to_jsonable
 from satchain.scene.layout import OBJECT_KINDS
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
-__all__ = ["MEASURERS", "OBJECT_KINDS", "AutoItem", "AutoResult", "Measurer", "measure_auto"]
+__all__ = [
+    "MEASURERS",
+    "OBJECT_KINDS",
+    "AutoItem",
+    "AutoResult",
+    "Measurer",
+    "check_image_affine",
+    "measure_auto",
+    "truth_origin_m",
+]
 
 #: A per-kind measurer: ``(context, truth item) -> (AutoItem, skipped entries)``; raises ``Skip`` (the reason)
 #: or ``InputError`` for an item it cannot measure.
@@ -120,6 +144,7 @@ def measure_auto(
     ids=None,
     wedge_threshold: float = 0.15,
     full_scale: float | None = None,
+    image_affine=None,
 ) -> AutoResult:
     """Run every applicable measurement on a simulated image, guided by its scene's truth record.
 
@@ -143,6 +168,14 @@ def measure_auto(
         The sensor's full scale in the image's units (``2**bit_depth - 1`` for DN; the run passes its
         detector's); integer images default to their dtype maximum.  Pixels at it are clipped; without it
         clipping is named only on other evidence (:func:`satchain.measure.find_clipping`).
+    image_affine : affine.Affine or 6 numbers, optional
+        The image's geometry when it is not a plain grid of square pixels: scene metres (the truth's x, y) ->
+        continuous pixel coordinates with pixel centres at integers, ``col = a x + b y + c``, ``row = d x + e y
+        + f`` for ``(a, b, c, d, e, f)`` (a pushbroom image sheared and scaled by Earth rotation or a line-rate
+        error: ``satchain run`` passes :meth:`satchain.tf.pushbroom.PushbroomTerms.image_affine`).  It places
+        the image by itself (``origin_m`` is then not given; ``AutoResult.origin_m`` is the scene point of the
+        image's top-left corner) and ``pixel_m`` defaults to its ACT ground step.  See "Image geometry" in the
+        module docstring for what each target kind does with it.
 
     Returns
     -------
@@ -161,9 +194,9 @@ def measure_auto(
     raw = np.asarray(image)
     data = as_float_array("image", raw, ndim=2, finite=False)
     items = _truth_items(truth)
-    p, origin = _geometry(truth, data.shape, pixel_m, origin_m)
+    frame = _frame(truth, data.shape, pixel_m, origin_m, image_affine)
+    p, origin = frame.pixel_m, frame.origin_m
     thr = check_range("wedge_threshold", wedge_threshold, 0.0, 1.0, lo_open=True, hi_open=True)
-    frame = Frame(p, origin, data.shape)
     cal = calibrate(data, truth, items, frame)
     fs = resolve_full_scale(raw, full_scale)
     fs_refl = None if fs is None else (fs - cal["offset"]) / cal["gain"]
@@ -214,6 +247,57 @@ def _truth_items(truth) -> list[dict]:
     return truth["items"]
 
 
+def truth_origin_m(truth: dict) -> tuple[float, float]:
+    """The scene point (m) of the top-left corner of the truth's render window (``(0, 0)`` for a whole-scene
+    render): where :func:`measure_auto` puts an image's corner by default."""
+    t_pix = truth.get("pixel_m")
+    win = truth.get("window_px") or [0, 0, 0, 0]
+    tp = float(t_pix) if t_pix is not None else 0.0
+    return int(win[1]) * tp, int(win[0]) * tp
+
+
+def check_image_affine(image_affine) -> tuple[float, float, float, float, float, float] | None:
+    """``image_affine`` as ``(a, b, c, d, e, f)`` (see :func:`measure_auto`), or None; a clear error otherwise."""
+    if image_affine is None:
+        return None
+    allowed = (
+        "must be an affine.Affine or 6 finite numbers (a, b, c, d, e, f) mapping scene metres to image pixels "
+        "(col = a x + b y + c, row = d x + e y + f), invertible"
+    )
+    try:
+        vals = tuple(image_affine)
+    except TypeError:
+        vals = ()
+    if len(vals) == 9 and tuple(vals[6:]) == (0, 0, 1):
+        vals = vals[:6]
+    ok = len(vals) == 6 and all(isinstance(v, (int, float, np.integer, np.floating)) for v in vals)
+    ok = ok and not any(isinstance(v, (bool, np.bool_)) for v in vals)
+    coeffs = tuple(float(v) for v in vals) if ok else ()
+    if not ok or not all(math.isfinite(v) for v in coeffs):
+        raise InputError(f"image_affine = {image_affine!r}: {allowed}")
+    a, b, _, d, e, _ = coeffs
+    det = a * e - b * d
+    if det == 0 or abs(det) <= 1e-12 * (abs(a) + abs(b)) * (abs(d) + abs(e)):
+        raise InputError(f"image_affine = {image_affine!r}: not invertible (a e - b d = {det:g}); {allowed}")
+    return coeffs
+
+
+def _frame(truth: dict, shape, pixel_m, origin_m, image_affine) -> Frame:
+    """The image's :class:`Frame` (see :func:`measure_auto`)."""
+    coeffs = check_image_affine(image_affine)
+    if coeffs is None:
+        p, origin = _geometry(truth, shape, pixel_m, origin_m)
+        return Frame(p, origin, tuple(shape))
+    if origin_m is not None:
+        raise InputError(
+            f"origin_m = {origin_m!r}: give origin_m or image_affine, not both (image_affine places the image)"
+        )
+    geo = Frame(1.0, (0.0, 0.0), tuple(shape), coeffs)
+    p = geo.step_m(0) if pixel_m is None else check_positive("pixel_m", pixel_m, error=InputError)
+    origin = geo.metres(-0.5, -0.5)
+    return Frame(p, (float(origin[0]), float(origin[1])), tuple(shape), coeffs)
+
+
 def _geometry(truth: dict, shape, pixel_m, origin_m):
     """Resolve the image's pixel size and origin (see :func:`measure_auto`)."""
     t_pix = truth.get("pixel_m")
@@ -229,8 +313,7 @@ def _geometry(truth: dict, shape, pixel_m, origin_m):
         )
     p = check_positive("pixel_m", pixel_m, error=InputError)
     if origin_m is None:
-        tp = float(t_pix) if t_pix is not None else 0.0
-        origin_m = (int(win[1]) * tp, int(win[0]) * tp)
+        origin_m = truth_origin_m(truth)
     try:
         ox, oy = (float(v) for v in origin_m)
     except (TypeError, ValueError):
