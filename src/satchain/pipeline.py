@@ -121,7 +121,7 @@ def _stage_measure(
                         **({} if geo is None else {"image_affine": geo}))  # fmt: skip
     cal = auto.calibration  # its gain models the diffraction tail that pulls the plateaus' medians
     gain = cal.get("gain") if cal.get("fitted") else None
-    snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m, gain=gain)
+    snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m, gain=gain, image_affine=geo)
     progress("measure", 1, 1)
     return Measurements(auto, snr)
 

@@ -109,34 +109,36 @@ class _Flat:
         return level, ((level, _noise_sigma(d)) if d.size >= 2 * _MIN_PLATEAU_SAMPLES else None)
 
 
-def _edge_plateaus(image: np.ndarray, it: Mapping[str, Any], pixel_m: float) -> tuple[_Flat, _Flat] | None:
-    """An edge's bright and dark plateaus (>= 4 px from the edge), None when either is too small."""
-    x0, y0, x1, y1 = it["bbox_m"]
-    r0, r1 = max(int(np.ceil(y0 / pixel_m)) + 2, 0), min(int(y1 / pixel_m) - 2, image.shape[0])
-    c0, c1 = max(int(np.ceil(x0 / pixel_m)) + 2, 0), min(int(x1 / pixel_m) - 2, image.shape[1])
-    if r1 - r0 < 8 or c1 - c0 < 8:
+def _edge_plateaus(image: np.ndarray, it: Mapping[str, Any], frame) -> tuple[_Flat, _Flat] | None:
+    """An edge's bright and dark plateaus (>= 4 px from the edge, >= 2 px inside its square), None when either
+    is too small. ``frame``: the image's geometry (:class:`satchain.measure._auto_common.Frame`)."""
+    x0, y0, x1, y1 = (float(v) for v in it["bbox_m"])
+    c0, r0, c1, r1 = frame.covering(it["bbox_m"])
+    r0, r1, c0, c1 = max(r0, 0), min(r1, image.shape[0]), max(c0, 0), min(c1, image.shape[1])
+    if r1 - r0 < 12 or c1 - c0 < 12:
         return None
-    yy, xx = np.mgrid[r0:r1, c0:c1]
+    rr, cc = np.mgrid[r0:r1, c0:c1]
+    xm, ym = frame.metres(cc.astype(float), rr.astype(float))  # pixel centres in scene metres
+    step = 2.5 * max(frame.step_m(0), frame.step_m(1))  # the pixels 2 px and more inside the square
+    inside = (xm >= x0 + step) & (xm <= x1 - step) & (ym >= y0 + step) & (ym <= y1 - step)
     (px, py), (nx, ny) = it["edge_point_m"], it["normal_to_bright"]
-    d = ((xx + 0.5) * pixel_m - px) * nx + ((yy + 0.5) * pixel_m - py) * ny
+    d = (xm - px) * nx + (ym - py) * ny
     block = image[r0:r1, c0:c1]
-    far = _PLATEAU_PX * pixel_m
-    if (d > far).sum() <= _MIN_PLATEAU_SAMPLES or (d < -far).sum() <= _MIN_PLATEAU_SAMPLES:
+    far = _PLATEAU_PX * max(frame.step_m(0), frame.step_m(1))
+    bright, dark = inside & (d > far), inside & (d < -far)
+    if bright.sum() <= _MIN_PLATEAU_SAMPLES or dark.sum() <= _MIN_PLATEAU_SAMPLES:
         return None
     if abs(nx) > abs(ny):  # an ACT edge: take differences down its columns, along the edge, not across it
-        block, d = block.T, d.T
-    return _Flat(block, d > far), _Flat(block, d < -far)
+        block, bright, dark = block.T, bright.T, dark.T
+    return _Flat(block, bright), _Flat(block, dark)
 
 
-def _background_patches(image: np.ndarray, items, pixel_m: float) -> tuple[np.ndarray, np.ndarray]:
+def _background_patches(image: np.ndarray, items, frame) -> tuple[np.ndarray, np.ndarray]:
     """(levels, noise sigmas) of all target-free 16 x 16 px patches of the background."""
     occupied = np.zeros(image.shape, bool)
     for it in items:
-        x0, y0, x1, y1 = it["bbox_m"]
-        occupied[
-            max(int(y0 / pixel_m) - 2, 0) : int(y1 / pixel_m) + 3,
-            max(int(x0 / pixel_m) - 2, 0) : int(x1 / pixel_m) + 3,
-        ] = True
+        c0, r0, c1, r1 = frame.covering(it["bbox_m"])
+        occupied[max(r0 - 2, 0) : max(r1 + 2, 0), max(c0 - 2, 0) : max(c1 + 2, 0)] = True
     n, sigmas, levels = _PATCH_PX, [], []
     for r in range(0, image.shape[0] - n + 1, n):
         for c in range(0, image.shape[1] - n + 1, n):
@@ -197,7 +199,9 @@ def _snr_sigma(edges, patches, r_bg: float, gain_given: float | None = None) -> 
     return float(np.std(snr[ok], ddof=1)), None
 
 
-def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float, gain: float | None = None) -> SnrResult:
+def measure_snr(
+    image, truth: Mapping[str, Any] | Truth, *, pixel_m: float, gain: float | None = None, image_affine=None
+) -> SnrResult:
     """GIQE contrast SNR of ``image`` (see the module docstring).
 
     Parameters
@@ -214,6 +218,10 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float, gain
         ``measure_auto(...).calibration["gain"]``, which models the optics' diffraction tail (the plateaus'
         medians are pulled toward their surroundings by it: the straight line through them reads the gain
         ~1.5 % low for an obscured aperture).  Default: the median over the edges of (bright - dark) / step.
+    image_affine : affine.Affine or 6 numbers, optional
+        Scene metres -> image pixel coordinates (centres at integers) of a pushbroom image sheared or scaled by
+        its motion (as :func:`satchain.measure.auto.measure_auto` takes it); the plateaus and the target-free
+        background are placed through it.
 
     Examples
     --------
@@ -226,18 +234,22 @@ def measure_snr(image, truth: Mapping[str, Any] | Truth, *, pixel_m: float, gain
     >>> abs(r.snr / (1000 * 0.08 / 2.0) - 1) < 0.1
     True
     """
+    from satchain.measure._auto_common import Frame
+    from satchain.measure.auto import check_image_affine
+
     a = as_float_array("image", image, ndim=2)
     pixel_m = check_positive("pixel_m", pixel_m)
+    frame = Frame(pixel_m, (0.0, 0.0), a.shape, check_image_affine(image_affine))
     gain_given = None if gain is None else check_positive("gain", gain)
     truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     items = list(truth.get("items", []))
     edges = []  # (bright plateau, dark plateau, reflectance step) of each edge with a nonzero step
     for it in items:
-        if it.get("kind") == SlantedEdge.kind and (flats := _edge_plateaus(a, it, pixel_m)) is not None:
+        if it.get("kind") == SlantedEdge.kind and (flats := _edge_plateaus(a, it, frame)) is not None:
             step = float(it["bright"]) - float(it["dark"])
             if step and flats[0].level != flats[1].level:
                 edges.append((*flats, step))
-    patches = _background_patches(a, items, pixel_m)
+    patches = _background_patches(a, items, frame)
     bg_sigma = float(np.median(patches[1])) if len(patches[1]) else None
     gain = None
     if not edges:
