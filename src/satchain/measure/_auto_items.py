@@ -86,6 +86,8 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "f_cy_per_px": r.f_cy_per_px,
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
         "mtf": r.mtf,
+        "lines": r.lines,  # each image line across the edge and where it crosses it (line-of-sight motion)
+        "edge_position_px": r.edge_position_px,
     }
     if frame.affine is not None:  # the truth's direction through the image geometry: the angle the image shows
         a, b, d, e = frame.linear

@@ -145,7 +145,8 @@ def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
     if tp is not None:  # formed in time: the line of sight and each row's displacement
         from satchain.report.motion_plot import plot_line_of_sight
 
-        jobs.submit(plot_line_of_sight, tp, int(ctx.image.shape[0]), d / "line_of_sight.png")
+        measured = (ctx.measured or {}).get(EDGES.key, [])  # the summaries with per-line edge positions
+        jobs.submit(plot_line_of_sight, tp, int(ctx.image.shape[0]), d / "line_of_sight.png", measured)
     jobs.start()
     plot_image_with_rois(ctx, d / "image_rois.png")
     for item in ctx.truth["items"]:
