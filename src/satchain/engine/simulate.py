@@ -174,6 +174,7 @@ class Simulator:
         from satchain.engine.yaw import yaw_rotation_deg
 
         self.yaw_deg = yaw_rotation_deg(system)  # the detector turned: the ground truth rotated (engine.yaw)
+        self._yaw_cache: tuple[np.ndarray, np.ndarray] | None = None
         self._plan_decimation()
         self._plan_frame()
         if has_pushbroom_motion(system):  # rows formed in time along the line of sight (engine.timepath)
@@ -311,6 +312,7 @@ class Simulator:
         self.check_frame()
         (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
         frame = self._frame_window(coarse, (-ey, -ex), (ly, lx))
+        self._yaw_cache = None  # the rotated frame is not kept beyond this call (its copy is ``frame``)
         return self._form_block(frame, (-ey, -ex), (0, self.output_shape[0]), (0, self.output_shape[1]))
 
     def frame_map(self, axis: int) -> np.ndarray:
@@ -330,9 +332,22 @@ class Simulator:
             return np.where(inside, t + c, -1)
         return np.where(inside, t, _map_indices(-e, length, nc, "symmetric")) + c
 
-    def _frame_window(self, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
+    def _frame_window(
+        self, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int], *, rotated: bool = True
+    ) -> np.ndarray:
         """Samples ``start .. start + shape`` (ground-truth coarse coordinates) of the coarse frame, taken
-        periodically over the frame (as its FFT sees it), as float32."""
+        periodically over the frame (as its FFT sees it), as float32; under yaw steering those of the rotated
+        frame (:meth:`yaw_frame`) unless ``rotated`` is False."""
+        if self.yaw_deg and rotated:
+            frame = self.yaw_frame(coarse)
+            iy, ix = (np.mod(np.arange(a, a + n) + e, m) for a, n, e, m in
+                      zip(start, shape, self.frame_ext, self.frame_shape, strict=True))  # fmt: skip
+            if np.all(np.diff(iy) == 1) and np.all(np.diff(ix) == 1):  # one slice: no gather copy
+                out = np.array(frame[iy[0] : iy[-1] + 1, ix[0] : ix[-1] + 1], dtype=np.float32)
+            else:
+                out = np.asarray(frame[np.ix_(iy, ix)], dtype=np.float32)
+            release_pages(frame)
+            return out
         idx = []
         for ax in (0, 1):
             fm = self.frame_map(ax)
@@ -396,8 +411,6 @@ class Simulator:
         """Output pixels ``rows x cols`` of the periodic extension of ``block``, whose sample 0 is the ground
         truth's coarse sample ``start``: OTF, footprints and sampling in frequency."""
         f_band = self.f_cut * self.D  # cycles per coarse sample
-        if self.yaw_deg:
-            block = self._yawed(block, start)
         ly, lx = block.shape
         spec = spectral.tile_band_spectrum(
             block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=self.params.workers
@@ -405,21 +418,27 @@ class Simulator:
         del block
         return self.form_spectrum(spec, start, rows, cols, weight=weight)
 
-    def _yawed(self, block: np.ndarray, start: tuple[int, int]) -> np.ndarray:
-        """The whole coarse frame rotated about the output grid's centre (:mod:`satchain.engine.yaw`)."""
-        from satchain.engine.yaw import check_band, rotate_frame
+    def yaw_frame(self, coarse: np.ndarray) -> np.ndarray:
+        """The coarse frame of ``coarse`` rotated about the output grid's centre (:mod:`satchain.engine.yaw`),
+        made once per coarse grid: in memory, or into ``self.yaw_store(shape)`` when a streamed caller set it
+        (a disk-backed array)."""
+        from satchain.engine.yaw import check_band, rotate_into
 
-        if tuple(block.shape) != tuple(self.frame_shape):
-            raise ResourceLimitError(
-                "orbit.yaw_steering is simulated on the whole coarse frame in memory; this input streams in tiles "
-                f"(frame {self.frame_shape[0]} x {self.frame_shape[1]}): crop it or raise the memory limit"
-            )
+        if self._yaw_cache is not None and self._yaw_cache[0] is coarse:
+            return self._yaw_cache[1]
         check_band(self.f_cut * self.D, self.f_stop * self.D, self.yaw_deg)
+        (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
         pivot = []
-        for ax, s in enumerate((self.ys, self.xs)):  # the output grid's centre, in block samples
+        for s, e in zip((self.ys, self.xs), (ey, ex), strict=True):  # the output grid's centre, frame samples
             centre_in = s.phase_px + s.n_output * s.k / 2.0  # input-grid coordinate
-            pivot.append(centre_in / self.D - 0.5 - start[ax])
-        return rotate_frame(block, self.yaw_deg, (pivot[0], pivot[1]), workers=self.params.workers)
+            pivot.append(centre_in / self.D - 0.5 + e)
+        store = getattr(self, "yaw_store", None)
+        out = np.empty((ly, lx), dtype=np.float32) if store is None else store((ly, lx))
+        self._yaw_cache = None  # a failed rotation leaves no stale frame
+        rotate_into(lambda a, h: self._frame_window(coarse, (a - ey, -ex), (h, lx), rotated=False), (ly, lx), out,
+                    self.yaw_deg, (pivot[0], pivot[1]), workers=self.params.workers)  # fmt: skip
+        self._yaw_cache = (coarse, out)
+        return out
 
     def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
         """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse

@@ -130,9 +130,15 @@ def coarse_store(
     try:
         claim(d)
         arr = np.lib.format.open_memmap(d / "coarse.npy", mode="w+", dtype=np.float32, shape=sim.n_coarse)
+        if sim.yaw_deg:  # the rotated frame (engine.yaw) beside it, on disk too
+            sim.yaw_store = lambda shape: np.lib.format.open_memmap(
+                d / "yawed.npy", mode="w+", dtype=np.float32, shape=shape
+            )
         yield arr
         del arr
     finally:
+        if sim.yaw_deg:
+            sim.yaw_store, sim._yaw_cache = None, None
         shutil.rmtree(d, ignore_errors=True)
 
 
@@ -155,13 +161,6 @@ class FarField:
 
         from satchain.engine import spectral
 
-        if sim.yaw_deg:
-            from satchain.errors import ResourceLimitError
-
-            raise ResourceLimitError(
-                "orbit.yaw_steering is simulated on the whole coarse frame in memory, not streamed: crop the input "
-                "or raise the memory limit (SATCHAIN_MEMORY_LIMIT)"
-            )
         self.sim = sim
         self.f_split = far_split(sim, margin_px)
         ly, lx = sim.frame_shape

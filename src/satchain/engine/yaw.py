@@ -13,6 +13,10 @@ the relative speed, in time). The rotation is applied to the coarse frame (the b
 shears, ``M = Sx(tan(g/2)) Sy(-sin g) Sx(tan(g/2))``, each an exact Fourier shift of every row (column) of the
 frame. The band stays below the coarse Nyquist frequency through the shears (checked), and the frame is widened by
 the rotation's reach so that the shears' wrap-around lies in its far margin, as the frame's own period does.
+
+The rotated frame is made once, after stage 1, by bands of rows and columns (:func:`rotate_into`): in memory, or
+for a streamed simulation in a disk-backed array beside the coarse grid; stage 2 then reads it as it reads the
+frame (whole, by tiles, or for the far field), so yaw steering streams like every other case.
 """
 
 from __future__ import annotations
@@ -23,7 +27,9 @@ import numpy as np
 
 from satchain.errors import ConfigError
 
-__all__ = ["check_band", "rotate_frame", "yaw_margin", "yaw_rotation_deg"]
+__all__ = ["check_band", "rotate_frame", "rotate_into", "yaw_margin", "yaw_rotation_deg"]
+
+_BAND_BYTES = 64 * 2**20  # the transform of one band of rows or columns
 
 
 def yaw_rotation_deg(system) -> float:
@@ -78,11 +84,33 @@ def _shear(a: np.ndarray, axis: int, shift: np.ndarray, workers: int | None) -> 
 def rotate_frame(frame: np.ndarray, angle_deg: float, pivot: tuple[float, float], *, workers=None) -> np.ndarray:
     """``B'(q) = B(P + M (q - P))`` (module docstring) of the periodic band-limited ``frame``; ``pivot = (row, col)``
     in frame samples."""
+    out = np.empty(frame.shape, dtype=np.float32)
+    rotate_into(lambda a, h: frame[a : a + h], frame.shape, out, angle_deg, pivot, workers=workers)
+    return out
+
+
+def rotate_into(read_rows, shape: tuple[int, int], out: np.ndarray, angle_deg: float, pivot: tuple[float, float],
+                *, workers=None, band_bytes: float = _BAND_BYTES) -> None:  # fmt: skip
+    """:func:`rotate_frame` out of core: ``read_rows(a, h)`` gives frame rows ``a .. a+h-1``, the result goes into
+    ``out`` (``shape``, float32; a disk-backed array works): row bands for the two x-shears, column bands for the
+    y-shear, each band at most ``band_bytes`` of transform (the frame is never read whole)."""
+    from satchain.engine.sources import release_pages
+
     g = math.radians(angle_deg)
     t, s = math.tan(g / 2), -math.sin(g)
     py, px = pivot
-    rows = np.arange(frame.shape[0]) - py
-    cols = np.arange(frame.shape[1]) - px
-    out = _shear(frame, 1, t * rows, workers)  # B1(x, y) = B(x + t (y - py), y)
-    out = _shear(out, 0, s * cols, workers)  # B2(x, y) = B1(x, y + s (x - px))
-    return _shear(out, 1, t * rows, workers)  # B3 = B2 sheared as B1
+    ly, lx = shape
+    h = max(1, int(band_bytes // (16 * lx)))
+    for a in range(0, ly, h):  # B1(x, y) = B(x + t (y - py), y)
+        blk = np.asarray(read_rows(a, min(h, ly - a)), dtype=np.float32)
+        out[a : a + blk.shape[0]] = _shear(blk, 1, t * (np.arange(a, a + blk.shape[0]) - py), workers)
+        release_pages(out)
+    w = max(1, int(band_bytes // (16 * ly)))
+    for c in range(0, lx, w):  # B2(x, y) = B1(x, y + s (x - px))
+        blk = np.asarray(out[:, c : c + w], dtype=np.float32)
+        out[:, c : c + blk.shape[1]] = _shear(blk, 0, s * (np.arange(c, c + blk.shape[1]) - px), workers)
+        release_pages(out)
+    for a in range(0, ly, h):  # B3 = B2 sheared as B1
+        blk = np.asarray(out[a : a + h], dtype=np.float32)
+        out[a : a + blk.shape[0]] = _shear(blk, 1, t * (np.arange(a, a + blk.shape[0]) - py), workers)
+        release_pages(out)
