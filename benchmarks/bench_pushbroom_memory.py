@@ -19,7 +19,14 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_georaster import run_child  # noqa: E402  (the benchmarks folder is not a package)
 
+YAW = "\n[orbit]\nlatitude_deg = 0.0\ninclination_deg = 97.6\nearth_rotation = true\nyaw_steering = true\n"
 OSCILLATION = '\n[[motion.oscillation]]\naxis = "act"\namplitude_px = 0.5\nfrequency_hz = 4465.0\nphase_deg = 30.0\n'
+
+
+def _with_orbit(preset: str, keys: str) -> str:
+    """The preset with the Earth-rotation keys added to its own [orbit] table."""
+    head, sep, tail = preset.partition("[orbit]\n")
+    return head + sep + keys.split("[orbit]\n", 1)[1] + tail if sep else preset + keys
 
 
 def main() -> None:
@@ -39,6 +46,8 @@ def main() -> None:
     systems = {"static": d / "static.toml", "in time": d / "oscillation.toml"}
     systems["static"].write_text(preset)
     systems["in time"].write_text(preset + OSCILLATION)
+    systems["yaw steering"] = d / "yaw.toml"  # the frame rotated (engine.yaw), then rows in time
+    systems["yaw steering"].write_text(_with_orbit(preset, YAW))
     rows = {}
     for name, sysf in systems.items():
         out = d / f"out_{name.replace(' ', '_')}.tif"
@@ -52,8 +61,9 @@ def main() -> None:
     for name, (wall, rss, streamed) in rows.items():
         print(f"{a.n}^2 uint16 at {a.pixel_m:g} m, {name:8s}: {wall:7.1f} s, {a.n * a.n / wall / 1e6:6.1f} Mpx/s, "
               f"peak RSS {rss:.2f} GB{' (streamed)' if streamed else ''}")  # fmt: skip
-    print(f"in time / static: {rows['in time'][0] / rows['static'][0]:.2f} x the time, "
-          f"{rows['in time'][1] / rows['static'][1]:.2f} x the memory")  # fmt: skip
+    for name in ("in time", "yaw steering"):
+        print(f"{name} / static: {rows[name][0] / rows['static'][0]:.2f} x the time, "
+              f"{rows[name][1] / rows['static'][1]:.2f} x the memory")  # fmt: skip
 
 
 if __name__ == "__main__":
