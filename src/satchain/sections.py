@@ -18,7 +18,7 @@ from satchain._sections_base import (  # noqa: F401  (re-exported: other modules
     _number_kinds,
     _StrictNumbers,
 )
-from satchain.sections_motion import JitterPSD, Oscillation, as_tables, check_earth_rotation
+from satchain.sections_motion import JitterPSD, LineOfSightLog, Oscillation, as_tables, check_earth_rotation
 
 EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
 EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
@@ -354,6 +354,7 @@ class Motion(_Frozen):
     )
     oscillation: tuple[Oscillation, ...] = Field(default=(), max_length=64, description="[[motion.oscillation]]")
     jitter_psd: tuple[JitterPSD, ...] = Field(default=(), max_length=16, description="[motion.jitter_psd] table(s)")
+    line_of_sight: LineOfSightLog | None = Field(default=None, description="[motion.line_of_sight]: a measured log")
 
     @field_validator("jitter_psd", mode="before")
     @classmethod
@@ -362,8 +363,8 @@ class Motion(_Frozen):
 
     @property
     def time_varying(self) -> bool:
-        """True when the motion has terms that change during a TDI window (oscillations, a jitter PSD)."""
-        return bool(self.oscillation or self.jitter_psd)
+        """True when the motion has terms that change during a TDI window (oscillations, a jitter PSD, a log)."""
+        return bool(self.oscillation or self.jitter_psd or self.line_of_sight is not None)
 
 
 class Radiometry(_Frozen):

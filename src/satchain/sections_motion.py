@@ -16,11 +16,16 @@ from __future__ import annotations
 import math
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import Field, model_validator
 
 from satchain._sections_base import _Frozen
+from satchain.errors import ConfigError, SatchainIOError
 
-__all__ = ["MAX_FREQUENCY_HZ", "JitterPSD", "Oscillation", "check_earth_rotation"]
+__all__ = ["MAX_FREQUENCY_HZ", "JitterPSD", "LineOfSightLog", "Oscillation", "check_earth_rotation", "read_los_csv"]
+
+#: The longest line-of-sight log accepted (samples).
+MAX_LOG_SAMPLES = 2_000_000
 
 #: The highest line-of-sight frequency accepted (the time path samples as finely as the highest one needs).
 MAX_FREQUENCY_HZ = 1e6
@@ -82,6 +87,108 @@ class JitterPSD(_Frozen):
         """The motion's variance, the area under the PSD (px^2)."""
         f, p = self.frequency_hz, self.psd_px2_per_hz
         return float(sum(0.5 * (p[k] + p[k + 1]) * (f[k + 1] - f[k]) for k in range(len(f) - 1)))
+
+
+class LineOfSightLog(_Frozen):
+    """A measured line of sight, e.g. from an attitude log: ``act_px`` / ``alt_px`` (detector pixels, either
+    may be left out: zero) at ``time_s``, linear between the samples. ``time_offset_s`` is the log's time at
+    ``t = 0``, the start of row 0's TDI window; the log must cover the whole scan. ``file = "log.csv"`` reads the
+    columns ``time_s``, ``act_px``, ``alt_px`` (a header row naming them; ``#`` comments) when the system is
+    loaded, relative to the system file: the system then holds the samples (self-contained).
+
+    Examples
+    --------
+    >>> log = LineOfSightLog(time_s=[0.0, 0.01, 0.02], act_px=[0.0, 0.5, 0.0])
+    >>> log.alt_px, log.duration_s
+    ((0.0, 0.0, 0.0), 0.02)
+    """
+
+    time_s: tuple[float, ...] = Field(min_length=2, max_length=MAX_LOG_SAMPLES)
+    act_px: tuple[float, ...] | None = Field(default=None, max_length=MAX_LOG_SAMPLES)
+    alt_px: tuple[float, ...] | None = Field(default=None, max_length=MAX_LOG_SAMPLES)
+    time_offset_s: float = Field(default=0.0, ge=-1e9, le=1e9, description="the log's time at t = 0")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _file(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "file" in data:
+            data = dict(data)
+            table = read_los_csv(data.pop("file"))
+            for key in ("time_s", "act_px", "alt_px"):
+                if key in data:
+                    raise ValueError(f"motion.line_of_sight: give either file or {key}, not both")
+            data.update(table)
+        return data
+
+    @model_validator(mode="after")
+    def _table(self) -> LineOfSightLog:
+        t = self.time_s
+        if self.act_px is None and self.alt_px is None:
+            raise ValueError("motion.line_of_sight: needs act_px, alt_px or both (detector pixels at time_s)")
+        if self.act_px is None:
+            object.__setattr__(self, "act_px", (0.0,) * len(t))
+        if self.alt_px is None:
+            object.__setattr__(self, "alt_px", (0.0,) * len(t))
+        for key in ("act_px", "alt_px"):
+            v = getattr(self, key)
+            if len(v) != len(t):
+                raise ValueError(f"{key} has {len(v)} values but time_s has {len(t)}: give one per time")
+            if not all(math.isfinite(x) and abs(x) <= 1000 for x in v):
+                raise ValueError(f"{key}: every value must be finite and within +-1000 px")
+        if not all(math.isfinite(x) for x in t) or any(b <= a for a, b in zip(t[:-1], t[1:], strict=True)):
+            raise ValueError("time_s: must be finite and strictly increasing")
+        return self
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s[-1] - self.time_s[0])
+
+    def at(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(act, alt)`` px at the scan times ``t_s`` (``t = 0``: row 0's window starts), linear between the
+        samples; a ConfigError when the log does not cover them."""
+        t = np.asarray(self.time_s, dtype=float)
+        u = np.asarray(t_s, dtype=float) + self.time_offset_s
+        if u.size and (u.min() < t[0] - 1e-12 or u.max() > t[-1] + 1e-12):
+            raise ConfigError(
+                f"motion.line_of_sight: the log covers {t[0]:.6g} .. {t[-1]:.6g} s, the scan needs "
+                f"{u.min():.6g} .. {u.max():.6g} s (time_offset_s = {self.time_offset_s:g} at row 0's window): "
+                "give a longer log, a smaller scene or another time_offset_s"
+            )
+        return np.interp(u, t, self.act_px), np.interp(u, t, self.alt_px)
+
+
+def read_los_csv(path: Any) -> dict[str, tuple[float, ...]]:
+    """The columns ``time_s`` and ``act_px`` / ``alt_px`` of a CSV line-of-sight log (header row, ``#``
+    comments), for :class:`LineOfSightLog`."""
+    from pathlib import Path
+
+    p = Path(str(path))
+    if not p.is_file():
+        raise SatchainIOError(f"motion.line_of_sight.file = {str(p)!r}: not found")
+    try:
+        lines = [
+            ln for ln in p.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.lstrip().startswith("#")
+        ]
+        names = [n.strip().lower() for n in lines[0].split(",")] if lines else []
+        arr = np.loadtxt(lines[1:], delimiter=",", ndmin=2, dtype=float) if len(lines) > 1 else np.zeros((0, 0))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"motion.line_of_sight.file = {str(p)!r}: not a CSV of numbers ({exc})") from None
+    if "time_s" not in names or not {"act_px", "alt_px"} & set(names):
+        raise ConfigError(
+            f"motion.line_of_sight.file = {str(p)!r}: its header names {names}; need time_s and act_px and/or alt_px"
+        )
+    if arr.shape[1] != len(names):
+        raise ConfigError(
+            f"motion.line_of_sight.file = {str(p)!r}: {arr.shape[1]} columns, the header names {len(names)}"
+        )
+    out = {}
+    for key in ("time_s", "act_px", "alt_px"):
+        if key in names:
+            v = arr[:, names.index(key)]
+            if not np.all(np.isfinite(v)):
+                raise ConfigError(f"motion.line_of_sight.file = {str(p)!r}: column {key} has non-finite values")
+            out[key] = tuple(float(x) for x in v)
+    return out
 
 
 def as_tables(value: Any) -> Any:

@@ -107,8 +107,12 @@ class ImagingSystem(_Frozen):
 
     @classmethod
     def from_toml(cls, path: str | Path) -> ImagingSystem:
-        """Read and validate a system TOML file."""
-        return cls.from_dict(_read_toml(path))
+        """Read and validate a system TOML file (a ``[motion.line_of_sight] file`` is relative to it)."""
+        data = _read_toml(path)
+        los = data.get("motion", {}).get("line_of_sight") if isinstance(data.get("motion"), dict) else None
+        if isinstance(los, dict) and isinstance(los.get("file"), str):
+            los["file"] = str((Path(path).resolve().parent / los["file"]).resolve())
+        return cls.from_dict(data)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (the TOML structure; pitches and active widths in explicit form)."""

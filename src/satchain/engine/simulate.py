@@ -339,15 +339,9 @@ class Simulator:
         periodically over the frame (as its FFT sees it), as float32; under yaw steering those of the rotated
         frame (:meth:`yaw_frame`) unless ``rotated`` is False."""
         if self.yaw_deg and rotated:
-            frame = self.yaw_frame(coarse)
-            iy, ix = (np.mod(np.arange(a, a + n) + e, m) for a, n, e, m in
-                      zip(start, shape, self.frame_ext, self.frame_shape, strict=True))  # fmt: skip
-            if np.all(np.diff(iy) == 1) and np.all(np.diff(ix) == 1):  # one slice: no gather copy
-                out = np.array(frame[iy[0] : iy[-1] + 1, ix[0] : ix[-1] + 1], dtype=np.float32)
-            else:
-                out = np.asarray(frame[np.ix_(iy, ix)], dtype=np.float32)
-            release_pages(frame)
-            return out
+            from satchain.engine.yaw import rotated_window
+
+            return rotated_window(self, coarse, start, shape)
         idx = []
         for ax in (0, 1):
             fm = self.frame_map(ax)
@@ -419,26 +413,10 @@ class Simulator:
         return self.form_spectrum(spec, start, rows, cols, weight=weight)
 
     def yaw_frame(self, coarse: np.ndarray) -> np.ndarray:
-        """The coarse frame of ``coarse`` rotated about the output grid's centre (:mod:`satchain.engine.yaw`),
-        made once per coarse grid: in memory, or into ``self.yaw_store(shape)`` when a streamed caller set it
-        (a disk-backed array)."""
-        from satchain.engine.yaw import check_band, rotate_into
+        """The coarse frame of ``coarse`` rotated for yaw steering (:func:`satchain.engine.yaw.rotated_frame`)."""
+        from satchain.engine.yaw import rotated_frame
 
-        if self._yaw_cache is not None and self._yaw_cache[0] is coarse:
-            return self._yaw_cache[1]
-        check_band(self.f_cut * self.D, self.f_stop * self.D, self.yaw_deg)
-        (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
-        pivot = []
-        for s, e in zip((self.ys, self.xs), (ey, ex), strict=True):  # the output grid's centre, frame samples
-            centre_in = s.phase_px + s.n_output * s.k / 2.0  # input-grid coordinate
-            pivot.append(centre_in / self.D - 0.5 + e)
-        store = getattr(self, "yaw_store", None)
-        out = np.empty((ly, lx), dtype=np.float32) if store is None else store((ly, lx))
-        self._yaw_cache = None  # a failed rotation leaves no stale frame
-        rotate_into(lambda a, h: self._frame_window(coarse, (a - ey, -ex), (h, lx), rotated=False), (ly, lx), out,
-                    self.yaw_deg, (pivot[0], pivot[1]), workers=self.params.workers)  # fmt: skip
-        self._yaw_cache = (coarse, out)
-        return out
+        return rotated_frame(self, coarse)
 
     def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
         """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse
@@ -573,14 +551,15 @@ class Simulator:
 
 def has_pushbroom_motion(system: ImagingSystem) -> bool:
     """Whether ``system`` has line-of-sight motion in time (``[[motion.oscillation]]``, ``[motion.jitter_psd]``,
-    ``motion.line_rate_error``, ``orbit.earth_rotation``): its image is then formed in time."""
+    ``[motion.line_of_sight]``, ``motion.line_rate_error``, ``orbit.earth_rotation``): its image is then formed
+    in time."""
     m = system.motion
-    return bool(m.oscillation or m.jitter_psd or m.line_rate_error or system.orbit.earth_rotation)
+    return bool(m.time_varying or m.line_rate_error or system.orbit.earth_rotation)
 
 
 def _is_pushbroom(name: str) -> bool:
     """The OTF components of pushbroom motion (:class:`satchain.tf.pushbroom.PushbroomTerms`)."""
-    return name.startswith(("oscillation_", "jitter_psd_")) or name == "tdi_drift"
+    return name.startswith(("oscillation_", "jitter_psd_", "los_log_")) or name == "tdi_drift"
 
 
 def spectral_len(n: int) -> int:

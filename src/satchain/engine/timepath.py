@@ -9,7 +9,8 @@ charge packet of row ``i`` sees, at time ``t``, the ground point
 
 where ``eps`` is the ALT drift per line time (``motion.line_rate_error`` plus the Earth's along-track term) and
 ``sigma`` the ACT drift (the Earth's rotation, :func:`satchain.tf.pushbroom._earth_rotation`); ``LOS`` is the sum
-of the ``[[motion.oscillation]]`` sinusoids and one realisation of each ``[motion.jitter_psd]``. With
+of the ``[[motion.oscillation]]`` sinusoids, one realisation of each ``[motion.jitter_psd]`` and the
+``[motion.line_of_sight]`` log (linear between its samples, 8 time samples per interval at least). With
 ``u = t / dt - i`` in ``[0, N]`` this is the row's own position ``i (1 + eps)`` plus the drift ``eps u`` over the
 window: the image is scaled by ``1 + eps`` along-track and sheared by ``sigma`` px per row, and smeared by the
 drift, exactly as :class:`satchain.tf.pushbroom.PushbroomTerms` predicts.
@@ -38,6 +39,7 @@ import numpy as np
 __all__ = ["MIN_WINDOW_SAMPLES", "SAMPLES_PER_PERIOD", "TimePath", "form_rows", "time_path"]
 
 SAMPLES_PER_PERIOD = 24
+LOG_SAMPLES = 8  # time samples per interval of a [motion.line_of_sight] log
 MIN_WINDOW_SAMPLES = 32
 _MAX_SAMPLES_PER_LINE = 4096
 _BLOCK_BYTES = 128 * 2**20  # the sliding sums of one block of rows
@@ -94,6 +96,9 @@ def _samples_per_line(system, line_time_s: float, stages: int) -> int:
     mot = system.motion
     f_top = max([o.frequency_hz for o in mot.oscillation] + [t.frequency_hz[-1] for t in mot.jitter_psd] + [0.0])
     m = max(math.ceil(SAMPLES_PER_PERIOD * f_top * line_time_s), math.ceil(MIN_WINDOW_SAMPLES / stages), 1)
+    if mot.line_of_sight is not None:  # a log, linear between its samples: >= LOG_SAMPLES per interval
+        step = float(np.min(np.diff(mot.line_of_sight.time_s)))
+        m = max(m, math.ceil(LOG_SAMPLES * line_time_s / step))
     return int(min(m, _MAX_SAMPLES_PER_LINE))
 
 
@@ -141,8 +146,11 @@ def time_path(system, n_rows: int, *, seed: int = 0) -> TimePath | None:
             dy = dy + r
         else:
             dx = dx + r
+    if system.motion.line_of_sight is not None:
+        act, alt = system.motion.line_of_sight.at(t)
+        dx, dy = dx + act, dy + alt
     moves = [bool(np.ptp(d) > 0) for d in (dy, dx)]
-    los = bool(system.motion.oscillation or system.motion.jitter_psd)
+    los = system.motion.time_varying
     return TimePath(dt, n_st, m, dy, dx, moves[0], moves[1], (float(sigma), float(eps)), los)
 
 

@@ -27,7 +27,15 @@ import numpy as np
 
 from satchain.errors import ConfigError
 
-__all__ = ["check_band", "rotate_frame", "rotate_into", "yaw_margin", "yaw_rotation_deg"]
+__all__ = [
+    "check_band",
+    "rotate_frame",
+    "rotate_into",
+    "rotated_frame",
+    "rotated_window",
+    "yaw_margin",
+    "yaw_rotation_deg",
+]
 
 _BAND_BYTES = 64 * 2**20  # the transform of one band of rows or columns
 
@@ -114,3 +122,40 @@ def rotate_into(read_rows, shape: tuple[int, int], out: np.ndarray, angle_deg: f
         blk = np.asarray(out[a : a + h], dtype=np.float32)
         out[a : a + blk.shape[0]] = _shear(blk, 1, t * (np.arange(a, a + blk.shape[0]) - py), workers)
         release_pages(out)
+
+
+def rotated_frame(sim, coarse: np.ndarray) -> np.ndarray:
+    """The coarse frame of ``coarse`` rotated about the output grid's centre, made once per coarse grid (kept in
+    ``sim._yaw_cache``): in memory, or into ``sim.yaw_store(shape)`` when a streamed caller set it (a disk-backed
+    array beside the coarse grid, :func:`satchain.engine.stream.coarse_store`)."""
+    if sim._yaw_cache is not None and sim._yaw_cache[0] is coarse:
+        return sim._yaw_cache[1]
+    check_band(sim.f_cut * sim.D, sim.f_stop * sim.D, sim.yaw_deg)
+    (ey, ex), (ly, lx) = sim.frame_ext, sim.frame_shape
+    pivot = []
+    for s, e in zip((sim.ys, sim.xs), (ey, ex), strict=True):  # the output grid's centre, in frame samples
+        centre_in = s.phase_px + s.n_output * s.k / 2.0  # input-grid coordinate
+        pivot.append(centre_in / sim.D - 0.5 + e)
+    store = getattr(sim, "yaw_store", None)
+    out = np.empty((ly, lx), dtype=np.float32) if store is None else store((ly, lx))
+    sim._yaw_cache = None  # a failed rotation leaves no stale frame
+    rotate_into(lambda a, h: sim._frame_window(coarse, (a - ey, -ex), (h, lx), rotated=False), (ly, lx), out,
+                sim.yaw_deg, (pivot[0], pivot[1]), workers=sim.params.workers)  # fmt: skip
+    sim._yaw_cache = (coarse, out)
+    return out
+
+
+def rotated_window(sim, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
+    """Samples ``start .. start + shape`` (ground-truth coarse coordinates) of the rotated frame, periodically
+    over it, as float32 (a slice where the window does not wrap: no gather copy)."""
+    from satchain.engine.sources import release_pages
+
+    frame = rotated_frame(sim, coarse)
+    iy, ix = (np.mod(np.arange(a, a + n) + e, m) for a, n, e, m in
+              zip(start, shape, sim.frame_ext, sim.frame_shape, strict=True))  # fmt: skip
+    if np.all(np.diff(iy) == 1) and np.all(np.diff(ix) == 1):
+        out = np.array(frame[iy[0] : iy[-1] + 1, ix[0] : ix[-1] + 1], dtype=np.float32)
+    else:
+        out = np.asarray(frame[np.ix_(iy, ix)], dtype=np.float32)
+    release_pages(frame)
+    return out

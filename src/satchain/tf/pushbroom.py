@@ -240,6 +240,60 @@ def drift_otf(nu_x_cy_per_px, nu_y_cy_per_px, *, stages: int, drift_x_px: float,
     return np.sinc(int(stages) * (float(drift_x_px) * nx + float(drift_y_px) * ny))
 
 
+_LOG_MAX_LINES = 4096  # rows of a line-of-sight log the budget averages over
+
+
+def log_windows(system, axis: str) -> tuple[np.ndarray, int, int]:
+    """``(x, m, K)``: the ``[motion.line_of_sight]`` log's ``axis`` on the time path's grid (``m`` samples per
+    line, midpoints, from ``t = 0``) over the rows whose TDI windows it covers (at most 4096), ``K`` samples per
+    window. The budget's log terms are taken over these windows."""
+    from satchain.engine.timepath import _samples_per_line
+
+    log, dt, n_st = system.motion.line_of_sight, system.line_time_s, system.detector.tdi_stages
+    m = _samples_per_line(system, dt, n_st)
+    span = log.time_s[-1] - log.time_offset_s  # scan time the log reaches
+    rows = int(min(_LOG_MAX_LINES, math.floor(span / dt + 1e-9) - n_st))
+    if log.time_offset_s < log.time_s[0] - 1e-12 or rows < 1:
+        raise ConfigError(
+            f"motion.line_of_sight: the log ({log.time_s[0]:.6g} .. {log.time_s[-1]:.6g} s, time_offset_s = "
+            f"{log.time_offset_s:g}) does not cover one TDI window ({n_st * dt:.6g} s) from row 0"
+        )
+    t = (np.arange((rows + n_st) * m) + 0.5) * dt / m
+    act, alt = log.at(t)
+    return (act if axis == "act" else alt), m, n_st * m
+
+
+def log_otf(nu_cy_per_px, x: np.ndarray, m: int, k: int) -> np.ndarray:
+    """Expected OTF (complex) over the rows of a sampled line of sight ``x`` (px; ``m`` samples per line, ``k``
+    per window) about each row's window mean: ``mean_i mean_{t in window i} exp(2 pi i nu (x(t) - d_i))``."""
+    nu = np.atleast_1d(np.asarray(nu_cy_per_px, dtype=float))
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    starts = np.arange((x.size - k) // m + 1) * m
+    d = (c[starts + k] - c[starts]) / k  # each row's displacement
+    out = np.empty(nu.shape, dtype=complex)
+    step = max(1, int(2**24 // max(x.size, 1)))
+    for a in range(0, nu.size, step):
+        f = nu[a : a + step]
+        e = np.exp(2j * np.pi * np.outer(x, f))
+        ce = np.zeros((x.size + 1, f.size), dtype=complex)
+        np.cumsum(e, axis=0, out=ce[1:])
+        w = (ce[starts + k] - ce[starts]) / k
+        out[a : a + step] = np.mean(w * np.exp(-2j * np.pi * np.outer(d, f)), axis=0)
+    return out
+
+
+def _on_axis_signed(axis: str, pitch_mm: float, fn: Callable[[np.ndarray], np.ndarray]):
+    """As :func:`_on_axis` for a complex ``fn`` (no symmetry assumed): once per distinct signed value."""
+    k = 0 if axis == "act" else 1
+
+    def comp(fx, fy):
+        v = np.asarray(np.broadcast_arrays(fx, fy)[k], dtype=float) * pitch_mm
+        u, inv = np.unique(v, return_inverse=True)
+        return fn(u)[inv.reshape(v.shape)]
+
+    return comp
+
+
 def on_one_axis(values: np.ndarray, fn: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     """``fn`` of ``|values|`` evaluated once per distinct value: on the 1-D slice of a broadcast grid (a
     zero stride), then on its unique values."""
@@ -309,6 +363,13 @@ class PushbroomTerms:
                 comps[f"jitter_psd_{axis}"] = _on_axis(
                     axis, self._pitch_mm[axis], lambda nu, w=w: jitter_psd_otf(nu, w)
                 )
+        if self.system.motion.line_of_sight is not None:
+            for axis in ("act", "alt"):
+                x, m, k = log_windows(self.system, axis)
+                if np.ptp(x) > 0:
+                    comps[f"los_log_{axis}"] = _on_axis_signed(
+                        axis, self._pitch_mm[axis], lambda nu, x=x, m=m, k=k: log_otf(nu, x, m, k)
+                    )
         if self.drift_px is not None:
             dx, dy = self.drift_px
             px, py = self._pitch_mm["act"], self._pitch_mm["alt"]
@@ -370,6 +431,18 @@ class PushbroomTerms:
                 "line_displacement_rms_px": math.sqrt(w.displacement_variance_px2),
                 "line_to_line_rms_px": math.sqrt(w.line_to_line_variance_px2),
             }
+        log = {}
+        if mot.line_of_sight is not None:
+            for axis in ("act", "alt"):
+                x, m, k = log_windows(self.system, axis)
+                c = np.concatenate([[0.0], np.cumsum(x)])
+                starts = np.arange((x.size - k) // m + 1) * m
+                d = (c[starts + k] - c[starts]) / k
+                lv, sv = float(np.var(d)), float(np.mean(np.diff(d) ** 2)) if d.size > 1 else 0.0
+                var[axis] += lv
+                step[axis] += sv
+                log[axis] = {"line_displacement_rms_px": math.sqrt(lv), "line_to_line_rms_px": math.sqrt(sv),
+                             "rows_averaged": int(d.size)}  # fmt: skip
         out = {
             "line_time_s": self.line_time_s,
             "tdi_stages": self.stages,
@@ -389,6 +462,8 @@ class PushbroomTerms:
             out["oscillations"] = oscs
         if psd:
             out["jitter_psd"] = psd
+        if log:
+            out["line_of_sight_log"] = log
         if self.earth is not None:
             e = {k: v for k, v in self.earth.items() if k != "tdi_drift_px_per_stage"}
             out["earth_rotation"] = e
