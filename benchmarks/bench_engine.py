@@ -1,6 +1,8 @@
 """Engine throughput and memory against a simple full-frame NumPy reference, and a gigapixel run.
 
 Run: ``python benchmarks/bench_engine.py [--size 4096] [--gigapixel [--giga-size 32768]]``
+     ``python benchmarks/bench_engine.py --fft-ratio [--ratio-size 8192]``
+     ``python benchmarks/bench_engine.py --stream [--stream-sizes 8192 16384]``  (add 24576: minutes on 2 cores)
 
 (a) A synthetic 4096 x 4096 scene at 3.5 cm (edges and random rectangles, generated with NumPy from a
 seed) through the AnkaraSat-3 system (k = 14): the engine (``Simulator.run``, default parameters) against
@@ -12,6 +14,14 @@ every pixel; the default (mirror) run differs from it near the edges by the bord
 
 (b) ``--gigapixel``: a 32768 x 32768 input rendered on the fly by a procedural source (analytic stripes,
 a Siemens-like sector pattern and slanted edges, generated per window) -- never materialised.
+
+(c) ``--fft-ratio``: ``satchain.simulate`` of the in-memory float32 synthetic scene (default 8192 x 8192) divided
+by one float32 ``scipy.fft.rfft2`` + ``irfft2`` of the same array, both in this process, median of 3 each
+(the bound: the engine should cost no more than one FFT pair of its input).
+
+(d) ``--stream``: the streamed path of ``bench_stream.py`` (procedural input, coarse grid on disk, stage 2 in
+tiles, image written to a tiled TIFF) at each of ``--stream-sizes``: throughput in input Mpx/s and peak RSS,
+and the spread of the throughput (slowest / fastest; target: within 15 %).
 """
 
 from __future__ import annotations
@@ -76,6 +86,56 @@ class ProceduralScene:
         cx, cy = 1024.0 + 2048.0 * (x // 2048), 1024.0 + 2048.0 * (y // 2048)
         sectors = 0.1 * np.sign(np.sin(36 * np.arctan2(y - cy, x - cx)))
         return 0.45 + stripes + edge + sectors
+
+
+def fft_ratio(n: int, *, repeats: int = 3) -> None:
+    """(c): ``satchain.simulate`` / one float32 rfft2 + irfft2 of the same input, medians of ``repeats``."""
+    import scipy.fft as sfft
+
+    import satchain
+
+    scene = synthetic_scene(n)
+    system = satchain.load_preset("ankarasat3")
+    from satchain.engine.simulate import SimParams
+
+    workers = SimParams().workers
+
+    def pair() -> None:
+        sfft.irfft2(sfft.rfft2(scene, workers=workers), s=scene.shape, workers=workers)
+
+    def engine() -> None:
+        satchain.simulate(scene, system, pixel_m=PIXEL_M)
+
+    times: dict[str, list[float]] = {"pair": [], "engine": []}
+    pair()  # plans and pages, outside the timing
+    for _ in range(repeats):  # interleaved, so a change of load hits both
+        for name, fn in (("pair", pair), ("engine", engine)):
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    tp, te = (float(np.median(times[k])) for k in ("pair", "engine"))
+    print(f"\n(c) {n} x {n} float32 scene, ankarasat3 at {PIXEL_M} m, {workers} FFT workers, median of {repeats}")
+    print(f"  one float32 rfft2 + irfft2: {tp:.3f} s;  satchain.simulate: {te:.3f} s ({n * n / 1e6 / te:.1f} Mpx/s)")
+    print(f"  engine / FFT pair: {te / tp:.2f}x   (target <= 1.0x)")
+
+
+def stream_scaling(sizes: list[int]) -> None:
+    """(d): streamed throughput (``bench_stream.py``'s streamed run, each size in its own process)."""
+    import bench_stream
+
+    rows = []
+    with tempfile.TemporaryDirectory() as d:
+        for n in sizes:
+            ns = argparse.Namespace(size=n, tile=512, margin=128, dir=d, tiff=None, stage1_mib=640)
+            r = bench_stream._run("streamed", ns)
+            os.remove(r["path"])
+            rows.append(r)
+    print("\n(d) streamed path (procedural input, coarse grid on disk, 512-px output tiles)")
+    print(f"  {'input':>13s} {'wall s':>8s} {'stage 1 s':>9s} {'Mpx/s':>7s} {'peak RSS MiB':>13s}")
+    for n, r in zip(sizes, rows, strict=True):
+        print(f"  {n:>6d}^2 px {r['wall_s']:8.1f} {r['stage1_s']:9.1f} {r['mpx_s']:7.1f} {r['peak_rss_mib']:13.0f}")
+    mpx = [r["mpx_s"] for r in rows]
+    print(f"  throughput fastest / slowest: {max(mpx) / min(mpx):.2f}   (target <= 1.15)")
 
 
 # ------------------------------------------------------------------ children (one measurement each)
@@ -164,6 +224,10 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=4096, help="side of the in-memory input (px)")
     ap.add_argument("--gigapixel", action="store_true", help="also run the procedural 32768^2 input")
     ap.add_argument("--giga-size", type=int, default=32768)
+    ap.add_argument("--fft-ratio", action="store_true", help="only (c): engine time / one float32 FFT pair")
+    ap.add_argument("--ratio-size", type=int, default=8192)
+    ap.add_argument("--stream", action="store_true", help="only (d): streamed throughput at --stream-sizes")
+    ap.add_argument("--stream-sizes", type=int, nargs="+", default=[8192, 16384])
     ap.add_argument("--child", choices=sorted(CHILDREN), help=argparse.SUPPRESS)
     ap.add_argument("--n", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
@@ -172,6 +236,12 @@ def main() -> None:
         info = CHILDREN[a.child](a.n, a.out)
         info["peak_rss_mib"] = peak_rss_mib()
         print(json.dumps(info))
+        return
+    if a.fft_ratio or a.stream:
+        if a.fft_ratio:
+            fft_ratio(a.ratio_size)
+        if a.stream:
+            stream_scaling(a.stream_sizes)
         return
 
     n = a.size

@@ -24,12 +24,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft as sfft
 
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
 from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages
-from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
+from satchain.engine.tiling import AxisSampling, Tile, Window, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
@@ -279,11 +280,13 @@ class Simulator:
     # ------------------------------------------------------------------ stage 1
     def decimate_tile(self, source: GroundTruth, tile: Tile) -> np.ndarray:
         """The coarse samples of one tile (its margins read through the border rule)."""
-        p = self.params
-        data = read_with_border(source, tile.input, rule=p.border, value=p.border_value)
-        out = spectral.decimate_tile(
-            data.astype(np.float32), D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers
+        p, D, w = self.params, self.D, tile.input
+        # the far margin stretched to a fast FFT length (a longer margin: the same coarse samples)
+        h, wd = (D * sfft.next_fast_len(-(-n // D)) if D > 1 else n for n in (w.height, w.width))
+        data = read_with_border(
+            source, Window(w.row0, w.col0, h, wd), rule=p.border, value=p.border_value, dtype=np.float32
         )
+        out = spectral.decimate_tile(data, D=D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
         m = self.margin_fine // self.D
         return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
 

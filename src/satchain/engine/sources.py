@@ -81,10 +81,25 @@ class ArraySource:
         self.shape_px = (int(a.shape[0]), int(a.shape[1]))
 
     def read(self, window: Window) -> np.ndarray:
-        block = np.asarray(self.array[window.rows, window.cols], dtype=np.float64)
-        if not np.all(np.isfinite(block)):
-            raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
+        return np.asarray(self.read_stored(window), dtype=np.float64)
+
+    def read_stored(self, window: Window) -> np.ndarray:
+        """``window`` as stored (a view of the array, its own dtype: no copy), checked finite."""
+        block = self.array[window.rows, window.cols]
+        _check_finite(block, window)
         return block
+
+
+def _check_finite(block: np.ndarray, window: Window) -> None:
+    """Refuse NaN/inf in ``block``: one pass summing it (no temporary), the element test only where the sum is
+    not finite (a NaN/inf, or an overflow of large finite values)."""
+    if block.dtype.kind not in "fc":
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        if np.isfinite(np.add.reduce(block, axis=None)):
+            return
+    if not np.all(np.isfinite(block)):
+        raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
 
 
 class SceneSource:
@@ -98,7 +113,11 @@ class SceneSource:
         self.shape_px = tuple(int(v) for v in scene.shape_px(self.pixel_m))
 
     def read(self, window: Window) -> np.ndarray:
-        return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m), dtype=np.float64)
+        return np.asarray(self.read_stored(window), dtype=np.float64)
+
+    def read_stored(self, window: Window) -> np.ndarray:
+        """``window`` as the scene renders it (its own dtype)."""
+        return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m))
 
 
 def as_ground_truth(obj, *, pixel_m: float | None = None) -> GroundTruth:
@@ -129,26 +148,71 @@ def _map_indices(start: int, length: int, n: int, rule: str) -> np.ndarray:
     return np.where(j < n, j, 2 * n - 1 - j)
 
 
-def read_with_border(source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0) -> np.ndarray:
-    """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``."""
+def _runs(start: int, length: int, n: int, rule: str) -> list[tuple[int, int, int, int]]:
+    """:func:`_map_indices` as runs ``(dst, src, count, step)``: ``dst .. dst + count`` of the window are source
+    indices ``src, src + step, ...`` (step +1, or -1 for a mirrored run)."""
+    runs, i, end = [], start, start + length
+    while i < end:
+        j = i % (2 * n if rule == "symmetric" else n)
+        if j < n:
+            cnt, src, step = min(n - j, end - i), j, 1
+        else:  # the mirrored half of the symmetric period
+            cnt, src, step = min(2 * n - j, end - i), 2 * n - 1 - j, -1
+        runs.append((i - start, src, cnt, step))
+        i += cnt
+    return runs
+
+
+def _span(runs: list[tuple[int, int, int, int]]) -> tuple[int, int]:
+    """The source indices ``[lo, hi)`` that ``runs`` cover."""
+    lo = min(src if step > 0 else src - cnt + 1 for _, src, cnt, step in runs)
+    hi = max(src + cnt if step > 0 else src + 1 for _, src, cnt, step in runs)
+    return lo, hi
+
+
+def _run_slice(src: int, cnt: int, step: int, lo: int) -> slice:
+    a = src - lo
+    if step > 0:
+        return slice(a, a + cnt)
+    return slice(a, a - cnt if a - cnt >= 0 else None, -1)
+
+
+def _read(source: GroundTruth, window: Window) -> np.ndarray:
+    stored = getattr(source, "read_stored", None)
+    return stored(window) if stored is not None else source.read(window)
+
+
+def read_with_border(
+    source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0, dtype=np.float64
+) -> np.ndarray:
+    """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``. The result is
+    ``dtype``; a window inside an :class:`ArraySource` already of that dtype is a view of it (no copy)."""
     check_choice("border", rule, BORDER_RULES)
     ny, nx = source.shape_px
     inside = (
         window.row0 >= 0 and window.col0 >= 0 and window.row0 + window.height <= ny and window.col0 + window.width <= nx
     )
     if inside:
-        return source.read(window)
+        return np.asarray(_read(source, window), dtype=dtype)
     if rule == "constant":
-        out = np.full((window.height, window.width), float(value))
+        out = np.full((window.height, window.width), float(value), dtype=dtype)
         r0, c0 = max(window.row0, 0), max(window.col0, 0)
         r1, c1 = min(window.row0 + window.height, ny), min(window.col0 + window.width, nx)
         if r1 > r0 and c1 > c0:
-            out[r0 - window.row0 : r1 - window.row0, c0 - window.col0 : c1 - window.col0] = source.read(
-                Window(r0, c0, r1 - r0, c1 - c0)
+            out[r0 - window.row0 : r1 - window.row0, c0 - window.col0 : c1 - window.col0] = _read(
+                source, Window(r0, c0, r1 - r0, c1 - c0)
             )
         return out
-    ry = _map_indices(window.row0, window.height, ny, rule)
-    rx = _map_indices(window.col0, window.width, nx, rule)
-    y0, y1, x0, x1 = int(ry.min()), int(ry.max()) + 1, int(rx.min()), int(rx.max()) + 1
-    block = source.read(Window(y0, x0, y1 - y0, x1 - x0))
-    return block[np.ix_(ry - y0, rx - x0)]
+    ry, rx = _runs(window.row0, window.height, ny, rule), _runs(window.col0, window.width, nx, rule)
+    (y0, y1), (x0, x1) = _span(ry), _span(rx)
+    block = _read(source, Window(y0, x0, y1 - y0, x1 - x0))
+    if len(ry) * len(rx) > 64:  # a source far smaller than the window: index arrays
+        iy = _map_indices(window.row0, window.height, ny, rule) - y0
+        ix = _map_indices(window.col0, window.width, nx, rule) - x0
+        return np.asarray(block[np.ix_(iy, ix)], dtype=dtype)
+    out = np.empty((window.height, window.width), dtype=dtype)
+    for dy, sy, cy, ty in ry:  # copy slices (mirrored runs are reversed views): no index arrays
+        rows = _run_slice(sy, cy, ty, y0)
+        for dx, sx, cx, tx in rx:
+            out[dy : dy + cy, dx : dx + cx] = block[rows, _run_slice(sx, cx, tx, x0)]
+    return out
