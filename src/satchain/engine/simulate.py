@@ -24,13 +24,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft as sfft
 
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages
-from satchain.engine.tiling import AxisSampling, Tile, Window, plan_tiles
+from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages, take
+from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
@@ -218,9 +217,9 @@ class Simulator:
                 f"allows {p.max_tile_bytes / 2**20:.0f} MiB); use a coarser ground-truth pixel"
             )
         self.tile_coarse = min(tile_coarse, max(self.n_coarse))
-        origin = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D)
-        self.tiles: list[Tile] = plan_tiles(
-            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine, origin_px=origin
+        origin, mf = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D), self.margin_fine
+        self.tiles: list[Tile] = plan_tiles(  # fast: input windows of fast FFT lengths
+            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=mf, origin_px=origin, fast=True
         )
 
     def _plan_frame(self) -> None:
@@ -280,13 +279,9 @@ class Simulator:
     # ------------------------------------------------------------------ stage 1
     def decimate_tile(self, source: GroundTruth, tile: Tile) -> np.ndarray:
         """The coarse samples of one tile (its margins read through the border rule)."""
-        p, D, w = self.params, self.D, tile.input
-        # the far margin stretched to a fast FFT length (a longer margin: the same coarse samples)
-        h, wd = (D * sfft.next_fast_len(-(-n // D)) if D > 1 else n for n in (w.height, w.width))
-        data = read_with_border(
-            source, Window(w.row0, w.col0, h, wd), rule=p.border, value=p.border_value, dtype=np.float32
-        )
-        out = spectral.decimate_tile(data, D=D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
+        p = self.params
+        data = read_with_border(source, tile.input, rule=p.border, value=p.border_value, dtype=np.float32)
+        out = spectral.decimate_tile(data, D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
         m = self.margin_fine // self.D
         return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
@@ -343,7 +338,7 @@ class Simulator:
             idx.append(fm[np.mod(t, fm.size)])
         iy, ix = idx
         # only the window's elements are read (a disk-backed coarse grid is never loaded whole)
-        out = np.asarray(coarse[np.ix_(np.maximum(iy, 0), np.maximum(ix, 0))], dtype=np.float32)
+        out = take(coarse, np.maximum(iy, 0), np.maximum(ix, 0))
         release_pages(coarse)
         if self.params.border == "constant":
             out[iy < 0, :] = self.params.border_value

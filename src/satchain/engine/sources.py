@@ -163,6 +163,35 @@ def _runs(start: int, length: int, n: int, rule: str) -> list[tuple[int, int, in
     return runs
 
 
+def index_runs(idx: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """``idx`` (1-D, integers) as runs ``(dst, src, count, step)``, step 1, -1 or 0 (a repeated index)."""
+    runs, i, n = [], 0, len(idx)
+    d = np.diff(idx).tolist()
+    idx = idx.tolist()
+    while i < n:
+        step = d[i] if i < n - 1 and d[i] in (-1, 0, 1) else 1
+        j = i + 1
+        while j < n and d[j - 1] == step:
+            j += 1
+        runs.append((i, idx[i], j - i, step))
+        i = j
+    return runs
+
+
+def take(array: np.ndarray, iy: np.ndarray, ix: np.ndarray, *, dtype=np.float32) -> np.ndarray:
+    """``array[np.ix_(iy, ix)]`` as ``dtype``, copied by slices over the runs of the indices (mirrored or wrapped
+    index maps have a few): only those elements are read (a memmap is never loaded whole)."""
+    ry, rx = index_runs(np.asarray(iy)), index_runs(np.asarray(ix))
+    if len(ry) * len(rx) > 256:  # many short runs: index arrays
+        return np.asarray(array[np.ix_(iy, ix)], dtype=dtype)
+    out = np.empty((len(iy), len(ix)), dtype=dtype)
+    for dy, sy, cy, ty in ry:
+        rows = _run_slice(sy, cy, ty, 0)
+        for dx, sx, cx, tx in rx:
+            out[dy : dy + cy, dx : dx + cx] = array[rows, _run_slice(sx, cx, tx, 0)]
+    return out
+
+
 def _span(runs: list[tuple[int, int, int, int]]) -> tuple[int, int]:
     """The source indices ``[lo, hi)`` that ``runs`` cover."""
     lo = min(src if step > 0 else src - cnt + 1 for _, src, cnt, step in runs)
@@ -172,6 +201,8 @@ def _span(runs: list[tuple[int, int, int, int]]) -> tuple[int, int]:
 
 def _run_slice(src: int, cnt: int, step: int, lo: int) -> slice:
     a = src - lo
+    if step == 0:  # one index repeated: a length-1 slice, broadcast
+        return slice(a, a + 1)
     if step > 0:
         return slice(a, a + cnt)
     return slice(a, a - cnt if a - cnt >= 0 else None, -1)
