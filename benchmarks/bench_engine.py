@@ -71,21 +71,44 @@ def synthetic_scene(n: int, seed: int = 0) -> np.ndarray:
 class ProceduralScene:
     """A ground truth generated per window (pure function of pixel position): nothing is stored.
 
-    Picklable, so it also runs on process-based Dask workers."""
+    Bar targets by 4096-row band, slanted edges every 2048 px and a 72-sector star every 2048 px, rendered in
+    float32 at a few ns per pixel (the sector pattern, periodic over 2048 x 2048 px, from a table built on the
+    first read), so that a streamed run measures the engine rather than this input. Picklable (the table is
+    rebuilt where it is read), so it also runs on process-based Dask workers."""
+
+    PERIOD = 2048
 
     def __init__(self, n: int, *, pixel_m: float = PIXEL_M):
         self.pixel_m = pixel_m
         self.shape_px = (n, n)
+        self._sectors = None
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_sectors": None}
+
+    def sectors(self) -> np.ndarray:
+        """``0.1 sign(sin(36 theta))`` about the centre of a ``PERIOD``-px square, float32."""
+        if self._sectors is None:
+            p = self.PERIOD
+            d = np.arange(p, dtype=np.float64) - p / 2
+            self._sectors = (0.1 * np.sign(np.sin(36 * np.arctan2(d[:, None], d[None, :])))).astype(np.float32)
+        return self._sectors
 
     def read(self, window) -> np.ndarray:
+        from satchain.engine.sources import take
+
         row0, col0, h, w = window
-        y = np.arange(row0, row0 + h, dtype=np.float64)[:, None]
-        x = np.arange(col0, col0 + w, dtype=np.float64)[None, :]
-        stripes = 0.15 * np.sign(np.sin(2 * np.pi * x / (37.0 + (y // 4096) * 3.0)))  # bar targets by band
-        edge = 0.2 * ((x - 0.12 * y) % 2048 > 1024)  # slanted edges every 2048 px
-        cx, cy = 1024.0 + 2048.0 * (x // 2048), 1024.0 + 2048.0 * (y // 2048)
-        sectors = 0.1 * np.sign(np.sin(36 * np.arctan2(y - cy, x - cx)))
-        return 0.45 + stripes + edge + sectors
+        y = np.arange(row0, row0 + h, dtype=np.float32)[:, None]
+        x = np.arange(col0, col0 + w, dtype=np.float32)[None, :]
+        p = self.PERIOD
+        out = take(self.sectors(), np.arange(row0, row0 + h) % p, np.arange(col0, col0 + w) % p)
+        band, x64 = np.arange(row0, row0 + h) // 4096, np.arange(col0, col0 + w, dtype=np.float64)[None, :]
+        for b in np.unique(band):  # bar targets: one row of stripes per band
+            rows = slice(int(np.searchsorted(band, b)), int(np.searchsorted(band, b, side="right")))
+            out[rows] += (0.45 + 0.15 * np.sign(np.sin(2 * np.pi * x64 / (37.0 + b * 3.0)))).astype(np.float32)
+        u = (x - np.float32(0.12) * y) * np.float32(1.0 / p)  # slanted edges every PERIOD px
+        out += np.float32(0.2) * (u - np.floor(u) > np.float32(0.5))
+        return out
 
 
 def fft_ratio(n: int, *, repeats: int = 3) -> None:
