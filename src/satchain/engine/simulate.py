@@ -166,7 +166,7 @@ class Simulator:
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
-        self.time_path = None  # pushbroom motion in time (set_time_path)
+        self.time_path, self._transfer = None, {}  # pushbroom motion in time (set_time_path); band_values' transfer
         self._exclude: tuple[str, ...] = ("detector",)
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
@@ -353,8 +353,8 @@ class Simulator:
         for ax, (lo, hi) in enumerate((rows, cols)):
             kk, ki, D = self.k[ax], self.k_int[ax], self.D
             q = ki // math.gcd(ki, D) if ki else 1  # coarse samples per aligned output period
-            a = int(math.floor((lo - margin_px) * kk / D / q)) * q
-            b = int(math.ceil((hi + margin_px) * kk / D))
+            a = int(math.floor((lo - margin_px) * kk / D / q + 1e-9)) * q  # not one period early by rounding
+            b = int(math.ceil((hi + margin_px) * kk / D - 1e-9))
             start.append(a)
             shape.append(q * spectral_len(-(-(b - a) // q)))
         return tuple(start), tuple(shape)
@@ -421,19 +421,24 @@ class Simulator:
 
     def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
         """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse
-        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``."""
-        D = self.D
-        ly, lx = spec.shape
-        ny_f, nx_f = ly * D, lx * D  # block length in input pixels
-        fy = spec.my / ny_f * self.to_cy_per_mm[0]
-        fx = spec.mx / nx_f * self.to_cy_per_mm[1]
-        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=self._exclude)
-        if weight is not None:
-            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
-        c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
-        return (
-            vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
-        )
+        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``. That
+        transfer is kept for the latest bands (up to 64 MiB): the streamed path's tiles share it."""
+        key = (spec.shape, spec.my.tobytes(), spec.mx.size, weight, self._exclude, id(self.otf))
+        t = self._transfer.get(key)
+        if t is None:
+            (ly, lx), c = spec.shape, (self.D - 1) / 2.0  # coarse sample j sits at input pixel D j + c
+            ny_f, nx_f = ly * self.D, lx * self.D  # block length in input pixels
+            fy, fx = spec.my / ny_f * self.to_cy_per_mm[0], spec.mx / nx_f * self.to_cy_per_mm[1]
+            t = self.otf(fx[None, :], fy[:, None], exclude=self._exclude)
+            if weight is not None:
+                t = t * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
+            t = t * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None]
+            t *= np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
+            old = list(self._transfer.items())[-3:]  # the latest 4 bands (the streamed tiles' shapes), <= 64 MiB
+            while old and sum(v.nbytes for _, v in old) + t.nbytes > 2**26:
+                old.pop(0)
+            self._transfer = dict([*old, (key, t)]) if t.nbytes <= 2**26 else {}
+        return spec.values * t
 
     def form_spectrum(
         self,

@@ -150,10 +150,18 @@ def _fold(values: np.ndarray, m: np.ndarray, n: int, *, axis: int) -> np.ndarray
 def sampling_matrix(centres: np.ndarray, width_px: float, n0: int, n: int, m: np.ndarray) -> np.ndarray:
     """``M[i, a] = sum_n w_i(n) exp(2 pi i m_a (n - n0) / n)``: footprint averaging of a band-limited frame
     signal, evaluated from its DFT coefficients ``m`` (frame origin at input pixel ``n0``, ``n`` input
-    pixels long). Any footprint width and position."""
+    pixels long). Any footprint width and position. A footprint's pixels are consecutive, so the sum is a
+    polynomial in ``exp(2 pi i m / n)`` (Horner's rule) times the phase of its first pixel: one exponential
+    per element instead of one per footprint pixel."""
     idx, w = footprint_weights(centres, width_px, n0)
-    out = np.zeros((centres.size, m.size), dtype=np.complex128)
-    ph = 2j * np.pi * m[None, :] / n
-    for k in range(idx.shape[1]):
-        out += w[:, k, None] * np.exp(ph * idx[:, k, None])
-    return out
+    m = np.asarray(m)
+    r = np.exp(2j * np.pi * m / n)
+    acc = np.broadcast_to(w[:, -1, None], (centres.size, m.size)).astype(np.complex128)
+    for k in range(idx.shape[1] - 2, -1, -1):
+        acc *= r[None, :]
+        acc += w[:, k, None]
+    if np.issubdtype(m.dtype, np.integer):  # the first pixel's phase reduced exactly in integers
+        turns = np.mod(np.outer(idx[:, 0], m), n) / n
+    else:
+        turns = np.outer(idx[:, 0], m) / n
+    return acc * np.exp(2j * np.pi * turns)
