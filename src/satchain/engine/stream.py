@@ -71,7 +71,7 @@ def stream_bytes(sim: Simulator) -> float:
     """Estimated peak bytes of the streamed path (the coarse grid on disk is not counted): one decimation
     tile or one stage-2 window with its tile's temporaries, plus one output band and the preview."""
     t, m = stream_tile_px(sim), int(sim.params.stream_margin_px)
-    _, shape = sim.tile_window((0, t), (0, t), m)
+    _, shape = sim.tile_window((0, t), (0, t + t // 2), m)  # the widest tile (_col_spans)
     window = min(_FRAME_BYTES_PER_PX * float(shape[0]) * shape[1], sim.frame_bytes)
     decim = min(float(sim.params.max_tile_bytes), 20.0 * (sim.D * sim.n_coarse[0]) * (sim.D * sim.n_coarse[1]))
     band = 8.0 * t * sim.output_shape[1]
@@ -82,7 +82,7 @@ def stream_bytes(sim: Simulator) -> float:
     by, bx = (band_index(n, far_split(sim, m)) for n in (ly, lx))
     far = 8.0 * (2 * ly + 2 * by + 1) * (bx + 1) + 16.0 * t * (2 * by + 2 * bx + 2)
     build = 3.0 * _FAR_BAND_BYTES
-    return max(window + _TILE_OUT_BYTES_PER_PX * float(t) * t, decim, build) + far + band + preview
+    return max(window + _TILE_OUT_BYTES_PER_PX * 1.5 * t * t, decim, build) + far + band + preview
 
 
 def far_split(sim: Simulator, margin_px: int) -> float:
@@ -215,6 +215,15 @@ class FarField:
         return np.real(self._rows_values @ mx.T)
 
 
+def _col_spans(nx: int, t: int) -> list[tuple[int, int]]:
+    """The column ranges of the output tiles: ``t`` wide, the last one up to ``1.5 t`` (a remainder narrower than
+    ``t / 2`` joins its neighbour rather than paying a whole window for a sliver)."""
+    starts = list(range(0, nx, t))
+    if len(starts) > 1 and nx - starts[-1] < t // 2:
+        starts.pop()
+    return [(c0, starts[i + 1] if i + 1 < len(starts) else nx) for i, c0 in enumerate(starts)]
+
+
 def stream_tiles(
     sim: Simulator,
     coarse: np.ndarray,
@@ -239,13 +248,13 @@ def stream_tiles(
         raise ConfigError(f"rows = {rows!r}: must start on the tile grid (multiples of {t})")
     for r0 in range(r_lo, min(r_hi, ny), t):
         r1 = min(r0 + t, ny, r_hi)
-        for c0 in range(0, nx, t):
-            c1 = min(c0 + t, nx)
+        for c0, c1 in _col_spans(nx, t):
+            # a tile cut by the image's edge is formed as a whole one (its window longer at the far end: more
+            # context), so that the tiles' windows share a shape and the OTF (Simulator.band_values)
+            full = ((r0, r1), (c0, c1)) if sim.time_path is not None else ((r0, r0 + t), (c0, max(c1, c0 + t)))
+            img = sim.form_tile(coarse, *full, margin_px=m, weight=far.high if far else None)[: r1 - r0, : c1 - c0]
             if far:
-                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m, weight=far.high)
                 img += far.tile((r0, r1), (c0, c1))
-            else:
-                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m)
             if sensor is not None:
                 img = sensor.convert(
                     img, origin=(r0, c0), units=units, noise=noise, seed=seed, block_px=sim.params.noise_block_px
