@@ -28,7 +28,7 @@ import numpy as np
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages, take
+from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
@@ -279,11 +279,11 @@ class Simulator:
     # ------------------------------------------------------------------ stage 1
     def decimate_tile(self, source: GroundTruth, tile: Tile) -> np.ndarray:
         """The coarse samples of one tile (its margins read through the border rule)."""
-        p = self.params
-        data = read_with_border(source, tile.input, rule=p.border, value=p.border_value, dtype=np.float32)
+        p = self.params  # the tile is assembled chunk by chunk as it is transformed; NaN/inf shows in the result
+        data = BorderedWindow(source, tile.input, rule=p.border, value=p.border_value, dtype=np.float32, check=False)
         out = spectral.decimate_tile(data, D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
         m = self.margin_fine // self.D
-        return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
+        return data.require_finite(out)[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
     def decimate(
         self, source: GroundTruth, *, progress: Progress | None = None, out: np.ndarray | None = None

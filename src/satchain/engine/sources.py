@@ -25,6 +25,7 @@ from satchain.errors import InputError
 __all__ = [
     "BORDER_RULES",
     "ArraySource",
+    "BorderedWindow",
     "GroundTruth",
     "SceneSource",
     "as_ground_truth",
@@ -83,10 +84,11 @@ class ArraySource:
     def read(self, window: Window) -> np.ndarray:
         return np.asarray(self.read_stored(window), dtype=np.float64)
 
-    def read_stored(self, window: Window) -> np.ndarray:
-        """``window`` as stored (a view of the array, its own dtype: no copy), checked finite."""
+    def read_stored(self, window: Window, *, check: bool = True) -> np.ndarray:
+        """``window`` as stored (a view of the array, its own dtype: no copy), checked finite (``check``)."""
         block = self.array[window.rows, window.cols]
-        _check_finite(block, window)
+        if check:
+            _check_finite(block, window)
         return block
 
 
@@ -115,8 +117,8 @@ class SceneSource:
     def read(self, window: Window) -> np.ndarray:
         return np.asarray(self.read_stored(window), dtype=np.float64)
 
-    def read_stored(self, window: Window) -> np.ndarray:
-        """``window`` as the scene renders it (its own dtype)."""
+    def read_stored(self, window: Window, *, check: bool = True) -> np.ndarray:
+        """``window`` as the scene renders it (its own dtype; the scene checks it)."""
         return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m))
 
 
@@ -208,9 +210,87 @@ def _run_slice(src: int, cnt: int, step: int, lo: int) -> slice:
     return slice(a, a - cnt if a - cnt >= 0 else None, -1)
 
 
-def _read(source: GroundTruth, window: Window) -> np.ndarray:
+def _read(source: GroundTruth, window: Window, check: bool = True) -> np.ndarray:
     stored = getattr(source, "read_stored", None)
-    return stored(window) if stored is not None else source.read(window)
+    return stored(window, check=check) if stored is not None else source.read(window)
+
+
+class BorderedWindow:
+    """``window`` of ``source`` continued beyond it by the border ``rule``, as ``dtype``, assembled on demand
+    by rows: ``w[a:b]`` copies rows ``a .. b`` from the source block by slices (mirrored runs are reversed
+    views; no index arrays), or is a view of an :class:`ArraySource` already of ``dtype`` when the window lies
+    inside it. The source is read once; the engine transforms a tile chunk by chunk, so the whole bordered
+    tile never exists. ``np.asarray(w)`` is all of it. ``check=False`` defers the NaN/inf scan of the source
+    block to :meth:`require_finite`."""
+
+    def __init__(self, source: GroundTruth, window: Window, *, rule: str, value: float = 0.0, dtype=np.float64,
+                 check: bool = True):  # fmt: skip
+        check_choice("border", rule, BORDER_RULES)
+        self.window, self.value, self.dtype = window, float(value), np.dtype(dtype)
+        self.shape = (int(window.height), int(window.width))
+        self.ndim = 2
+        ny, nx = source.shape_px
+        (r0, h), (c0, w) = (window.row0, window.height), (window.col0, window.width)
+        self.inside = r0 >= 0 and c0 >= 0 and r0 + h <= ny and c0 + w <= nx
+        if self.inside or rule == "constant":  # fill runs (source index None) outside the source
+            self.ry, self.rx = _clip_runs(r0, h, ny), _clip_runs(c0, w, nx)
+            self.fill = not self.inside
+        else:
+            self.ry, self.rx, self.fill = _runs(r0, h, ny, rule), _runs(c0, w, nx, rule), False
+        spans = [[r for r in runs if r[1] is not None] for runs in (self.ry, self.rx)]
+        (self.y0, y1), (self.x0, x1) = (_span(r) if r else (0, 0) for r in spans)
+        empty = y1 <= self.y0 or x1 <= self.x0
+        self.block = None if empty else _read(source, Window(self.y0, self.x0, y1 - self.y0, x1 - self.x0), check)
+        self._whole = None
+        if len(self.ry) * len(self.rx) > 64:  # a source far smaller than the window: index arrays, once
+            iy = _map_indices(r0, h, ny, rule) - self.y0
+            ix = _map_indices(c0, w, nx, rule) - self.x0
+            self._whole = np.asarray(self.block[np.ix_(iy, ix)], dtype=self.dtype)
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        a, b, _ = rows.indices(self.shape[0])
+        if self._whole is not None:
+            return self._whole[a:b]
+        if self.inside:
+            return np.asarray(self.block[a:b], dtype=self.dtype)
+        out = (
+            np.full((b - a, self.shape[1]), self.value, self.dtype)
+            if self.fill
+            else np.empty((b - a, self.shape[1]), self.dtype)
+        )
+        for dy, sy, cy, ty in self.ry:
+            lo, hi = max(dy, a), min(dy + cy, b)
+            if hi <= lo or sy is None:
+                continue
+            src_rows = _run_slice(sy + ty * (lo - dy), hi - lo, ty, self.y0)
+            for dx, sx, cx, tx in self.rx:
+                if sx is not None:
+                    out[lo - a : hi - a, dx : dx + cx] = self.block[src_rows, _run_slice(sx, cx, tx, self.x0)]
+        return out
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return np.asarray(self[:], dtype=dtype)
+
+    def require_finite(self, result: np.ndarray) -> np.ndarray:
+        """``result`` (computed from this window) when it is finite; else the source block's NaN/inf is reported
+        (every output of a transform sums every input, so one NaN/inf in the input spoils all of it)."""
+        if np.isfinite(result).all():
+            return result
+        if self.block is not None:  # the source's window that was read
+            _check_finite(self.block, Window(self.y0, self.x0, *self.block.shape))
+        raise InputError(f"image: window {tuple(self.window)}: values too large for float32 transforms (finite "
+                         f"input, non-finite result)")  # fmt: skip
+
+
+def _clip_runs(start: int, length: int, n: int) -> list[tuple[int, int | None, int, int]]:
+    """Runs of ``start .. start + length`` over ``[0, n)``: the part inside the source, fill (None) beyond."""
+    lo, hi = min(max(start, 0), start + length), max(min(start + length, n), start)
+    runs = [(0, None, lo - start, 0)] if lo > start else []
+    if hi > lo:
+        runs.append((lo - start, lo, hi - lo, 1))
+    if start + length > max(hi, lo):
+        runs.append((max(hi, lo) - start, None, start + length - max(hi, lo), 0))
+    return runs
 
 
 def read_with_border(
@@ -218,32 +298,4 @@ def read_with_border(
 ) -> np.ndarray:
     """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``. The result is
     ``dtype``; a window inside an :class:`ArraySource` already of that dtype is a view of it (no copy)."""
-    check_choice("border", rule, BORDER_RULES)
-    ny, nx = source.shape_px
-    inside = (
-        window.row0 >= 0 and window.col0 >= 0 and window.row0 + window.height <= ny and window.col0 + window.width <= nx
-    )
-    if inside:
-        return np.asarray(_read(source, window), dtype=dtype)
-    if rule == "constant":
-        out = np.full((window.height, window.width), float(value), dtype=dtype)
-        r0, c0 = max(window.row0, 0), max(window.col0, 0)
-        r1, c1 = min(window.row0 + window.height, ny), min(window.col0 + window.width, nx)
-        if r1 > r0 and c1 > c0:
-            out[r0 - window.row0 : r1 - window.row0, c0 - window.col0 : c1 - window.col0] = _read(
-                source, Window(r0, c0, r1 - r0, c1 - c0)
-            )
-        return out
-    ry, rx = _runs(window.row0, window.height, ny, rule), _runs(window.col0, window.width, nx, rule)
-    (y0, y1), (x0, x1) = _span(ry), _span(rx)
-    block = _read(source, Window(y0, x0, y1 - y0, x1 - x0))
-    if len(ry) * len(rx) > 64:  # a source far smaller than the window: index arrays
-        iy = _map_indices(window.row0, window.height, ny, rule) - y0
-        ix = _map_indices(window.col0, window.width, nx, rule) - x0
-        return np.asarray(block[np.ix_(iy, ix)], dtype=dtype)
-    out = np.empty((window.height, window.width), dtype=dtype)
-    for dy, sy, cy, ty in ry:  # copy slices (mirrored runs are reversed views): no index arrays
-        rows = _run_slice(sy, cy, ty, y0)
-        for dx, sx, cx, tx in rx:
-            out[dy : dy + cy, dx : dx + cx] = block[rows, _run_slice(sx, cx, tx, x0)]
-    return out
+    return BorderedWindow(source, window, rule=rule, value=value, dtype=dtype)[:]

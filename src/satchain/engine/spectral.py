@@ -37,7 +37,7 @@ __all__ = [
 #: Kernel half-length of :func:`lowpass` in units of 1 / (f_stop - f_pass): the kernel's L1 norm beyond it
 #: is < 1e-5 (measured), an order below the engine's 1e-4 accuracy target.
 LOWPASS_SUPPORT = 11.0
-_ROW_CHUNK_PX = 1 << 21  # pixels per chunk of rows transformed at once in tile_band_spectrum
+_ROW_CHUNK_PX = 1 << 20  # pixels per chunk of rows transformed at once in tile_band_spectrum
 
 
 def band_index(n: int, f_cut_cy_per_px: float) -> int:
