@@ -252,7 +252,8 @@ class BorderedWindow:
         if self._whole is not None:
             return self._whole[a:b]
         if self.inside:
-            return np.asarray(self.block[a:b], dtype=self.dtype)
+            with np.errstate(over="ignore"):
+                return np.asarray(self.block[a:b], dtype=self.dtype)
         out = (
             np.full((b - a, self.shape[1]), self.value, self.dtype)
             if self.fill
@@ -265,7 +266,8 @@ class BorderedWindow:
             src_rows = _run_slice(sy + ty * (lo - dy), hi - lo, ty, self.y0)
             for dx, sx, cx, tx in self.rx:
                 if sx is not None:
-                    out[lo - a : hi - a, dx : dx + cx] = self.block[src_rows, _run_slice(sx, cx, tx, self.x0)]
+                    with np.errstate(over="ignore"):  # beyond float32: inf, refused by require_finite
+                        out[lo - a : hi - a, dx : dx + cx] = self.block[src_rows, _run_slice(sx, cx, tx, self.x0)]
         return out
 
     def __array__(self, dtype=None, copy=None) -> np.ndarray:
@@ -278,8 +280,9 @@ class BorderedWindow:
             return result
         if self.block is not None:  # the source's window that was read
             _check_finite(self.block, Window(self.y0, self.x0, *self.block.shape))
-        raise InputError(f"image: window {tuple(self.window)}: values too large for float32 transforms (finite "
-                         f"input, non-finite result)")  # fmt: skip
+        read = (self.y0, self.x0, *(self.block.shape if self.block is not None else (0, 0)))
+        raise InputError(f"image: window {read}: values too large for the float32 transforms (finite input, "
+                         f"non-finite result); scale the ground truth")  # fmt: skip
 
 
 def _clip_runs(start: int, length: int, n: int) -> list[tuple[int, int | None, int, int]]:

@@ -100,8 +100,9 @@ def decimate_tile(tile: np.ndarray, *, D: int, f_pass: float, f_stop: float, wor
     gy = lowpass(spec.my / ny, f_pass, f_stop) * np.exp(2j * np.pi * spec.my * c / ny) / (D * D)
     gx = lowpass(spec.mx / nx, f_pass, f_stop) * np.exp(2j * np.pi * spec.mx * c / nx)
     vals = spec.values
-    vals *= gy[:, None].astype(vals.dtype)
-    vals *= gx[None, :].astype(vals.dtype)
+    with np.errstate(invalid="ignore", over="ignore"):  # a NaN/inf input spoils the result: the caller checks it
+        vals *= gy[:, None].astype(vals.dtype)
+        vals *= gx[None, :].astype(vals.dtype)
     coarse = np.zeros((cy, cx // 2 + 1), dtype=np.complex64)
     coarse[np.mod(spec.my, cy)[:, None], spec.mx[None, :]] = vals
     out = sfft.irfft(sfft.ifft(coarse, axis=0, workers=workers, overwrite_x=True), n=cx, axis=1, workers=workers)
