@@ -98,16 +98,31 @@ class ProceduralScene:
         from satchain.engine.sources import take
 
         row0, col0, h, w = window
-        y = np.arange(row0, row0 + h, dtype=np.float32)[:, None]
-        x = np.arange(col0, col0 + w, dtype=np.float32)[None, :]
         p = self.PERIOD
         out = take(self.sectors(), np.arange(row0, row0 + h) % p, np.arange(col0, col0 + w) % p)
-        band, x64 = np.arange(row0, row0 + h) // 4096, np.arange(col0, col0 + w, dtype=np.float64)[None, :]
-        for b in np.unique(band):  # bar targets: one row of stripes per band
-            rows = slice(int(np.searchsorted(band, b)), int(np.searchsorted(band, b, side="right")))
-            out[rows] += (0.45 + 0.15 * np.sign(np.sin(2 * np.pi * x64 / (37.0 + b * 3.0)))).astype(np.float32)
-        u = (x - np.float32(0.12) * y) * np.float32(1.0 / p)  # slanted edges every PERIOD px
-        out += np.float32(0.2) * (u - np.floor(u) > np.float32(0.5))
+        x = np.arange(col0, col0 + w, dtype=np.float64)
+        # slanted edges every PERIOD px, 0.2 where (x - 0.12 y) mod PERIOD > PERIOD / 2: for integer x that is
+        # a PERIOD-periodic pattern of j = (x - floor(0.12 y)) mod PERIOD (j > PERIOD / 2, or j = 0 when
+        # 0.12 y is not an integer), so each row adds a slice of one of two tiled patterns
+        j = np.arange(p)
+        pats = [
+            np.tile(np.float32(0.2) * (j > p // 2) + np.float32(0.2) * (frac & (j == 0)), 2 + w // p)
+            for frac in (False, True)
+        ]
+        stripes, band_of = {}, None
+        for r in range(h):
+            y = row0 + r
+            band = y // 4096
+            if band != band_of:  # bar targets: one row of stripes per 4096-row band
+                if band not in stripes:
+                    stripes[band] = (0.45 + 0.15 * np.sign(np.sin(2 * np.pi * x / (37.0 + band * 3.0)))).astype(
+                        np.float32
+                    )
+                row_add, band_of = stripes[band], band
+            s = 0.12 * y
+            n = int(np.floor(s))
+            a = (col0 - n) % p
+            out[r] += row_add + pats[s != n][a : a + w]
         return out
 
 
