@@ -69,11 +69,11 @@ def synthetic_scene(n: int, seed: int = 0) -> np.ndarray:
 
 
 class ProceduralScene:
-    """A ground truth generated per window (pure function of pixel position): nothing is stored.
+    """A ground truth generated per window (a pure function of pixel position): only a 16 MiB table is held.
 
     Bar targets by 4096-row band, slanted edges every 2048 px and a 72-sector star every 2048 px, rendered in
-    float32 at a few ns per pixel (the sector pattern, periodic over 2048 x 2048 px, from a table built on the
-    first read), so that a streamed run measures the engine rather than this input. Picklable (the table is
+    float32 at a few ns per pixel (the sector pattern, periodic over 2048 x 2048 px, from a table built when the
+    scene is made), so that a streamed run measures the engine rather than this input. Picklable (the table is
     rebuilt where it is read), so it also runs on process-based Dask workers."""
 
     PERIOD = 2048
@@ -82,6 +82,7 @@ class ProceduralScene:
         self.pixel_m = pixel_m
         self.shape_px = (n, n)
         self._sectors = None
+        self.sectors()  # built here, not in the first read
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_sectors": None}
