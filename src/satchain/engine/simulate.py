@@ -38,7 +38,7 @@ __all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
 
 Progress = Callable[[int, int], None]
 Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
-_TILE_BYTES_PER_PX = 20  # float64 read + float32 tile + complex64 half spectrum + kept band
+_TILE_BYTES_PER_PX = 20  # a float64 render + row chunks + band spectra (generous: an array source needs ~4)
 _FRAME_BYTES_PER_PX = 20  # coarse float32 + complex64 half spectrum + band products
 
 
