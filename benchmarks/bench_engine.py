@@ -1,6 +1,8 @@
 """Engine throughput and memory against a simple full-frame NumPy reference, and a gigapixel run.
 
 Run: ``python benchmarks/bench_engine.py [--size 4096] [--gigapixel [--giga-size 32768]]``
+     ``python benchmarks/bench_engine.py --fft-ratio [--ratio-size 8192]``
+     ``python benchmarks/bench_engine.py --stream [--stream-sizes 8192 16384] [--repeat 2]``  (24576: ~20 s a run)
 
 (a) A synthetic 4096 x 4096 scene at 3.5 cm (edges and random rectangles, generated with NumPy from a
 seed) through the AnkaraSat-3 system (k = 14): the engine (``Simulator.run``, default parameters) against
@@ -12,6 +14,14 @@ every pixel; the default (mirror) run differs from it near the edges by the bord
 
 (b) ``--gigapixel``: a 32768 x 32768 input rendered on the fly by a procedural source (analytic stripes,
 a Siemens-like sector pattern and slanted edges, generated per window) -- never materialised.
+
+(c) ``--fft-ratio``: ``satchain.simulate`` of the in-memory float32 synthetic scene (default 8192 x 8192) divided
+by one float32 ``scipy.fft.rfft2`` + ``irfft2`` of the same array, both in this process, median of 3 each
+(the bound: the engine should cost no more than one FFT pair of its input).
+
+(d) ``--stream``: the streamed path of ``bench_stream.py`` (procedural input, coarse grid on disk, stage 2 in
+tiles, image written to a tiled TIFF) at each of ``--stream-sizes``: throughput in input Mpx/s and peak RSS,
+and the spread of the throughput (slowest / fastest; target: within 15 %).
 """
 
 from __future__ import annotations
@@ -59,23 +69,119 @@ def synthetic_scene(n: int, seed: int = 0) -> np.ndarray:
 
 
 class ProceduralScene:
-    """A ground truth generated per window (pure function of pixel position): nothing is stored.
+    """A ground truth generated per window (a pure function of pixel position): only a 16 MiB table is held.
 
-    Picklable, so it also runs on process-based Dask workers."""
+    Bar targets by 4096-row band, slanted edges every 2048 px and a 72-sector star every 2048 px, rendered in
+    float32 at a few ns per pixel (the sector pattern, periodic over 2048 x 2048 px, from a table built when the
+    scene is made), so that a streamed run measures the engine rather than this input. Picklable (the table is
+    rebuilt where it is read), so it also runs on process-based Dask workers."""
+
+    PERIOD = 2048
 
     def __init__(self, n: int, *, pixel_m: float = PIXEL_M):
         self.pixel_m = pixel_m
         self.shape_px = (n, n)
+        self._sectors = None
+        self.sectors()  # built here, not in the first read
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_sectors": None}
+
+    def sectors(self) -> np.ndarray:
+        """``0.1 sign(sin(36 theta))`` about the centre of a ``PERIOD``-px square, float32."""
+        if self._sectors is None:
+            p = self.PERIOD
+            d = np.arange(p, dtype=np.float64) - p / 2
+            self._sectors = (0.1 * np.sign(np.sin(36 * np.arctan2(d[:, None], d[None, :])))).astype(np.float32)
+        return self._sectors
 
     def read(self, window) -> np.ndarray:
+        from satchain.engine.sources import take
+
         row0, col0, h, w = window
-        y = np.arange(row0, row0 + h, dtype=np.float64)[:, None]
-        x = np.arange(col0, col0 + w, dtype=np.float64)[None, :]
-        stripes = 0.15 * np.sign(np.sin(2 * np.pi * x / (37.0 + (y // 4096) * 3.0)))  # bar targets by band
-        edge = 0.2 * ((x - 0.12 * y) % 2048 > 1024)  # slanted edges every 2048 px
-        cx, cy = 1024.0 + 2048.0 * (x // 2048), 1024.0 + 2048.0 * (y // 2048)
-        sectors = 0.1 * np.sign(np.sin(36 * np.arctan2(y - cy, x - cx)))
-        return 0.45 + stripes + edge + sectors
+        p = self.PERIOD
+        out = take(self.sectors(), np.arange(row0, row0 + h) % p, np.arange(col0, col0 + w) % p)
+        x = np.arange(col0, col0 + w, dtype=np.float64)
+        # slanted edges every PERIOD px, 0.2 where (x - 0.12 y) mod PERIOD > PERIOD / 2: for integer x that is
+        # a PERIOD-periodic pattern of j = (x - floor(0.12 y)) mod PERIOD (j > PERIOD / 2, or j = 0 when
+        # 0.12 y is not an integer), so each row adds a slice of one of two tiled patterns
+        j = np.arange(p)
+        pats = [
+            np.tile(np.float32(0.2) * (j > p // 2) + np.float32(0.2) * (frac & (j == 0)), 2 + w // p)
+            for frac in (False, True)
+        ]
+        stripes, band_of = {}, None
+        for r in range(h):
+            y = row0 + r
+            band = y // 4096
+            if band != band_of:  # bar targets: one row of stripes per 4096-row band
+                if band not in stripes:
+                    stripes[band] = (0.45 + 0.15 * np.sign(np.sin(2 * np.pi * x / (37.0 + band * 3.0)))).astype(
+                        np.float32
+                    )
+                row_add, band_of = stripes[band], band
+            s = 0.12 * y
+            n = int(np.floor(s))
+            a = (col0 - n) % p
+            out[r] += row_add + pats[s != n][a : a + w]
+        return out
+
+
+def fft_ratio(n: int, *, repeats: int = 3) -> None:
+    """(c): ``satchain.simulate`` / one float32 rfft2 + irfft2 of the same input, medians of ``repeats``."""
+    import scipy.fft as sfft
+
+    import satchain
+
+    scene = synthetic_scene(n)
+    system = satchain.load_preset("ankarasat3")
+    from satchain.engine.simulate import SimParams
+
+    workers = SimParams().workers
+
+    def pair() -> None:
+        sfft.irfft2(sfft.rfft2(scene, workers=workers), s=scene.shape, workers=workers)
+
+    def engine() -> None:
+        satchain.simulate(scene, system, pixel_m=PIXEL_M)
+
+    times: dict[str, list[float]] = {"pair": [], "engine": []}
+    pair()  # plans and pages, outside the timing
+    for _ in range(repeats):  # interleaved, so a change of load hits both
+        for name, fn in (("pair", pair), ("engine", engine)):
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    tp, te = (float(np.median(times[k])) for k in ("pair", "engine"))
+    print(f"\n(c) {n} x {n} float32 scene, ankarasat3 at {PIXEL_M} m, {workers} FFT workers, median of {repeats}")
+    print(f"  one float32 rfft2 + irfft2: {tp:.3f} s;  satchain.simulate: {te:.3f} s ({n * n / 1e6 / te:.1f} Mpx/s)")
+    print(f"  engine / FFT pair: {te / tp:.2f}x   (target <= 1.0x)")
+    print(f"  (fastest runs: pair {min(times['pair']):.3f} s, engine {min(times['engine']):.3f} s: ", end="")
+    print(f"{min(times['engine']) / min(times['pair']):.2f}x)")
+
+
+def stream_scaling(sizes: list[int], repeat: int = 1) -> None:
+    """(d): streamed throughput (``bench_stream.py``'s streamed run, each size in its own process; the
+    fastest of ``repeat`` runs, so that other load on the machine does not decide the spread)."""
+    import bench_stream
+
+    rows = []
+    with tempfile.TemporaryDirectory() as d:
+        for n in sizes:
+            ns = argparse.Namespace(size=n, tile=512, margin=128, dir=d, tiff=None, stage1_mib=640)
+            runs = []
+            for _ in range(repeat):
+                runs.append(bench_stream._run("streamed", ns))
+                os.remove(runs[-1]["path"])
+            best = min(runs, key=lambda r: r["wall_s"])
+            best["peak_rss_mib"] = max(r["peak_rss_mib"] for r in runs)
+            rows.append(best)
+    print(f"\n(d) streamed path (procedural input, coarse grid on disk, 512-px output tiles; best of {repeat})")
+    print(f"  {'input':>13s} {'wall s':>8s} {'stage 1 s':>9s} {'Mpx/s':>7s} {'peak RSS MiB':>13s}")
+    for n, r in zip(sizes, rows, strict=True):
+        print(f"  {n:>6d}^2 px {r['wall_s']:8.1f} {r['stage1_s']:9.1f} {r['mpx_s']:7.1f} {r['peak_rss_mib']:13.0f}")
+    mpx = [r["mpx_s"] for r in rows]
+    print(f"  throughput fastest / slowest: {max(mpx) / min(mpx):.2f}   (target <= 1.15)")
 
 
 # ------------------------------------------------------------------ children (one measurement each)
@@ -164,6 +270,11 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=4096, help="side of the in-memory input (px)")
     ap.add_argument("--gigapixel", action="store_true", help="also run the procedural 32768^2 input")
     ap.add_argument("--giga-size", type=int, default=32768)
+    ap.add_argument("--fft-ratio", action="store_true", help="only (c): engine time / one float32 FFT pair")
+    ap.add_argument("--ratio-size", type=int, default=8192)
+    ap.add_argument("--stream", action="store_true", help="only (d): streamed throughput at --stream-sizes")
+    ap.add_argument("--stream-sizes", type=int, nargs="+", default=[8192, 16384])
+    ap.add_argument("--repeat", type=int, default=2, help="(d): runs per size, the fastest is printed")
     ap.add_argument("--child", choices=sorted(CHILDREN), help=argparse.SUPPRESS)
     ap.add_argument("--n", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
@@ -172,6 +283,12 @@ def main() -> None:
         info = CHILDREN[a.child](a.n, a.out)
         info["peak_rss_mib"] = peak_rss_mib()
         print(json.dumps(info))
+        return
+    if a.fft_ratio or a.stream:
+        if a.fft_ratio:
+            fft_ratio(a.ratio_size)
+        if a.stream:
+            stream_scaling(a.stream_sizes, a.repeat)
         return
 
     n = a.size

@@ -145,3 +145,15 @@ def test_cli_streams_when_the_full_frame_does_not_fit(tmp_path, monkeypatch):
     assert a.shape == b.shape and np.max(np.abs(a - b)) <= 1e-6
     assert (tmp_path / "s.png").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_a_frame_no_larger_than_one_window_is_formed_whole():
+    """Tiling would save no memory: the streamed tiles are slices of the exact full-frame image."""
+    from satchain.engine.stream import FarField
+
+    img = make_scene((1400, 1400), np.random.default_rng(5))
+    sim = Simulator(BASE, input_pixel_m=PIXEL_M, input_shape=img.shape, params=SimParams(stream_tile_px=512))
+    coarse = sim.decimate(ArraySource(img, pixel_m=PIXEL_M))
+    far = FarField(sim, coarse, margin_px=sim.params.stream_margin_px)
+    assert far.image is not None
+    np.testing.assert_array_equal(_assemble(sim, coarse, far=far), sim.form_image(coarse))

@@ -28,7 +28,7 @@ import numpy as np
 from satchain._validate import check_choice, check_range
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, GroundTruth, as_ground_truth, read_with_border, release_pages
+from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.system import ImagingSystem
@@ -38,7 +38,7 @@ __all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
 
 Progress = Callable[[int, int], None]
 Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
-_TILE_BYTES_PER_PX = 20  # float64 read + float32 tile + complex64 half spectrum + kept band
+_TILE_BYTES_PER_PX = 20  # a float64 render + row chunks + band spectra (generous: an array source needs ~4)
 _FRAME_BYTES_PER_PX = 20  # coarse float32 + complex64 half spectrum + band products
 
 
@@ -166,7 +166,7 @@ class Simulator:
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
-        self.time_path = None  # pushbroom motion in time (set_time_path)
+        self.time_path, self._transfer = None, {}  # pushbroom motion in time (set_time_path); band_values' transfer
         self._exclude: tuple[str, ...] = ("detector",)
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
@@ -218,9 +218,9 @@ class Simulator:
                 f"allows {p.max_tile_bytes / 2**20:.0f} MiB); use a coarser ground-truth pixel"
             )
         self.tile_coarse = min(tile_coarse, max(self.n_coarse))
-        origin = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D)
-        self.tiles: list[Tile] = plan_tiles(
-            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=self.margin_fine, origin_px=origin
+        origin, mf = (-self.coarse_ext[0] * self.D, -self.coarse_ext[1] * self.D), self.margin_fine
+        self.tiles: list[Tile] = plan_tiles(  # fast: input windows of fast FFT lengths
+            self.n_coarse, D=self.D, tile_coarse=self.tile_coarse, margin_px=mf, origin_px=origin, fast=True
         )
 
     def _plan_frame(self) -> None:
@@ -280,13 +280,11 @@ class Simulator:
     # ------------------------------------------------------------------ stage 1
     def decimate_tile(self, source: GroundTruth, tile: Tile) -> np.ndarray:
         """The coarse samples of one tile (its margins read through the border rule)."""
-        p = self.params
-        data = read_with_border(source, tile.input, rule=p.border, value=p.border_value)
-        out = spectral.decimate_tile(
-            data.astype(np.float32), D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers
-        )
+        p = self.params  # the tile is assembled chunk by chunk as it is transformed; NaN/inf shows in the result
+        data = BorderedWindow(source, tile.input, rule=p.border, value=p.border_value, dtype=np.float32, check=False)
+        out = spectral.decimate_tile(data, D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
         m = self.margin_fine // self.D
-        return out[m : m + tile.coarse.height, m : m + tile.coarse.width]
+        return data.require_finite(out)[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
     def decimate(
         self, source: GroundTruth, *, progress: Progress | None = None, out: np.ndarray | None = None
@@ -349,7 +347,7 @@ class Simulator:
             idx.append(fm[np.mod(t, fm.size)])
         iy, ix = idx
         # only the window's elements are read (a disk-backed coarse grid is never loaded whole)
-        out = np.asarray(coarse[np.ix_(np.maximum(iy, 0), np.maximum(ix, 0))], dtype=np.float32)
+        out = take(coarse, np.maximum(iy, 0), np.maximum(ix, 0))
         release_pages(coarse)
         if self.params.border == "constant":
             out[iy < 0, :] = self.params.border_value
@@ -364,8 +362,8 @@ class Simulator:
         for ax, (lo, hi) in enumerate((rows, cols)):
             kk, ki, D = self.k[ax], self.k_int[ax], self.D
             q = ki // math.gcd(ki, D) if ki else 1  # coarse samples per aligned output period
-            a = int(math.floor((lo - margin_px) * kk / D / q)) * q
-            b = int(math.ceil((hi + margin_px) * kk / D))
+            a = int(math.floor((lo - margin_px) * kk / D / q + 1e-9)) * q  # not one period early by rounding
+            b = int(math.ceil((hi + margin_px) * kk / D - 1e-9))
             start.append(a)
             shape.append(q * spectral_len(-(-(b - a) // q)))
         return tuple(start), tuple(shape)
@@ -420,19 +418,24 @@ class Simulator:
 
     def band_values(self, spec: spectral.BandSpectrum, *, weight: Weight | None = None) -> np.ndarray:
         """``spec``'s values times the system OTF (without the detector), ``weight(fy, fx)`` (cycles per coarse
-        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``."""
-        D = self.D
-        ly, lx = spec.shape
-        ny_f, nx_f = ly * D, lx * D  # block length in input pixels
-        fy = spec.my / ny_f * self.to_cy_per_mm[0]
-        fx = spec.mx / nx_f * self.to_cy_per_mm[1]
-        vals = spec.values * self.otf(fx[None, :], fy[:, None], exclude=self._exclude)
-        if weight is not None:
-            vals = vals * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
-        c = (D - 1) / 2.0  # coarse sample j sits at input pixel D j + c (block centre)
-        return (
-            vals * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None] * np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
-        )
+        sample) when given, and the phase that puts coarse sample j at input pixel ``D j + (D - 1) / 2``. That
+        transfer is kept for the latest bands (up to 64 MiB): the streamed path's tiles share it."""
+        key = (spec.shape, spec.my.tobytes(), spec.mx.size, weight, self._exclude, id(self.otf))
+        t = self._transfer.get(key)
+        if t is None:
+            (ly, lx), c = spec.shape, (self.D - 1) / 2.0  # coarse sample j sits at input pixel D j + c
+            ny_f, nx_f = ly * self.D, lx * self.D  # block length in input pixels
+            fy, fx = spec.my / ny_f * self.to_cy_per_mm[0], spec.mx / nx_f * self.to_cy_per_mm[1]
+            t = self.otf(fx[None, :], fy[:, None], exclude=self._exclude)
+            if weight is not None:
+                t = t * weight(spec.my[:, None] / ly, spec.mx[None, :] / lx)
+            t = t * np.exp(-2j * np.pi * spec.my * c / ny_f)[:, None]
+            t *= np.exp(-2j * np.pi * spec.mx * c / nx_f)[None, :]
+            old = list(self._transfer.items())[-3:]  # the latest 4 bands (the streamed tiles' shapes), <= 64 MiB
+            while old and sum(v.nbytes for _, v in old) + t.nbytes > 2**26:
+                old.pop(0)
+            self._transfer = dict([*old, (key, t)]) if t.nbytes <= 2**26 else {}
+        return spec.values * t
 
     def form_spectrum(
         self,

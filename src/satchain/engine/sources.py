@@ -25,6 +25,7 @@ from satchain.errors import InputError
 __all__ = [
     "BORDER_RULES",
     "ArraySource",
+    "BorderedWindow",
     "GroundTruth",
     "SceneSource",
     "as_ground_truth",
@@ -81,10 +82,26 @@ class ArraySource:
         self.shape_px = (int(a.shape[0]), int(a.shape[1]))
 
     def read(self, window: Window) -> np.ndarray:
-        block = np.asarray(self.array[window.rows, window.cols], dtype=np.float64)
-        if not np.all(np.isfinite(block)):
-            raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
+        return np.asarray(self.read_stored(window), dtype=np.float64)
+
+    def read_stored(self, window: Window, *, check: bool = True) -> np.ndarray:
+        """``window`` as stored (a view of the array, its own dtype: no copy), checked finite (``check``)."""
+        block = self.array[window.rows, window.cols]
+        if check:
+            _check_finite(block, window)
         return block
+
+
+def _check_finite(block: np.ndarray, window: Window) -> None:
+    """Refuse NaN/inf in ``block``: one pass summing it (no temporary), the element test only where the sum is
+    not finite (a NaN/inf, or an overflow of large finite values)."""
+    if block.dtype.kind not in "fc":
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        if np.isfinite(np.add.reduce(block, axis=None)):
+            return
+    if not np.all(np.isfinite(block)):
+        raise InputError(f"image: window {tuple(window)} contains NaN/inf; ground truth must be finite")
 
 
 class SceneSource:
@@ -98,7 +115,11 @@ class SceneSource:
         self.shape_px = tuple(int(v) for v in scene.shape_px(self.pixel_m))
 
     def read(self, window: Window) -> np.ndarray:
-        return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m), dtype=np.float64)
+        return np.asarray(self.read_stored(window), dtype=np.float64)
+
+    def read_stored(self, window: Window, *, check: bool = True) -> np.ndarray:
+        """``window`` as the scene renders it (its own dtype; the scene checks it)."""
+        return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m))
 
 
 def as_ground_truth(obj, *, pixel_m: float | None = None) -> GroundTruth:
@@ -129,26 +150,155 @@ def _map_indices(start: int, length: int, n: int, rule: str) -> np.ndarray:
     return np.where(j < n, j, 2 * n - 1 - j)
 
 
-def read_with_border(source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0) -> np.ndarray:
-    """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``."""
-    check_choice("border", rule, BORDER_RULES)
-    ny, nx = source.shape_px
-    inside = (
-        window.row0 >= 0 and window.col0 >= 0 and window.row0 + window.height <= ny and window.col0 + window.width <= nx
-    )
-    if inside:
-        return source.read(window)
-    if rule == "constant":
-        out = np.full((window.height, window.width), float(value))
-        r0, c0 = max(window.row0, 0), max(window.col0, 0)
-        r1, c1 = min(window.row0 + window.height, ny), min(window.col0 + window.width, nx)
-        if r1 > r0 and c1 > c0:
-            out[r0 - window.row0 : r1 - window.row0, c0 - window.col0 : c1 - window.col0] = source.read(
-                Window(r0, c0, r1 - r0, c1 - c0)
-            )
+def _runs(start: int, length: int, n: int, rule: str) -> list[tuple[int, int, int, int]]:
+    """:func:`_map_indices` as runs ``(dst, src, count, step)``: ``dst .. dst + count`` of the window are source
+    indices ``src, src + step, ...`` (step +1, or -1 for a mirrored run)."""
+    runs, i, end = [], start, start + length
+    while i < end:
+        j = i % (2 * n if rule == "symmetric" else n)
+        if j < n:
+            cnt, src, step = min(n - j, end - i), j, 1
+        else:  # the mirrored half of the symmetric period
+            cnt, src, step = min(2 * n - j, end - i), 2 * n - 1 - j, -1
+        runs.append((i - start, src, cnt, step))
+        i += cnt
+    return runs
+
+
+def index_runs(idx: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """``idx`` (1-D, integers) as runs ``(dst, src, count, step)``, step 1, -1 or 0 (a repeated index)."""
+    runs, i, n = [], 0, len(idx)
+    d = np.diff(idx).tolist()
+    idx = idx.tolist()
+    while i < n:
+        step = d[i] if i < n - 1 and d[i] in (-1, 0, 1) else 1
+        j = i + 1
+        while j < n and d[j - 1] == step:
+            j += 1
+        runs.append((i, idx[i], j - i, step))
+        i = j
+    return runs
+
+
+def take(array: np.ndarray, iy: np.ndarray, ix: np.ndarray, *, dtype=np.float32) -> np.ndarray:
+    """``array[np.ix_(iy, ix)]`` as ``dtype``, copied by slices over the runs of the indices (mirrored or wrapped
+    index maps have a few): only those elements are read (a memmap is never loaded whole)."""
+    ry, rx = index_runs(np.asarray(iy)), index_runs(np.asarray(ix))
+    if len(ry) * len(rx) > 256:  # many short runs: index arrays
+        return np.asarray(array[np.ix_(iy, ix)], dtype=dtype)
+    out = np.empty((len(iy), len(ix)), dtype=dtype)
+    for dy, sy, cy, ty in ry:
+        rows = _run_slice(sy, cy, ty, 0)
+        for dx, sx, cx, tx in rx:
+            out[dy : dy + cy, dx : dx + cx] = array[rows, _run_slice(sx, cx, tx, 0)]
+    return out
+
+
+def _span(runs: list[tuple[int, int, int, int]]) -> tuple[int, int]:
+    """The source indices ``[lo, hi)`` that ``runs`` cover."""
+    lo = min(src if step > 0 else src - cnt + 1 for _, src, cnt, step in runs)
+    hi = max(src + cnt if step > 0 else src + 1 for _, src, cnt, step in runs)
+    return lo, hi
+
+
+def _run_slice(src: int, cnt: int, step: int, lo: int) -> slice:
+    a = src - lo
+    if step == 0:  # one index repeated: a length-1 slice, broadcast
+        return slice(a, a + 1)
+    if step > 0:
+        return slice(a, a + cnt)
+    return slice(a, a - cnt if a - cnt >= 0 else None, -1)
+
+
+def _read(source: GroundTruth, window: Window, check: bool = True) -> np.ndarray:
+    stored = getattr(source, "read_stored", None)
+    return stored(window, check=check) if stored is not None else source.read(window)
+
+
+class BorderedWindow:
+    """``window`` of ``source`` continued beyond it by the border ``rule``, as ``dtype``, assembled on demand
+    by rows: ``w[a:b]`` copies rows ``a .. b`` from the source block by slices (mirrored runs are reversed
+    views; no index arrays), or is a view of an :class:`ArraySource` already of ``dtype`` when the window lies
+    inside it. The source is read once; the engine transforms a tile chunk by chunk, so the whole bordered
+    tile never exists. ``np.asarray(w)`` is all of it. ``check=False`` defers the NaN/inf scan of the source
+    block to :meth:`require_finite`."""
+
+    def __init__(self, source: GroundTruth, window: Window, *, rule: str, value: float = 0.0, dtype=np.float64,
+                 check: bool = True):  # fmt: skip
+        check_choice("border", rule, BORDER_RULES)
+        self.window, self.value, self.dtype = window, float(value), np.dtype(dtype)
+        self.shape = (int(window.height), int(window.width))
+        self.ndim = 2
+        ny, nx = source.shape_px
+        (r0, h), (c0, w) = (window.row0, window.height), (window.col0, window.width)
+        self.inside = r0 >= 0 and c0 >= 0 and r0 + h <= ny and c0 + w <= nx
+        if self.inside or rule == "constant":  # fill runs (source index None) outside the source
+            self.ry, self.rx = _clip_runs(r0, h, ny), _clip_runs(c0, w, nx)
+            self.fill = not self.inside
+        else:
+            self.ry, self.rx, self.fill = _runs(r0, h, ny, rule), _runs(c0, w, nx, rule), False
+        spans = [[r for r in runs if r[1] is not None] for runs in (self.ry, self.rx)]
+        (self.y0, y1), (self.x0, x1) = (_span(r) if r else (0, 0) for r in spans)
+        empty = y1 <= self.y0 or x1 <= self.x0
+        self.block = None if empty else _read(source, Window(self.y0, self.x0, y1 - self.y0, x1 - self.x0), check)
+        self._whole = None
+        if len(self.ry) * len(self.rx) > 64:  # a source far smaller than the window: index arrays, once
+            iy = _map_indices(r0, h, ny, rule) - self.y0
+            ix = _map_indices(c0, w, nx, rule) - self.x0
+            self._whole = np.asarray(self.block[np.ix_(iy, ix)], dtype=self.dtype)
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        a, b, _ = rows.indices(self.shape[0])
+        if self._whole is not None:
+            return self._whole[a:b]
+        if self.inside:
+            with np.errstate(over="ignore"):
+                return np.asarray(self.block[a:b], dtype=self.dtype)
+        out = (
+            np.full((b - a, self.shape[1]), self.value, self.dtype)
+            if self.fill
+            else np.empty((b - a, self.shape[1]), self.dtype)
+        )
+        for dy, sy, cy, ty in self.ry:
+            lo, hi = max(dy, a), min(dy + cy, b)
+            if hi <= lo or sy is None:
+                continue
+            src_rows = _run_slice(sy + ty * (lo - dy), hi - lo, ty, self.y0)
+            for dx, sx, cx, tx in self.rx:
+                if sx is not None:
+                    with np.errstate(over="ignore"):  # beyond float32: inf, refused by require_finite
+                        out[lo - a : hi - a, dx : dx + cx] = self.block[src_rows, _run_slice(sx, cx, tx, self.x0)]
         return out
-    ry = _map_indices(window.row0, window.height, ny, rule)
-    rx = _map_indices(window.col0, window.width, nx, rule)
-    y0, y1, x0, x1 = int(ry.min()), int(ry.max()) + 1, int(rx.min()), int(rx.max()) + 1
-    block = source.read(Window(y0, x0, y1 - y0, x1 - x0))
-    return block[np.ix_(ry - y0, rx - x0)]
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return np.asarray(self[:], dtype=dtype)
+
+    def require_finite(self, result: np.ndarray) -> np.ndarray:
+        """``result`` (computed from this window) when it is finite; else the source block's NaN/inf is reported
+        (every output of a transform sums every input, so one NaN/inf in the input spoils all of it)."""
+        if np.isfinite(result).all():
+            return result
+        if self.block is not None:  # the source's window that was read
+            _check_finite(self.block, Window(self.y0, self.x0, *self.block.shape))
+        read = (self.y0, self.x0, *(self.block.shape if self.block is not None else (0, 0)))
+        raise InputError(f"image: window {read}: values too large for the float32 transforms (finite input, "
+                         f"non-finite result); scale the ground truth")  # fmt: skip
+
+
+def _clip_runs(start: int, length: int, n: int) -> list[tuple[int, int | None, int, int]]:
+    """Runs of ``start .. start + length`` over ``[0, n)``: the part inside the source, fill (None) beyond."""
+    lo, hi = min(max(start, 0), start + length), max(min(start + length, n), start)
+    runs = [(0, None, lo - start, 0)] if lo > start else []
+    if hi > lo:
+        runs.append((lo - start, lo, hi - lo, 1))
+    if start + length > max(hi, lo):
+        runs.append((max(hi, lo) - start, None, start + length - max(hi, lo), 0))
+    return runs
+
+
+def read_with_border(
+    source: GroundTruth, window: Window, *, rule: str = "symmetric", value: float = 0.0, dtype=np.float64
+) -> np.ndarray:
+    """Read ``window`` from ``source``; the parts outside the source follow the border ``rule``. The result is
+    ``dtype``; a window inside an :class:`ArraySource` already of that dtype is a view of it (no copy)."""
+    return BorderedWindow(source, window, rule=rule, value=value, dtype=dtype)[:]

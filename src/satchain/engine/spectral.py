@@ -37,6 +37,7 @@ __all__ = [
 #: Kernel half-length of :func:`lowpass` in units of 1 / (f_stop - f_pass): the kernel's L1 norm beyond it
 #: is < 1e-5 (measured), an order below the engine's 1e-4 accuracy target.
 LOWPASS_SUPPORT = 11.0
+_ROW_CHUNK_PX = 1 << 20  # pixels per chunk of rows transformed at once in tile_band_spectrum
 
 
 def band_index(n: int, f_cut_cy_per_px: float) -> int:
@@ -71,7 +72,11 @@ class BandSpectrum:
 def tile_band_spectrum(tile: np.ndarray, *, by: int, bx: int, workers: int = 1) -> BandSpectrum:
     """DFT of ``tile`` restricted to ``|my| <= by``, ``0 <= mx <= bx``."""
     ny, nx = tile.shape
-    x = sfft.rfft(tile, axis=1, workers=workers)[:, : bx + 1]
+    # real FFTs of row chunks, keeping only the band's columns (a small, contiguous array for the column FFTs)
+    x = np.empty((ny, bx + 1), dtype=np.result_type(tile.dtype, np.complex64))
+    step = max(1, _ROW_CHUNK_PX // max(nx, 1))
+    for r in range(0, ny, step):
+        x[r : r + step] = sfft.rfft(tile[r : r + step], axis=1, workers=workers)[:, : bx + 1]
     y = sfft.fft(x, axis=0, workers=workers, overwrite_x=True)
     if 2 * by + 1 >= ny:
         return BandSpectrum(y, np.fft.fftfreq(ny, 1.0 / ny).round().astype(np.int64), np.arange(bx + 1), (ny, nx))
@@ -92,13 +97,16 @@ def decimate_tile(tile: np.ndarray, *, D: int, f_pass: float, f_stop: float, wor
     cy, cx = ny // D, nx // D
     spec = tile_band_spectrum(tile, by=band_index(ny, f_stop), bx=band_index(nx, f_stop), workers=workers)
     c = (D - 1) / 2.0  # block centre: a phase ramp moves the samples there
-    gy = lowpass(spec.my / ny, f_pass, f_stop) * np.exp(2j * np.pi * spec.my * c / ny)
+    gy = lowpass(spec.my / ny, f_pass, f_stop) * np.exp(2j * np.pi * spec.my * c / ny) / (D * D)
     gx = lowpass(spec.mx / nx, f_pass, f_stop) * np.exp(2j * np.pi * spec.mx * c / nx)
-    g = gy[:, None] * gx[None, :]
+    vals = spec.values
+    with np.errstate(invalid="ignore", over="ignore"):  # a NaN/inf input spoils the result: the caller checks it
+        vals *= gy[:, None].astype(vals.dtype)
+        vals *= gx[None, :].astype(vals.dtype)
     coarse = np.zeros((cy, cx // 2 + 1), dtype=np.complex64)
-    coarse[np.mod(spec.my, cy)[:, None], spec.mx[None, :]] = spec.values * g
-    out = sfft.irfft(sfft.ifft(coarse, axis=0, workers=workers), n=cx, axis=1, workers=workers)
-    return (out / (D * D)).astype(np.float32)
+    coarse[np.mod(spec.my, cy)[:, None], spec.mx[None, :]] = vals
+    out = sfft.irfft(sfft.ifft(coarse, axis=0, workers=workers, overwrite_x=True), n=cx, axis=1, workers=workers)
+    return np.asarray(out, dtype=np.float32)
 
 
 def footprint_transfer(m: np.ndarray, *, centre: float, width_px: float, n_total: int) -> np.ndarray:
@@ -117,20 +125,44 @@ def fold_onto_grid(
     spectrum onto the output DFT grid and inverse-transform. ``values`` must already contain the phase of
     the output grid's first sample; returns ``Re(sum values e^{2 pi i (my i / Ny + mx j / Nx)})``."""
     noy, nox = n_out
-    vy = np.zeros((noy, values.shape[1]), dtype=np.complex128)
-    np.add.at(vy, np.mod(my, noy), values * cx[None, :])
-    v = np.zeros((noy, nox), dtype=np.complex128)
-    np.add.at(v.T, np.mod(mx, nox), vy.T)
-    return np.real(sfft.ifft2(v)) * (noy * nox)
+    vy = _fold(values * cx[None, :], my, noy, axis=0)
+    v = _fold(vy, mx, nox, axis=1)
+    return np.real(sfft.ifft2(v, overwrite_x=True)) * (noy * nox)
+
+
+def _fold(values: np.ndarray, m: np.ndarray, n: int, *, axis: int) -> np.ndarray:
+    """``out[r] = sum of values[a] over m[a] = r (mod n)`` along ``axis`` (complex128). ``m`` holds consecutive
+    integers in any order (the DFT's): sorted, padded to whole periods of ``n`` and summed period by period."""
+    order = np.argsort(m, kind="stable")
+    ms = m[order]
+    if ms.size and np.any(np.diff(ms) != 1):  # not consecutive: the general (slower) scatter-add
+        shape = list(values.shape)
+        shape[axis] = n
+        out = np.zeros(shape, dtype=np.complex128)
+        np.add.at(np.moveaxis(out, axis, 0), np.mod(m, n), np.moveaxis(values, axis, 0))
+        return out
+    v = np.moveaxis(np.asarray(values, dtype=np.complex128), axis, 0)[order]
+    periods = -(-v.shape[0] // n)
+    pad = np.zeros((periods * n - v.shape[0], *v.shape[1:]), dtype=v.dtype)
+    summed = np.concatenate([v, pad]).reshape(periods, n, *v.shape[1:]).sum(axis=0)
+    return np.moveaxis(np.roll(summed, int(ms[0]) % n if ms.size else 0, axis=0), 0, axis)
 
 
 def sampling_matrix(centres: np.ndarray, width_px: float, n0: int, n: int, m: np.ndarray) -> np.ndarray:
     """``M[i, a] = sum_n w_i(n) exp(2 pi i m_a (n - n0) / n)``: footprint averaging of a band-limited frame
     signal, evaluated from its DFT coefficients ``m`` (frame origin at input pixel ``n0``, ``n`` input
-    pixels long). Any footprint width and position."""
+    pixels long). Any footprint width and position. A footprint's pixels are consecutive, so the sum is a
+    polynomial in ``exp(2 pi i m / n)`` (Horner's rule) times the phase of its first pixel: one exponential
+    per element instead of one per footprint pixel."""
     idx, w = footprint_weights(centres, width_px, n0)
-    out = np.zeros((centres.size, m.size), dtype=np.complex128)
-    ph = 2j * np.pi * m[None, :] / n
-    for k in range(idx.shape[1]):
-        out += w[:, k, None] * np.exp(ph * idx[:, k, None])
-    return out
+    m = np.asarray(m)
+    r = np.exp(2j * np.pi * m / n)
+    acc = np.broadcast_to(w[:, -1, None], (centres.size, m.size)).astype(np.complex128)
+    for k in range(idx.shape[1] - 2, -1, -1):
+        acc *= r[None, :]
+        acc += w[:, k, None]
+    if np.issubdtype(m.dtype, np.integer):  # the first pixel's phase reduced exactly in integers
+        turns = np.mod(np.outer(idx[:, 0], m), n) / n
+    else:
+        turns = np.outer(idx[:, 0], m) / n
+    return acc * np.exp(2j * np.pi * turns)

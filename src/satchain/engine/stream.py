@@ -71,8 +71,7 @@ def stream_bytes(sim: Simulator) -> float:
     """Estimated peak bytes of the streamed path (the coarse grid on disk is not counted): one decimation
     tile or one stage-2 window with its tile's temporaries, plus one output band and the preview."""
     t, m = stream_tile_px(sim), int(sim.params.stream_margin_px)
-    _, shape = sim.tile_window((0, t), (0, t), m)
-    window = min(_FRAME_BYTES_PER_PX * float(shape[0]) * shape[1], sim.frame_bytes)
+    window = min(_window_bytes(sim, m), sim.frame_bytes)
     decim = min(float(sim.params.max_tile_bytes), 20.0 * (sim.D * sim.n_coarse[0]) * (sim.D * sim.n_coarse[1]))
     band = 8.0 * t * sim.output_shape[1]
     preview = 8.0 * min(PREVIEW_MAX_PX**2, float(sim.output_shape[0]) * sim.output_shape[1])
@@ -82,7 +81,14 @@ def stream_bytes(sim: Simulator) -> float:
     by, bx = (band_index(n, far_split(sim, m)) for n in (ly, lx))
     far = 8.0 * (2 * ly + 2 * by + 1) * (bx + 1) + 16.0 * t * (2 * by + 2 * bx + 2)
     build = 3.0 * _FAR_BAND_BYTES
-    return max(window + _TILE_OUT_BYTES_PER_PX * float(t) * t, decim, build) + far + band + preview
+    return max(window + _TILE_OUT_BYTES_PER_PX * 1.5 * t * t, decim, build) + far + band + preview
+
+
+def _window_bytes(sim: Simulator, margin_px: int) -> float:
+    """Working memory of the widest stage-2 tile's window (:func:`_col_spans`), bytes."""
+    t = stream_tile_px(sim)
+    _, shape = sim.tile_window((0, t), (0, t + t // 2), margin_px)
+    return _FRAME_BYTES_PER_PX * float(shape[0]) * shape[1]
 
 
 def far_split(sim: Simulator, margin_px: int) -> float:
@@ -154,6 +160,10 @@ class FarField:
     frame row, then an FFT along the columns of the kept band only: memory ``rows x band``), and evaluated
     at each tile's output pixels by a matrix DFT. ``f_split = 22 / margin`` (coarse samples), so the part
     ``G`` removes from the tile lies within half the margin.
+
+    When the whole coarse frame needs no more memory than one tile's window, tiling would save nothing: the
+    exact image is then formed at once (:meth:`Simulator.form_image`) and ``image`` holds it; tiles are its
+    slices.
     """
 
     def __init__(self, sim: Simulator, coarse: np.ndarray, *, margin_px: int, band_bytes: float = _FAR_BAND_BYTES):
@@ -161,7 +171,10 @@ class FarField:
 
         from satchain.engine import spectral
 
-        self.sim = sim
+        self.sim, self.image = sim, None
+        if sim.frame_bytes <= _window_bytes(sim, margin_px):  # tiles would save no memory: the exact image at once
+            self.image = sim.form_image(coarse)
+            return
         self.f_split = far_split(sim, margin_px)
         ly, lx = sim.frame_shape
         ey, ex = sim.frame_ext
@@ -214,6 +227,15 @@ class FarField:
         return np.real(self._rows_values @ mx.T)
 
 
+def _col_spans(nx: int, t: int) -> list[tuple[int, int]]:
+    """The column ranges of the output tiles: ``t`` wide, the last one up to ``1.5 t`` (a remainder narrower than
+    ``t / 2`` joins its neighbour rather than paying a whole window for a sliver)."""
+    starts = list(range(0, nx, t))
+    if len(starts) > 1 and nx - starts[-1] < t // 2:
+        starts.pop()
+    return [(c0, starts[i + 1] if i + 1 < len(starts) else nx) for i, c0 in enumerate(starts)]
+
+
 def stream_tiles(
     sim: Simulator,
     coarse: np.ndarray,
@@ -238,13 +260,16 @@ def stream_tiles(
         raise ConfigError(f"rows = {rows!r}: must start on the tile grid (multiples of {t})")
     for r0 in range(r_lo, min(r_hi, ny), t):
         r1 = min(r0 + t, ny, r_hi)
-        for c0 in range(0, nx, t):
-            c1 = min(c0 + t, nx)
-            if far:
-                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m, weight=far.high)
-                img += far.tile((r0, r1), (c0, c1))
+        for c0, c1 in _col_spans(nx, t):
+            # a tile cut by the image's edge is formed as a whole one (its window longer at the far end: more
+            # context), so that the tiles' windows share a shape and the OTF (Simulator.band_values)
+            full = ((r0, r1), (c0, c1)) if sim.time_path is not None else ((r0, r0 + t), (c0, max(c1, c0 + t)))
+            if far and far.image is not None:  # the whole frame at once (FarField: no larger than a window)
+                img = far.image[r0:r1, c0:c1].copy()
             else:
-                img = sim.form_tile(coarse, (r0, r1), (c0, c1), margin_px=m)
+                img = sim.form_tile(coarse, *full, margin_px=m, weight=far.high if far else None)[: r1 - r0, : c1 - c0]
+                if far:
+                    img += far.tile((r0, r1), (c0, c1))
             if sensor is not None:
                 img = sensor.convert(
                     img, origin=(r0, c0), units=units, noise=noise, seed=seed, block_px=sim.params.noise_block_px

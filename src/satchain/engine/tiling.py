@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+import scipy.fft as sfft
 
 from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError
@@ -118,12 +119,19 @@ class Tile(NamedTuple):
 
 
 def plan_tiles(
-    n_coarse: tuple[int, int], *, D: int, tile_coarse: int, margin_px: int, origin_px: tuple[int, int] = (0, 0)
+    n_coarse: tuple[int, int],
+    *,
+    D: int,
+    tile_coarse: int,
+    margin_px: int,
+    origin_px: tuple[int, int] = (0, 0),
+    fast: bool = False,
 ) -> list[Tile]:
     """Cut the coarse grid (coarse sample ``j`` = fine pixel ``D j``) into square tiles of ``tile_coarse``
     samples; each reads fine pixels ``[D j0 - margin_px, D j1 + margin_px)`` (``margin_px`` a multiple of
     ``D``), offset by ``origin_px`` (the fine pixel of coarse sample 0). Input windows may extend beyond the
-    ground truth: the border rule fills them.
+    ground truth: the border rule fills them. ``fast``: each input window is stretched at its far end to ``D``
+    times a fast FFT length (a longer far margin: the same coarse samples, much faster transforms).
 
     Examples
     --------
@@ -135,6 +143,10 @@ def plan_tiles(
             f"tile_coarse = {tile_coarse!r}, margin_px = {margin_px!r}: need tile_coarse >= 1 and margin_px a "
             f"non-negative multiple of D = {D}"
         )
+
+    def length(n: int) -> int:
+        return D * sfft.next_fast_len(n // D) if fast and D > 1 else n
+
     tiles = []
     for ti, j0 in enumerate(range(0, n_coarse[0], tile_coarse)):
         h = min(tile_coarse, n_coarse[0] - j0)
@@ -147,8 +159,8 @@ def plan_tiles(
                     input=Window(
                         origin_px[0] + D * j0 - margin_px,
                         origin_px[1] + D * i0 - margin_px,
-                        D * h + 2 * margin_px,
-                        D * w + 2 * margin_px,
+                        length(D * h + 2 * margin_px),
+                        length(D * w + 2 * margin_px),
                     ),
                 )
             )

@@ -37,27 +37,38 @@ def _oneill(v: np.ndarray, eps: float) -> np.ndarray:
     """Normalised annular-pupil MTF at ``v = f / cutoff`` (O'Neill 1956, in Schroeder's notation).
 
     The three region boundaries (``v = eps``, ``(1 -/+ eps) / 2``) are handled by clipping the arguments
-    of ``arccos``: each term then takes its constant value outside its region, so no branch is needed.
+    of ``arccos``: each term then takes its constant value outside its region, so no branch is needed. The
+    obscuration's terms are evaluated only inside their regions (``B`` is 0 for ``v >= eps``; ``C`` is
+    constant where its ``arccos`` argument is clipped) and take those constants elsewhere.
     """
     v = np.clip(np.abs(v), 0.0, 1.0)
     a = (2.0 / np.pi) * (np.arccos(v) - v * np.sqrt(1.0 - v * v))
     if eps == 0.0:
         return np.where(v >= 1.0, 0.0, np.clip(a, 0.0, 1.0))
+    b = np.zeros_like(v)
+    inner = v < eps
     with np.errstate(over="ignore"):  # a subnormal eps overflows to +-inf, which the clipping handles
-        x = np.minimum(v / eps, 1.0)
-        cos_phi = np.clip(((1.0 - 2.0 * v) * (1.0 + 2.0 * v) + eps * eps) / (2.0 * eps), -1.0, 1.0)
-    b = (2.0 * eps * eps / np.pi) * (np.arccos(x) - x * np.sqrt(1.0 - x * x))
+        x = np.minimum(v[inner] / eps, 1.0)
+        cos_phi = ((1.0 - 2.0 * v) * (1.0 + 2.0 * v) + eps * eps) / (2.0 * eps)
+    b[inner] = (2.0 * eps * eps / np.pi) * (np.arccos(x) - x * np.sqrt(1.0 - x * x))
+    ring = (cos_phi > -1.0) & (cos_phi < 1.0)
+    c = np.where(cos_phi >= 1.0, _oneill_c(np.array(1.0), eps), _oneill_c(np.array(-1.0), eps))
+    c[ring] = _oneill_c(cos_phi[ring], eps)
+    mtf = (a + b + c) / (1.0 - eps * eps)
+    return np.where(v >= 1.0, 0.0, np.clip(mtf, 0.0, 1.0))
+
+
+def _oneill_c(cos_phi: np.ndarray, eps: float) -> np.ndarray:
+    """O'Neill's cross-overlap term ``C`` at ``cos(phi)`` (in [-1, 1])."""
     phi = np.arccos(cos_phi)
     # atan(((1+eps)/(1-eps)) tan(phi/2)) written with arctan2 so that phi = pi gives exactly pi/2
     at = np.arctan2((1.0 + eps) * np.sin(phi / 2.0), (1.0 - eps) * np.cos(phi / 2.0))
-    c = (
+    return (
         (2.0 * eps / np.pi) * np.sin(phi)
         + ((1.0 + eps * eps) / np.pi) * phi
         - (2.0 * (1.0 - eps * eps) / np.pi) * at
         - 2.0 * eps * eps
     )
-    mtf = (a + b + c) / (1.0 - eps * eps)
-    return np.where(v >= 1.0, 0.0, np.clip(mtf, 0.0, 1.0))
 
 
 def annular_mtf(f_cy_per_mm, *, wavelength_m: float, f_number: float, obscuration_ratio: float = 0.0):

@@ -163,9 +163,13 @@ class SystemOTF:
         unknown = set(exclude) - set(self._components)
         if unknown:
             raise ConfigError(f"exclude = {sorted(unknown)!r}: not components of this system ({self.component_names})")
+        fx, fy = np.broadcast_arrays(
+            as_float_array("fx_cy_per_mm", fx_cy_per_mm), as_float_array("fy_cy_per_mm", fy_cy_per_mm)
+        )
         out = None
-        for name, v in self.components(fx_cy_per_mm, fy_cy_per_mm).items():
-            if name not in exclude:
+        for name, fn in self._components.items():
+            if name not in exclude:  # an excluded component is not evaluated at all
+                v = np.asarray(fn(fx, fy))
                 out = v if out is None else out * v
         if out is None:
             out = np.ones(np.broadcast_shapes(np.shape(fx_cy_per_mm), np.shape(fy_cy_per_mm)))
