@@ -83,7 +83,7 @@ def test_replace_reaches_the_new_keys():
         s.replace({"motion.oscillation[3].amplitude_px": 1.0})
 
 
-def test_readme_block_is_valid():
+def test_readme_block_is_valid(tmp_path, monkeypatch):
     import re
     import sys
     from pathlib import Path
@@ -96,6 +96,8 @@ def test_readme_block_is_valid():
     text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     (block,) = [b for b in re.findall(r"```toml\n(.*?)```", text, re.S) if "[[motion.oscillation]]" in b]
     keys = tomllib.loads(block)
+    monkeypatch.chdir(tmp_path)  # the block's attitude log, relative to the working folder here
+    (tmp_path / keys["motion"]["line_of_sight"]["file"]).write_text("time_s,act_px,alt_px\n0,0,0\n1,0.5,-0.2\n")
     d = BASE.to_dict()
     d["motion"].update(keys["motion"])
     d["orbit"].update(keys["orbit"])
