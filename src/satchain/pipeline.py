@@ -265,14 +265,17 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
     view = ReportInputs(result, out, results)
+    from satchain.report.gallery import item_thumbnail, thumbnail_calls
+
     with FigureJobs() as jobs:  # figures of plain data in helper processes, the rest here meanwhile
+        thumbs = [jobs.submit(item_thumbnail, *args) for args in thumbnail_calls(view)]
         _write_budget_and_scene(result, out, jobs)
         shown = run_figures.write_run_figures(view, jobs=jobs)
         _write_images(result, out)
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
-    html.write_report(view, out / "report.html")
+    html.write_report(view, out / "report.html", thumbnails=[jobs.result(i) for i in thumbs])
     report("report", 1, 1)
     write_text(out / "config.toml", config_to_toml(result.config))
 

@@ -1,6 +1,7 @@
 """Issue 21, point 3: figures of plain data drawn by helper processes give the same files as drawn here, a
 helper's failure is reported (not a half-written run), and SATCHAIN_FIGURE_PROCESSES is validated."""
 
+import numpy as np
 import pytest
 
 from satchain import load_preset
@@ -48,3 +49,19 @@ def test_the_process_count_is_validated(monkeypatch):
         figure_processes()
     monkeypatch.setenv("SATCHAIN_FIGURE_PROCESSES", "2")
     assert figure_processes() == 2
+
+
+def test_return_values_come_back_from_the_helper_and_from_here():
+    from satchain.report.gallery import item_thumbnail
+    from satchain.scene import Scene, SlantedEdge
+
+    scene = Scene(20.0, 20.0, (SlantedEdge("e", center_m=(10.0, 10.0), size_m=16.0),), pixel_m=0.25)
+    fp, det = np.full((10, 10), 0.3), np.full((4, 4), 0.5)
+    args = (scene, {"id": "e", "kind": "slanted_edge"}, (2.0, 2.0, 18.0, 18.0), 0.25, fp, 1.0, det, 4.0)
+    got = []
+    for n in (0, 1):
+        with FigureJobs(n) as jobs:
+            i = jobs.submit(item_thumbnail, *args)
+        got.append(jobs.result(i))
+    assert got[0] == got[1] and [p["title"] for p in got[0]["panels"]] == ["ground truth", "focal plane", "detector"]
+    assert got[0]["panels"][0]["width"] == 64  # 16 m at 0.25 m

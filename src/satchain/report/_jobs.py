@@ -63,14 +63,22 @@ class FigureJobs:
         self._procs: list[subprocess.Popen] = []
         self._feeders: list[threading.Thread] = []
         self._errors: list[str] = []
+        self._results: dict[int, Any] = {}
 
-    def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
-        if self.processes <= 0:
-            _draw(fn, args, kwargs)
-            return
+    def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> int:
+        """Queue ``fn(*args, **kwargs)``; returns its number for :meth:`result` (its return value must pickle)."""
         with self._lock:
-            self._todo.append(len(self._calls))
+            i = len(self._calls)
             self._calls.append((fn, args, kwargs))
+            if self.processes > 0:
+                self._todo.append(i)
+        if self.processes <= 0:
+            self._results[i] = _draw(fn, args, kwargs)
+        return i
+
+    def result(self, i: int) -> Any:
+        """The return value of call ``i`` (after :meth:`wait`)."""
+        return self._results.get(i)
 
     def _take(self, front: bool) -> int | None:
         with self._lock:
@@ -110,10 +118,12 @@ class FigureJobs:
             while (i := self._take(front=True)) is not None:
                 p.stdin.write(b"%d\n" % i)
                 p.stdin.flush()
-                if p.stdout.readline().strip() != b"ok":
+                head = p.stdout.readline().split()
+                if len(head) != 2 or head[0] != b"ok":
                     with self._lock:
                         self._todo.append(i)  # not drawn: this process draws it
                     raise BrokenPipeError
+                self._results[i] = pickle.loads(p.stdout.read(int(head[1])))
             p.stdin.close()
         except (BrokenPipeError, OSError, ValueError):
             pass  # the helper died (its error is read in wait) or was killed
@@ -122,7 +132,7 @@ class FigureJobs:
         self.start()
         while (i := self._take(front=False)) is not None:
             try:
-                _draw(*self._calls[i])
+                self._results[i] = _draw(*self._calls[i])
             except SatchainError:
                 self.kill()
                 raise
@@ -161,10 +171,10 @@ class FigureJobs:
             self.kill()
 
 
-def _draw(fn: Callable[..., Any], args: tuple, kwargs: dict) -> None:
+def _draw(fn: Callable[..., Any], args: tuple, kwargs: dict) -> Any:
     """One call here; its failure reads as a helper's does."""
     try:
-        fn(*args, **kwargs)
+        return fn(*args, **kwargs)
     except Exception as exc:
         raise SatchainError(f"a figure could not be drawn: {type(exc).__name__}: {exc}") from exc
 
@@ -178,17 +188,20 @@ def _close(p: subprocess.Popen) -> None:
 
 def _main() -> int:
     """The helper: read the pickled calls, then run call ``i`` for each line ``i`` on standard input, answering
-    ``ok`` when it is drawn; a failure's traceback goes to standard error (exit status 1)."""
+    ``ok N`` and the N bytes of its pickled return value; a failure's traceback goes to standard error (exit
+    status 1)."""
     import matplotlib
 
     matplotlib.use("Agg")
     stdin = sys.stdin.buffer
     calls = pickle.loads(stdin.read(int(stdin.readline())))
+    out = sys.stdout.buffer
+    sys.stdout = sys.stderr  # what a figure prints cannot corrupt the answers
     for line in stdin:
         fn, args, kwargs = calls[int(line)]
-        fn(*args, **kwargs)
-        sys.stdout.write("ok\n")
-        sys.stdout.flush()
+        value = pickle.dumps(fn(*args, **kwargs), protocol=pickle.HIGHEST_PROTOCOL)
+        out.write(b"ok %d\n" % len(value) + value)
+        out.flush()
     return 0
 
 

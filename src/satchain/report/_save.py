@@ -78,5 +78,5 @@ def _save_palette_png(fig, path: Path, **kwargs) -> None:
         rgb = Image.alpha_composite(Image.new("RGBA", rgba.size, "white"), rgba).convert("RGB")
     else:
         rgb = _render_rgb(fig, kwargs.get("dpi"))
-    q = rgb.quantize(colors=PNG_COLOURS, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    q = rgb.quantize(colors=PNG_COLOURS, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
     q.save(path, format="PNG", compress_level=6)

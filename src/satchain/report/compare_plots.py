@@ -143,14 +143,14 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
     with matplotlib.rc_context(rc_for(PRINT_WIDTH_IN)):
         fig, top, bot = _edge_figure()
         x, near = c["x_px"], np.abs(c["x_px"]) <= 6
-        for ax, r, key, lab in (
-            (top[0], bot[0], "esf", "ESF (normalised)"),
-            (top[1], bot[1], "lsf", "LSF (1/px)"),
+        for ax, r, key, lab, where in (  # fixed legend corners: "best" searches every point (slow)
+            (top[0], bot[0], "esf", "ESF (normalised)", "upper left"),
+            (top[1], bot[1], "lsf", "LSF (1/px)", "upper right"),
         ):
             ax.plot(x[near], c[key + "_measured"][near], color=MEAS, lw=1.4, label="measured")
             ax.plot(x[near], c[key + "_predicted"][near], color=PRED, ls="--", lw=1.4, label="predicted")
             ax.set_ylabel(lab)
-            ax.legend(loc="best")
+            ax.legend(loc=where)
             r.plot(x[near], c[key + "_measured"][near] - c[key + "_predicted"][near], color=MEAS, lw=1)
             _band(r, None)
             r.set_xlabel("distance from edge (px)")

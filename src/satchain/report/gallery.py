@@ -22,7 +22,7 @@ from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import REPORT_KINDS, measured_entries
 from satchain.scene.objects import Car, House, Railway, Wagon
 
-__all__ = ["GALLERY_KINDS", "plot_image_with_rois", "target_thumbnails"]
+__all__ = ["GALLERY_KINDS", "item_thumbnail", "plot_image_with_rois", "target_thumbnails", "thumbnail_calls"]
 
 #: Measurement targets (every one is shown) and real-world objects (the first of each kind is shown).
 GALLERY_KINDS = tuple(REPORT_KINDS)
@@ -143,30 +143,44 @@ def _chosen_items(ctx) -> list[dict]:
     return items
 
 
-def target_thumbnails(ctx) -> list[dict]:
-    """Per shown item: id, kind, box (m) and three panels (ground truth, focal plane, detector), each a dict
-    with ``title``, ``png`` (bytes), ``width``/``height`` (px) and ``pixel_m``."""
+def thumbnail_calls(ctx) -> list[tuple]:
+    """The arguments of :func:`item_thumbnail` for every shown item (plain data: the scene, crops, pixel sizes),
+    so that the thumbnails can be made in helper processes (:class:`satchain.report._jobs.FigureJobs`)."""
     p = float(ctx.config.scene.pixel_m)
     scene = _scene(ctx)
     fp_pixel = p * float(ctx.simulator.D)
     gsd = float(ctx.image_gsd_m)
     det = _to_reflectance(ctx)
     extent = (ctx.image.shape[1] * gsd, ctx.image.shape[0] * gsd)
-    out = []
+    calls = []
     for it in _chosen_items(ctx):
         box = _box(it, extent)
-        x0, y0, x1, y1 = box
-        win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
-        panels = []
-        for title, arr, pix in (
-            ("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p),
-            ("focal plane", _crop(np.asarray(ctx.focal_plane, float), box, fp_pixel), fp_pixel),
-            ("detector", _crop(det, box, gsd), gsd),
-        ):
-            if arr.size == 0:
-                continue
-            png, wpx, hpx = _png(arr)
-            shown_pix = pix * max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
-            panels.append({"title": title, "png": png, "width": wpx, "height": hpx, "pixel_m": shown_pix})
-        out.append({"id": it["id"], "kind": it["kind"], "box_m": box, "panels": panels})
-    return out
+        fp = _crop(np.asarray(ctx.focal_plane, float), box, fp_pixel)
+        calls.append((scene, {"id": it["id"], "kind": it["kind"]}, box, p, fp, fp_pixel, _crop(det, box, gsd), gsd))
+    return calls
+
+
+def item_thumbnail(scene, it: dict, box, p: float, fp: np.ndarray, fp_pixel: float, det: np.ndarray,
+                   gsd: float) -> dict:  # fmt: skip
+    """One item's three panels (ground truth rendered here, focal plane and detector crops): see
+    :func:`target_thumbnails`."""
+    x0, y0, x1, y1 = box
+    win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
+    panels = []
+    for title, arr, pix in (
+        ("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p),
+        ("focal plane", fp, fp_pixel),
+        ("detector", det, gsd),
+    ):
+        if arr.size == 0:
+            continue
+        png, wpx, hpx = _png(arr)
+        shown_pix = pix * max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
+        panels.append({"title": title, "png": png, "width": wpx, "height": hpx, "pixel_m": shown_pix})
+    return {"id": it["id"], "kind": it["kind"], "box_m": box, "panels": panels}
+
+
+def target_thumbnails(ctx) -> list[dict]:
+    """Per shown item: id, kind, box (m) and three panels (ground truth, focal plane, detector), each a dict
+    with ``title``, ``png`` (bytes), ``width``/``height`` (px) and ``pixel_m``."""
+    return [item_thumbnail(*args) for args in thumbnail_calls(ctx)]

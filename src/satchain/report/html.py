@@ -205,7 +205,9 @@ def _fit_rows(system) -> list[dict]:
     return out
 
 
-def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> None:
+def write_report(
+    ctx, path: Path, *, curve_files: list[str] | None = None, thumbnails: list[dict] | None = None
+) -> None:
     """Render ``report.html`` from the run's figures (``ctx.out/figures``, ``ctx.out/budget``) and results."""
     from satchain.report.gallery import target_thumbnails
 
@@ -242,7 +244,9 @@ def write_report(ctx, path: Path, *, curve_files: list[str] | None = None) -> No
         results=res,
         as_built=res.get("as_built_differences") or [],
         tol=res.get("tolerances") or {},
-        thumbs=_thumbs_with_overlays(ctx, target_thumbnails(ctx), _bar_limit(res)),
+        thumbs=_thumbs_with_overlays(
+            ctx, target_thumbnails(ctx) if thumbnails is None else thumbnails, _bar_limit(res)
+        ),
         flags=_all_flags(ctx, res),
         bar_rows=_bar_rows,
         correction_range=_correction_range,

@@ -78,14 +78,14 @@ def plot_line_of_sight(tp, n_rows: int, path: Path, edges: list[dict] | None = N
         a.set_ylabel("line of sight (px)")
         a.set_title(f"Line of sight over the scan ({tp.stages} TDI stages x {tp.line_time_s * 1e6:.1f} us lines)")
         a.grid(alpha=0.3)
-        a.legend()
+        a.legend(loc="upper right")
         b.plot(rows, dx - rows * tp.drift_px[0], lw=1.0, label="ACT, less the Earth-rotation shear")
         b.plot(rows, dy - rows * tp.drift_px[1], lw=1.0, label="ALT, less the along-track scale")
         b.set_xlabel("image row")
         b.set_ylabel("row displacement (px)")
         b.set_title("What each row saw: the window mean of the line of sight (rows shift by it; the rest blurs)")
         b.grid(alpha=0.3)
-        b.legend()
+        b.legend(loc="upper right")
         if tracks:
             c = axes[2]
             for ident, r, x in tracks:

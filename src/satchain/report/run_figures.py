@@ -110,7 +110,7 @@ def plot_edges_overview(edges: list[dict], path: Path) -> None:
         ax.set_ylabel("MTF")
         ax.set_title("Slanted edges: measured (solid) vs predicted (dashed) MTF")
         ax.grid(alpha=0.3)
-        ax.legend()
+        ax.legend(loc="upper right")  # the MTFs fall from the top left
         save_figure(fig, path, dpi=100)
 
 
