@@ -254,8 +254,14 @@ def _write_images(result: RunResult, out: Path) -> None:
     io.write_png(d / "focal_plane.png", io.preview_uint8(sim.focal_plane), pixel_m=sim.focal_plane_pixel_m)
 
 
-def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None) -> None:
-    """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``."""
+#: modules the figure helpers import first (satchain.report._jobs)
+_FIGURE_MODULES = ("satchain.report.compare_plots", "satchain.report.gallery", "satchain.report.budget",
+                   "satchain.report.run_figures", "satchain.report.motion_plot", "satchain.scene")  # fmt: skip
+
+
+def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None, jobs=None) -> None:
+    """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``; ``jobs``: a
+    :class:`satchain.report._jobs.FigureJobs` already launched (its helpers warm), else one made here."""
     from satchain.report import curves, html, run_figures
     from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
@@ -266,9 +272,15 @@ def write_run_directory(result: RunResult, out: Path, *, progress: Progress | No
     results = result.to_json_dict()
     view = ReportInputs(result, out, results)
     from satchain.report.gallery import item_thumbnail, thumbnail_calls
+    from satchain.scene import SiemensStar
 
-    with FigureJobs() as jobs:  # figures of plain data in helper processes, the rest here meanwhile
-        thumbs = [jobs.submit(item_thumbnail, *args) for args in thumbnail_calls(view)]
+    if jobs is None:
+        jobs = FigureJobs()
+        jobs.launch(_FIGURE_MODULES)  # they import while the thumbnails' inputs are cut here
+    with jobs:  # plain-data figures in helpers, the rest here
+        # the exact Siemens-star render is the longest call: first, so that it overlaps everything else
+        star = SiemensStar.kind
+        thumbs = [jobs.submit(item_thumbnail, *a, first=a[1]["kind"] == star) for a in thumbnail_calls(view)]
         _write_budget_and_scene(result, out, jobs)
         shown = run_figures.write_run_figures(view, jobs=jobs)
         _write_images(result, out)

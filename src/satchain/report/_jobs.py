@@ -65,13 +65,17 @@ class FigureJobs:
         self._errors: list[str] = []
         self._results: dict[int, Any] = {}
 
-    def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> int:
-        """Queue ``fn(*args, **kwargs)``; returns its number for :meth:`result` (its return value must pickle)."""
+    def submit(self, fn: Callable[..., Any], *args: Any, first: bool = False, **kwargs: Any) -> int:
+        """Queue ``fn(*args, **kwargs)``; returns its number for :meth:`result` (its return value must pickle).
+        ``first``: a long call, put at the front (a helper takes it early, so nobody waits for it at the end)."""
         with self._lock:
             i = len(self._calls)
             self._calls.append((fn, args, kwargs))
             if self.processes > 0:
-                self._todo.append(i)
+                if first:
+                    self._todo.appendleft(i)
+                else:
+                    self._todo.append(i)
         if self.processes <= 0:
             self._results[i] = _draw(fn, args, kwargs)
         return i
@@ -86,9 +90,10 @@ class FigureJobs:
                 return None
             return self._todo.popleft() if front else self._todo.pop()
 
-    def start(self) -> None:
-        """Start the helpers on the calls queued so far (no-op when they run or nothing is queued)."""
-        if self._procs or not self._todo:
+    def launch(self, preload: tuple[str, ...] = ()) -> None:
+        """Start the helper processes now, importing ``preload`` (module names) while the caller computes what
+        they will draw: their start-up (matplotlib, the report modules) is then off the critical path."""
+        if self._procs or self.processes <= 0:
             return
         import satchain
 
@@ -96,16 +101,25 @@ class FigureJobs:
         root = str(Path(satchain.__file__).resolve().parents[1])
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         env["MPLBACKEND"] = "Agg"
-        payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
-        for _ in range(min(self.processes, len(self._todo))):
-            p = subprocess.Popen(
-                [sys.executable, "-m", "satchain.report._jobs"],
-                stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.PIPE,
-                env=env,
+        for _ in range(self.processes):
+            self._procs.append(
+                subprocess.Popen(
+                    [sys.executable, "-m", "satchain.report._jobs", *preload],
+                    stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.PIPE,
+                    env=env,
+                )
             )
-            self._procs.append(p)
+
+    def start(self) -> None:
+        """Hand the calls queued so far to the helpers (launched here unless :meth:`launch` did)."""
+        if self._feeders or not self._todo:
+            return
+        if not self._procs:
+            self.launch()
+        payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
+        for p in self._procs:
             t = threading.Thread(target=self._feed, args=(p, payload), daemon=True)
             self._feeders.append(t)
             t.start()
@@ -130,6 +144,10 @@ class FigureJobs:
 
     def wait(self) -> None:
         self.start()
+        if not self._feeders:  # launched, given nothing: let them exit
+            for p in self._procs:
+                with contextlib.suppress(OSError):
+                    p.stdin.close()
         while (i := self._take(front=False)) is not None:
             try:
                 self._results[i] = _draw(*self._calls[i])
@@ -193,8 +211,15 @@ def _main() -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    import importlib
+
+    for module in sys.argv[1:]:  # what the calls will need, imported while the caller computes
+        importlib.import_module(module)
     stdin = sys.stdin.buffer
-    calls = pickle.loads(stdin.read(int(stdin.readline())))
+    head = stdin.readline()
+    if not head.strip():
+        return 0  # given nothing to draw
+    calls = pickle.loads(stdin.read(int(head)))
     out = sys.stdout.buffer
     sys.stdout = sys.stderr  # what a figure prints cannot corrupt the answers
     for line in stdin:
