@@ -65,3 +65,14 @@ def test_return_values_come_back_from_the_helper_and_from_here():
         got.append(jobs.result(i))
     assert got[0] == got[1] and [p["title"] for p in got[0]["panels"]] == ["ground truth", "focal plane", "detector"]
     assert got[0]["panels"][0]["width"] == 64  # 16 m at 0.25 m
+
+
+def test_a_helper_that_dies_at_start_leaves_its_calls_to_this_process(tmp_path, monkeypatch):
+    """A helper that cannot import (here: a module that does not exist) dies before drawing: the run's own
+    process draws every call and the run goes on."""
+    tp = _path()
+    jobs = FigureJobs(1)
+    jobs.launch(("satchain.no_such_module",))
+    with jobs:
+        jobs.submit(plot_line_of_sight, tp, 60, tmp_path / "e.png")
+    assert (tmp_path / "e.png").is_file()

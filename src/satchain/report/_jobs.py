@@ -62,7 +62,6 @@ class FigureJobs:
         self._lock = threading.Lock()
         self._procs: list[subprocess.Popen] = []
         self._feeders: list[threading.Thread] = []
-        self._errors: list[str] = []
         self._results: dict[int, Any] = {}
 
     def submit(self, fn: Callable[..., Any], *args: Any, first: bool = False, **kwargs: Any) -> int:
@@ -102,15 +101,17 @@ class FigureJobs:
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         env["MPLBACKEND"] = "Agg"
         for _ in range(self.processes):
-            self._procs.append(
-                subprocess.Popen(
+            try:
+                p = subprocess.Popen(
                     [sys.executable, "-m", "satchain.report._jobs", *preload],
                     stdin=subprocess.PIPE,
                     stdout=subprocess.PIPE,
                     stderr=subprocess.PIPE,
                     env=env,
                 )
-            )
+            except OSError:  # no helper can start here: every call is drawn in this process
+                break
+            self._procs.append(p)
 
     def start(self) -> None:
         """Hand the calls queued so far to the helpers (launched here unless :meth:`launch` did)."""
@@ -118,6 +119,8 @@ class FigureJobs:
             return
         if not self._procs:
             self.launch()
+        if not self._procs:
+            return
         payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
         for p in self._procs:
             t = threading.Thread(target=self._feed, args=(p, payload), daemon=True)
@@ -143,28 +146,30 @@ class FigureJobs:
             pass  # the helper died (its error is read in wait) or was killed
 
     def wait(self) -> None:
+        """Draw here what the helpers have not taken, wait for them; a call a helper could not finish (it died,
+        or the call raised there) is drawn here again, so only a call that fails here too raises."""
         self.start()
         if not self._feeders:  # launched, given nothing: let them exit
             for p in self._procs:
                 with contextlib.suppress(OSError):
                     p.stdin.close()
-        while (i := self._take(front=False)) is not None:
-            try:
-                self._results[i] = _draw(*self._calls[i])
-            except SatchainError:
-                self.kill()
-                raise
-        for t in self._feeders:
-            t.join()
+        while True:
+            while (i := self._take(front=False)) is not None:
+                try:
+                    self._results[i] = _draw(*self._calls[i])
+                except SatchainError:
+                    self.kill()
+                    raise
+            for t in self._feeders:
+                t.join()
+            if not self._todo:  # the feeders are done: nothing can be handed back any more
+                break
         procs, self._procs, self._feeders = self._procs, [], []
-        errors = []
         for p in procs:
-            err = p.stderr.read().decode(errors="replace").strip()
-            if p.wait() != 0:
-                errors.append(err.splitlines()[-1] if err else f"exit status {p.returncode}")
+            with contextlib.suppress(OSError):
+                p.stderr.read()  # a helper's error: its call was drawn here instead (above)
+            p.wait()
             _close(p)
-        if errors:
-            raise SatchainError(f"a figure could not be drawn: {errors[0]}")
 
     def kill(self) -> None:
         with self._lock:
