@@ -22,7 +22,15 @@ from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import REPORT_KINDS, measured_entries
 from satchain.scene.objects import Car, House, Railway, Wagon
 
-__all__ = ["GALLERY_KINDS", "item_thumbnail", "plot_image_with_rois", "target_thumbnails", "thumbnail_calls"]
+__all__ = [
+    "GALLERY_KINDS",
+    "draw_image_with_rois",
+    "image_rois_args",
+    "item_thumbnail",
+    "plot_image_with_rois",
+    "target_thumbnails",
+    "thumbnail_calls",
+]
 
 #: Measurement targets (every one is shown) and real-world objects (the first of each kind is shown).
 GALLERY_KINDS = tuple(REPORT_KINDS)
@@ -48,10 +56,19 @@ def _to_reflectance(ctx):
 def plot_image_with_rois(ctx, path: Path) -> None:
     """The simulated image (detector samples) with every measured target's region of interest drawn and
     labelled, and every other object outlined by kind."""
-    img = _to_reflectance(ctx)
-    gsd = float(ctx.image_gsd_m)
-    h, w = img.shape
+    draw_image_with_rois(*image_rois_args(ctx), path)
+
+
+def image_rois_args(ctx) -> tuple:
+    """The plain data :func:`draw_image_with_rois` needs (a job for a helper process)."""
     rois = {m["id"]: m["roi_px"] for _, m in measured_entries(ctx.measured) if m.get("roi_px") is not None}
+    return _to_reflectance(ctx), float(ctx.image_gsd_m), rois, ctx.truth["items"]
+
+
+def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[dict], path: Path) -> None:
+    """:func:`plot_image_with_rois` from plain data: the image in reflectance, its GSD, the regions measured
+    (pixel boxes by id) and the truth's items."""
+    h, w = img.shape
     scale = min(820.0 / w, 1150.0 / h, 3.0)
     width_in = w * scale / 100 + 1.0
     with matplotlib.rc_context(rc_for(width_in)):
@@ -59,7 +76,7 @@ def plot_image_with_rois(ctx, path: Path) -> None:
         ax = fig.add_subplot()
         ax.imshow(img, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, w * gsd, h * gsd, 0))
         seen = set()
-        for it in ctx.truth["items"]:
+        for it in items:
             x0, y0, x1, y1 = it["bbox_m"]
             kind = it["kind"]
             if kind in REPORT_KINDS:

@@ -19,7 +19,9 @@ from satchain.report.kinds import EDGES, REPORT_KINDS, WEDGES
 __all__ = [
     "plot_edges_overview",
     "plot_scene_overview",
+    "draw_target_chain",
     "plot_target_chain",
+    "target_chain_args",
     "render_scene_overview",
     "write_run_figures",
 ]
@@ -59,16 +61,27 @@ def _crop(image: np.ndarray, bbox_m, pixel_m: float) -> tuple[np.ndarray, tuple]
 
 def plot_target_chain(ctx, item: dict, path: Path) -> None:
     """One target at ground truth, in the focal plane and on the detector (the paper's Figure 4a-c)."""
+    draw_target_chain(*target_chain_args(ctx, item), path)
+
+
+def target_chain_args(ctx, item: dict) -> tuple:
+    """The plain data :func:`draw_target_chain` needs (a job for a helper process): the scene (rendered there),
+    the focal-plane and detector crops."""
     from satchain.report.gallery import _scene
 
-    sc = ctx.config.scene
+    p, D, gsd = float(ctx.config.scene.pixel_m), int(ctx.simulator.D), float(ctx.image_gsd_m)
+    fp = _crop(ctx.focal_plane, item["bbox_m"], p * D)
+    det = _crop(ctx.image, item["bbox_m"], gsd)
+    return _scene(ctx), item, p, D, gsd, fp, det
+
+
+def draw_target_chain(scene, item: dict, p: float, D: int, gsd: float, fp: tuple, det: tuple, path: Path) -> None:
+    """:func:`plot_target_chain` from plain data (``fp``, ``det``: each crop with its extent)."""
     x0, y0, x1, y1 = item["bbox_m"]
-    p = sc.pixel_m
     win = (int(y0 / p), int(x0 / p), max(int(np.ceil((y1 - y0) / p)), 1), max(int(np.ceil((x1 - x0) / p)), 1))
-    gt = _scene(ctx).render(win, pixel_m=p)
+    gt = scene.render(win, pixel_m=p)
     gt_ext = (win[1] * p, (win[1] + win[3]) * p, (win[0] + win[2]) * p, win[0] * p)
-    fp, fp_ext = _crop(ctx.focal_plane, item["bbox_m"], p * ctx.simulator.D)
-    det, det_ext = _crop(ctx.image, item["bbox_m"], ctx.image_gsd_m)
+    (fp, fp_ext), (det, det_ext) = fp, det
     aspect = (x1 - x0) / max(y1 - y0, 1e-9)
     with matplotlib.rc_context(rc_for(9)):
         if aspect > 2:  # long targets (a wedge along x): panels one above the other
@@ -82,8 +95,8 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
             axes = fig.subplots(1, 3)
         panels = (
             (gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"),
-            (fp, fp_ext, f"(b) focal plane, {p * ctx.simulator.D * 100:g} cm samples"),
-            (det, det_ext, f"(c) detector, GSD {ctx.image_gsd_m:.3g} m"),
+            (fp, fp_ext, f"(b) focal plane, {p * D * 100:g} cm samples"),
+            (det, det_ext, f"(c) detector, GSD {gsd:.3g} m"),
         )
         for ax, (im, ext, title) in zip(axes, panels, strict=True):
             ax.imshow(im, cmap="gray", extent=ext, interpolation="nearest")
@@ -121,7 +134,7 @@ def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
     caller waits for it); without it every figure is drawn here."""
     from satchain.report._jobs import FigureJobs
     from satchain.report.curves import build_curves
-    from satchain.report.gallery import plot_image_with_rois
+    from satchain.report.gallery import draw_image_with_rois, image_rois_args
 
     if jobs is None:
         with FigureJobs(0) as inline:
@@ -147,9 +160,9 @@ def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
 
         measured = (ctx.measured or {}).get(EDGES.key, [])  # the summaries with per-line edge positions
         jobs.submit(plot_line_of_sight, tp, int(ctx.image.shape[0]), d / "line_of_sight.png", measured)
-    jobs.start()
-    plot_image_with_rois(ctx, d / "image_rois.png")
+    jobs.submit(draw_image_with_rois, *image_rois_args(ctx), d / "image_rois.png")
     for item in ctx.truth["items"]:
         if item["kind"] == WEDGES.kind and any(w["id"] == item["id"] for w in r.get(WEDGES.key, [])):
-            plot_target_chain(ctx, item, d / f"fig4_wedge_{item['id']}.png")
+            jobs.submit(draw_target_chain, *target_chain_args(ctx, item), d / f"fig4_wedge_{item['id']}.png")
+    jobs.start()
     return curves
