@@ -148,3 +148,32 @@ def test_a_signal_whose_exception_library_code_swallows_still_stops_the_run(tmp_
     assert not list(tmp_path.glob(".res.*"))
     assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_signal_raised_where_python_ignores_exceptions_stops_the_run_quietly(tmp_path, reduced_scene_toml, capfd):
+    """CI saw it: the SIGTERM handler ran inside an import lock's weakref callback, where Python prints
+    "Exception ignored ... Traceback" and carries on. The run stops at its next progress step, and the
+    interruption it recorded is not printed as an ignored exception."""
+    import satchain
+    from satchain._safety import Interrupted
+
+    (tmp_path / "scene.toml").write_text(reduced_scene_toml)
+    cfg = satchain.RunConfig.from_dict({"scene": {"layout": str(tmp_path / "scene.toml"), "pixel_m": 0.49}})
+    stages = []
+
+    class SignalsWhenCollected:
+        def __del__(self):  # exceptions raised here are "ignored" by Python
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.5)  # the handler runs here
+
+    def progress(stage, done, total):
+        stages.append(stage)
+        if stage == "scene" and stages.count("scene") == 1:
+            SignalsWhenCollected()  # collected at once: its __del__ runs inside this call
+
+    with pytest.raises(Interrupted):
+        satchain.run(cfg, out_dir=tmp_path / "res", progress=progress)
+    assert "simulate" not in stages  # stopped at the next step, not at the end
+    err = capfd.readouterr().err
+    assert "Exception ignored" not in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == [tmp_path / "scene.toml"]

@@ -22,6 +22,7 @@ import os
 import shutil
 import signal
 import socket
+import sys
 import threading
 import time
 from collections.abc import Iterable, Iterator, Mapping
@@ -290,9 +291,18 @@ def terminate_as_interrupt() -> Iterator[_Received]:
         handlers[signal.SIGTERM] = signal.signal(signal.SIGTERM, _raise)
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         handlers[signal.SIGINT] = signal.signal(signal.SIGINT, _sigint)
+    previous_hook = sys.unraisablehook
+
+    def _quiet(unraisable):  # an interruption raised where Python ignores exceptions (an import lock's
+        if received.signum is not None and isinstance(unraisable.exc_value, KeyboardInterrupt):  # callback)
+            return  # is recorded: check() raises it again, so no "Exception ignored" traceback for it
+        previous_hook(unraisable)
+
+    sys.unraisablehook = _quiet
     try:
         yield received
     finally:
+        sys.unraisablehook = previous_hook
         for signum, previous in handlers.items():
             signal.signal(signum, previous)
 

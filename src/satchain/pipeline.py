@@ -370,10 +370,16 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
         try:
             _claim_run_dir(staging)
-            result = run_in_memory(config, progress=progress)
+
+            def checked(stage: str, done: int, total: int) -> None:  # a swallowed signal stops the run here too
+                received.check()
+                if progress is not None:
+                    progress(stage, done, total)
+
+            result = run_in_memory(config, progress=checked)
             t0 = time.perf_counter()
             timings = dict(result.timings_s)
-            write_run_directory(result, staging, progress=progress)
+            write_run_directory(result, staging, progress=checked)
             timings["report"] = round(time.perf_counter() - t0, 3)
             result = dataclasses.replace(result, timings_s=timings)
             from satchain.report._save import write_text
