@@ -38,8 +38,11 @@ class _CaseBars:
         self.cases = self.bar.add_task("cases", total=None)
         self.stage = self.bar.add_task("", total=None, visible=False)
         self.started = False  # whether the cases began (validation passed, the manifest written)
+        self.received = None  # satchain._safety's record of a signal (checked at every step)
 
     def __call__(self, stage: str, done: int, total: int) -> None:
+        if self.received is not None:
+            self.received.check()  # a signal whose exception was swallowed stops the sweep here
         if stage == "cases":
             self.started = True
             self.bar.update(self.cases, completed=done, total=total)
@@ -75,7 +78,7 @@ def simulate_cases(
     names = {**names, "sweep": "--sweep", "inputs": "INPUT", "out_dir": "-o"}
     bars = _CaseBars()
     try:
-        with bars.bar, terminate_as_interrupt():
+        with bars.bar, terminate_as_interrupt() as bars.received:
             cases = simulate_sweep(inputs, system, out, sweep=sweep, seed=seed, progress=bars, notify=_say,
                                    names=names, **options)  # fmt: skip
     except KeyboardInterrupt as exc:
