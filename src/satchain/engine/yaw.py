@@ -147,15 +147,12 @@ def rotated_frame(sim, coarse: np.ndarray) -> np.ndarray:
 
 def rotated_window(sim, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
     """Samples ``start .. start + shape`` (ground-truth coarse coordinates) of the rotated frame, periodically
-    over it, as float32 (a slice where the window does not wrap: no gather copy)."""
-    from satchain.engine.sources import release_pages
+    over it, as float32 (copied by slices, :func:`satchain.engine.sources.take`)."""
+    from satchain.engine.sources import release_pages, take
 
     frame = rotated_frame(sim, coarse)
     iy, ix = (np.mod(np.arange(a, a + n) + e, m) for a, n, e, m in
               zip(start, shape, sim.frame_ext, sim.frame_shape, strict=True))  # fmt: skip
-    if np.all(np.diff(iy) == 1) and np.all(np.diff(ix) == 1):
-        out = np.array(frame[iy[0] : iy[-1] + 1, ix[0] : ix[-1] + 1], dtype=np.float32)
-    else:
-        out = np.asarray(frame[np.ix_(iy, ix)], dtype=np.float32)
+    out = take(frame, iy, ix)
     release_pages(frame)
     return out

@@ -29,13 +29,11 @@ def row_displacements(tp, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
     >>> round(float(dy[1] - dy[0]), 6), float(dx.max())
     (0.05, 0.0)
     """
+    from satchain.tf.pushbroom import window_means
+
     k, m = tp.window_samples, tp.samples_per_line
-    out = []
-    for d in (tp.dy, tp.dx):
-        c = np.concatenate([[0.0], np.cumsum(d)])
-        s = np.arange(n_rows) * m
-        out.append((c[s + k] - c[s]) / k)
-    return out[0], out[1]
+    dy, dx = (window_means(d[: (n_rows - 1) * m + k], m, k) for d in (tp.dy, tp.dx))
+    return dy, dx
 
 
 def _detrend(x: np.ndarray, y: np.ndarray) -> np.ndarray:

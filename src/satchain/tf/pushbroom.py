@@ -45,9 +45,12 @@ __all__ = [
     "PSDWindow",
     "drift_otf",
     "jitter_psd_otf",
+    "log_otf",
+    "log_windows",
     "oscillation_displacement_px",
     "oscillation_otf",
     "psd_window",
+    "window_means",
 ]
 
 _GL8 = np.polynomial.legendre.leggauss(8)
@@ -263,13 +266,20 @@ def log_windows(system, axis: str) -> tuple[np.ndarray, int, int]:
     return (act if axis == "act" else alt), m, n_st * m
 
 
+def window_means(x: np.ndarray, m: int, k: int) -> np.ndarray:
+    """Each row's window mean of a path ``x`` sampled ``m`` times per line, ``k`` samples per window (rows start
+    every ``m`` samples, as many as ``x`` covers): the rows' displacements."""
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    starts = np.arange((x.size - k) // m + 1) * m
+    return (c[starts + k] - c[starts]) / k
+
+
 def log_otf(nu_cy_per_px, x: np.ndarray, m: int, k: int) -> np.ndarray:
     """Expected OTF (complex) over the rows of a sampled line of sight ``x`` (px; ``m`` samples per line, ``k``
     per window) about each row's window mean: ``mean_i mean_{t in window i} exp(2 pi i nu (x(t) - d_i))``."""
     nu = np.atleast_1d(np.asarray(nu_cy_per_px, dtype=float))
-    c = np.concatenate([[0.0], np.cumsum(x)])
     starts = np.arange((x.size - k) // m + 1) * m
-    d = (c[starts + k] - c[starts]) / k  # each row's displacement
+    d = window_means(x, m, k)  # each row's displacement
     out = np.empty(nu.shape, dtype=complex)
     step = max(1, int(2**24 // max(x.size, 1)))
     for a in range(0, nu.size, step):
@@ -345,6 +355,8 @@ class PushbroomTerms:
                 table.frequency_hz, table.psd_px2_per_hz, window_s=self.window_s, line_time_s=self.line_time_s, n_s=n_s
             )
             self.psd[table.axis] = self.psd[table.axis] + w if table.axis in self.psd else w
+        # the [motion.line_of_sight] log on the time grid, per axis (log_windows), made once
+        self.log = {} if mot.line_of_sight is None else {a: log_windows(system, a) for a in ("act", "alt")}
 
     @property
     def active(self) -> bool:
@@ -363,13 +375,11 @@ class PushbroomTerms:
                 comps[f"jitter_psd_{axis}"] = _on_axis(
                     axis, self._pitch_mm[axis], lambda nu, w=w: jitter_psd_otf(nu, w)
                 )
-        if self.system.motion.line_of_sight is not None:
-            for axis in ("act", "alt"):
-                x, m, k = log_windows(self.system, axis)
-                if np.ptp(x) > 0:
-                    comps[f"los_log_{axis}"] = _on_axis_signed(
-                        axis, self._pitch_mm[axis], lambda nu, x=x, m=m, k=k: log_otf(nu, x, m, k)
-                    )
+        for axis, (x, m, k) in self.log.items():
+            if np.ptp(x) > 0:
+                comps[f"los_log_{axis}"] = _on_axis_signed(
+                    axis, self._pitch_mm[axis], lambda nu, x=x, m=m, k=k: log_otf(nu, x, m, k)
+                )
         if self.drift_px is not None:
             dx, dy = self.drift_px
             px, py = self._pitch_mm["act"], self._pitch_mm["alt"]
@@ -432,17 +442,13 @@ class PushbroomTerms:
                 "line_to_line_rms_px": math.sqrt(w.line_to_line_variance_px2),
             }
         log = {}
-        if mot.line_of_sight is not None:
-            for axis in ("act", "alt"):
-                x, m, k = log_windows(self.system, axis)
-                c = np.concatenate([[0.0], np.cumsum(x)])
-                starts = np.arange((x.size - k) // m + 1) * m
-                d = (c[starts + k] - c[starts]) / k
-                lv, sv = float(np.var(d)), float(np.mean(np.diff(d) ** 2)) if d.size > 1 else 0.0
-                var[axis] += lv
-                step[axis] += sv
-                log[axis] = {"line_displacement_rms_px": math.sqrt(lv), "line_to_line_rms_px": math.sqrt(sv),
-                             "rows_averaged": int(d.size)}  # fmt: skip
+        for axis, (x, m, k) in self.log.items():
+            d = window_means(x, m, k)
+            lv, sv = float(np.var(d)), float(np.mean(np.diff(d) ** 2)) if d.size > 1 else 0.0
+            var[axis] += lv
+            step[axis] += sv
+            log[axis] = {"line_displacement_rms_px": math.sqrt(lv), "line_to_line_rms_px": math.sqrt(sv),
+                         "rows_averaged": int(d.size)}  # fmt: skip
         out = {
             "line_time_s": self.line_time_s,
             "tdi_stages": self.stages,
