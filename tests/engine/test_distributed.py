@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 
@@ -109,3 +114,35 @@ def test_simulator_and_sources_survive_pickling_for_process_workers():
     np.testing.assert_array_equal(sim2.decimate_tile(src2, tile), sim.decimate_tile(src, tile))
     stripes = cloudpickle.loads(cloudpickle.dumps(Stripes()))
     np.testing.assert_array_equal(stripes.read(Window(3, 4, 5, 6)), Stripes().read(Window(3, 4, 5, 6)))
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's allocator")
+def test_workers_keep_freed_tile_buffers_despite_dasks_trim_setting():
+    """Dask starts workers with MALLOC_TRIM_THRESHOLD_=65536, which fixes glibc's mmap threshold at 128 KiB, so
+    every tile buffer would be a fresh mapping faulted in again on each task. Once a stage-1 task has run, a
+    freed 16 MiB buffer stays in the heap (glibc's own statistics) and is reused."""
+    code = textwrap.dedent(
+        """
+        import ctypes, ctypes.util
+        import numpy as np
+        libc = ctypes.CDLL(ctypes.util.find_library("c"))
+        class Info(ctypes.Structure):
+            _fields_ = [(k, ctypes.c_size_t) for k in
+                        "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
+        libc.mallinfo2.restype = Info
+        def kept_after_free():
+            a = np.ones(2**21)  # 16 MiB
+            del a
+            return libc.mallinfo2().fordblks >= 2**24
+        before = kept_after_free()
+        from satchain.engine.distributed import _keep_freed_memory
+        _keep_freed_memory()
+        print(before, kept_after_free())
+        """
+    )
+    env = {**os.environ, "MALLOC_TRIM_THRESHOLD_": "65536"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=False)
+    if "mallinfo2" in out.stderr:
+        pytest.skip("glibc without mallinfo2")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "True"]

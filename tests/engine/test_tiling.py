@@ -50,3 +50,40 @@ def test_progress_reports_every_tile():
     sim.run(ArraySource(img, pixel_m=0.035), progress=lambda done, total: calls.append((done, total)))
     n = len(sim.tiles)
     assert calls == [(i, n) for i in range(1, n + 1)]
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    ny=st.integers(1, 5000),
+    nx=st.integers(1, 5000),
+    tile_coarse=st.integers(16, 2000),
+    D=st.integers(1, 14),
+    margin_blocks=st.integers(0, 60),
+)
+def test_fast_tiles_are_balanced_and_cover_the_grid_once(ny, nx, tile_coarse, D, margin_blocks):
+    """Equal tiles per axis (no short remainder tile, which costs nearly a full transform), no more of them
+    than ``tile_coarse`` needs, each coarse sample in exactly one tile, each input window holding its samples
+    with both margins, at D times a fast FFT length."""
+    from scipy.fft import next_fast_len
+
+    from satchain.engine.tiling import plan_tiles
+
+    m = margin_blocks * D
+    tiles = plan_tiles((ny, nx), D=D, tile_coarse=tile_coarse, margin_px=m, fast=True)
+    seen = np.zeros((ny, nx), dtype=np.int32)
+    for t in tiles:
+        seen[t.coarse.rows, t.coarse.cols] += 1
+        for j0, n, i0, length in ((t.coarse.row0, t.coarse.height, t.input.row0, t.input.height),
+                                  (t.coarse.col0, t.coarse.width, t.input.col0, t.input.width)):  # fmt: skip
+            assert i0 == D * j0 - m and length >= D * n + 2 * m
+            if D > 1:
+                assert length % D == 0 and next_fast_len(length // D) == length // D
+    assert np.all(seen == 1)
+    for axis, n in ((0, ny), (1, nx)):
+        sizes = sorted({(t.coarse.height, t.coarse.width)[axis] for t in tiles})
+        assert len({t.index[axis] for t in tiles}) <= -(-n // tile_coarse)
+        assert len(sizes) <= 2 and (len(sizes) == 1 or sizes[0] < sizes[1])  # full tiles, then one shorter
+        lengths = {
+            (t.input.height, t.input.width)[axis] for t in tiles if (t.coarse.height, t.coarse.width)[axis] == sizes[-1]
+        }
+        assert len(lengths) == 1

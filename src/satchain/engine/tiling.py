@@ -130,8 +130,9 @@ def plan_tiles(
     """Cut the coarse grid (coarse sample ``j`` = fine pixel ``D j``) into square tiles of ``tile_coarse``
     samples; each reads fine pixels ``[D j0 - margin_px, D j1 + margin_px)`` (``margin_px`` a multiple of
     ``D``), offset by ``origin_px`` (the fine pixel of coarse sample 0). Input windows may extend beyond the
-    ground truth: the border rule fills them. ``fast``: each input window is stretched at its far end to ``D``
-    times a fast FFT length (a longer far margin: the same coarse samples, much faster transforms).
+    ground truth: the border rule fills them. ``fast``: tiles of equal length along each axis (at most
+    ``tile_coarse`` samples before stretching), each input window stretched at its far end to ``D`` times a
+    fast FFT length (a longer far margin: the same coarse samples, much faster transforms).
 
     Examples
     --------
@@ -147,11 +148,21 @@ def plan_tiles(
     def length(n: int) -> int:
         return D * sfft.next_fast_len(n // D) if fast and D > 1 else n
 
+    def step(n: int) -> int:
+        """Coarse samples per tile along an axis. ``fast``: as many tiles as ``tile_coarse`` needs, of equal
+        length (no short remainder tile, which costs nearly a full one), each the most samples its fast
+        input window holds."""
+        if not fast:
+            return tile_coarse
+        h = -(-n // -(-n // tile_coarse))
+        return max(h, (length(D * h + 2 * margin_px) - 2 * margin_px) // D)
+
+    sy, sx = step(n_coarse[0]), step(n_coarse[1])
     tiles = []
-    for ti, j0 in enumerate(range(0, n_coarse[0], tile_coarse)):
-        h = min(tile_coarse, n_coarse[0] - j0)
-        for tj, i0 in enumerate(range(0, n_coarse[1], tile_coarse)):
-            w = min(tile_coarse, n_coarse[1] - i0)
+    for ti, j0 in enumerate(range(0, n_coarse[0], sy)):
+        h = min(sy, n_coarse[0] - j0)
+        for tj, i0 in enumerate(range(0, n_coarse[1], sx)):
+            w = min(sx, n_coarse[1] - i0)
             tiles.append(
                 Tile(
                     index=(ti, tj),
