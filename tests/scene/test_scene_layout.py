@@ -46,6 +46,23 @@ def test_window_equals_crop_fine_pixels(paper):
         np.testing.assert_allclose(tile, full[r : r + h, c : c + w], atol=1e-6, rtol=0)
 
 
+def test_large_window_painted_in_bands_on_threads_equals_one_band(paper, monkeypatch):
+    """A window above PARALLEL_RENDER_PX is painted in row bands on threads: bit-identical to painting it
+    whole (every pixel is its own area average), across the star, wedges, bars and objects."""
+    from satchain.scene import layout
+
+    monkeypatch.setattr(layout, "_render_threads", lambda: 2)
+    window = (-3, 95, 1311, 1207)  # 0.2 m pixels: most of the paper scene, past its top edge
+    monkeypatch.setattr(layout, "PARALLEL_RENDER_PX", 1 << 40)
+    assert len(layout._row_bands(window[2], window[3])) == 2
+    whole = paper.render(window, pixel_m=0.2)
+    monkeypatch.setattr(layout, "PARALLEL_RENDER_PX", 1)
+    cuts = layout._row_bands(window[2], window[3])
+    assert len(cuts) == 9 and cuts[0] == 0 and cuts[-1] == window[2]
+    banded = paper.render(window, pixel_m=0.2)
+    assert banded.dtype == np.float32 and np.array_equal(banded, whole)
+
+
 def test_render_outside_items_is_background(paper):
     img = paper.render((-50, -50, 10, 10), pixel_m=0.1)
     assert np.all(img == np.float32(paper.background))

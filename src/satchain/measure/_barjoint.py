@@ -205,6 +205,21 @@ def _solve(x, y, period, ks, x0, s, prior):
     return beta, float(np.sum((mat @ beta - rhs) ** 2))
 
 
+def _grid_costs(x, y, period, ks, grid, s, prior) -> np.ndarray:
+    """:func:`_solve`'s cost at every phase of ``grid`` in one batch: the same least squares (NumPy's
+    ``lstsq``: SVD, singular values below ``eps max(shape)`` of the largest dropped), stacked; the cost is the
+    residual of projecting the right-hand side on the kept singular vectors."""
+    kk = np.asarray(ks, dtype=float)
+    ph = 2 * np.pi * (x[None, :, None] - np.asarray(grid, dtype=float)[:, None, None]) * kk / period
+    data = np.concatenate([np.ones((len(grid), x.size, 1)), np.cos(ph)], axis=2) / s
+    mat = np.concatenate([data, np.broadcast_to(prior, (len(grid), *prior.shape))], axis=1)
+    rhs = np.concatenate([y / s, np.zeros(prior.shape[0])])
+    u, sv, _ = np.linalg.svd(mat, full_matrices=False)
+    keep = sv > np.finfo(float).eps * max(mat.shape[1:]) * sv[:, :1]
+    proj = np.where(keep, np.einsum("gnm,n->gm", u, rhs), 0.0)
+    return np.sum((rhs - np.einsum("gnm,gm->gn", u, proj)) ** 2, axis=1)
+
+
 def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noise=None):
     """Refit ``fit`` with the phase free, every odd harmonic up to 1.5 cy/px in the model, and the model's
     ``M(k / P)`` as a prior on the harmonics the group cannot observe (``noise``: the profile's 1-sigma from
@@ -278,8 +293,7 @@ def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noi
 def _best_phase(x, y, period, ks, s, prior):
     """Phase minimising the joint cost: a grid over one period, then a bounded scalar minimisation."""
     grid = np.arange(64) * period / 64
-    costs = [_solve(x, y, period, ks, g, s, prior)[1] for g in grid]
-    g0 = grid[int(np.argmin(costs))]
+    g0 = grid[int(np.argmin(_grid_costs(x, y, period, ks, grid, s, prior)))]
     res = minimize_scalar(
         lambda t: _solve(x, y, period, ks, t, s, prior)[1],
         bounds=(g0 - period / 64, g0 + period / 64),

@@ -135,12 +135,29 @@ class Scene:
         p = self.pixel_m if pixel_m is None else check_positive("pixel_m", pixel_m)
         window = (0, 0, *self.shape_px(p)) if window is None else check_window(window)
         row0, col0, h, w = window
+        out = np.empty((h, w), dtype=np.float32)
+        cuts = _row_bands(h, w)
+        if len(cuts) == 2:
+            self._paint_into(out, window, p)
+            return out
+        # a large window: row bands painted on threads (the heavy work is NumPy, which releases the GIL);
+        # every pixel is its own area average, so a band is exactly those rows of the whole window
+        from concurrent.futures import ThreadPoolExecutor
+
+        bands = [(out[a:b], (row0 + a, col0, b - a, w)) for a, b in zip(cuts[:-1], cuts[1:], strict=False)]
+        with ThreadPoolExecutor(_render_threads()) as pool:
+            list(pool.map(lambda band: self._paint_into(band[0], band[1], p), bands))
+        return out
+
+    def _paint_into(self, out: np.ndarray, window: tuple[int, int, int, int], p: float) -> None:
+        """Paint ``window`` (at pixel size ``p``) into ``out`` (float32, its shape)."""
+        row0, col0, h, w = window
         image = np.full((h, w), float(self.background))
         x0, y0, x1, y1 = col0 * p, row0 * p, (col0 + w) * p, (row0 + h) * p
         for item, (bx0, by0, bx1, by1) in zip(self.items, self._bboxes, strict=True):  # type: ignore[attr-defined]
             if bx1 >= x0 - p and bx0 <= x1 + p and by1 >= y0 - p and by0 <= y1 + p:
                 item.paint(image, window, p)
-        return image.astype(np.float32)
+        out[...] = image
 
     def truth(self, pixel_m: float | None = None, window: Window | None = None) -> dict[str, Any]:
         """The truth record: conventions, extent and every item's kind, id, bbox and parameters."""
@@ -169,6 +186,27 @@ class Scene:
                 "items": items,
             }
         )
+
+
+#: Windows of at least this many pixels are painted in row bands on threads (smaller ones: not worth it).
+PARALLEL_RENDER_PX = 1 << 21
+
+
+def _render_threads() -> int:
+    """Threads for painting one window: the CPUs this process may use, at most 4."""
+    import os
+
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(4, cpus))
+
+
+def _row_bands(h: int, w: int) -> list[int]:
+    """Row cuts ``[0, ..., h]`` of a ``h x w`` window: one band below :data:`PARALLEL_RENDER_PX` or on one
+    CPU, else four bands per thread (so that targets crowded into a few rows still spread), at least 64
+    rows each."""
+    threads = _render_threads()
+    n = 1 if h * w < PARALLEL_RENDER_PX or threads == 1 else max(1, min(4 * threads, h // 64))
+    return [h * i // n for i in range(n + 1)]
 
 
 def _jsonable(obj):
