@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from satchain import load_preset
 from satchain.engine.sensor import SensorModel
@@ -151,3 +153,19 @@ def test_errors_name_the_parameter():
         SensorModel().convert(img[:4, :4], origin=(0, 0), units="dn", noise=False)
     with pytest.raises(ConfigError, match="origin"):
         SENSOR.convert(img[:4, :4], origin=(3, 0), units="electrons", noise=True)
+
+
+@settings(max_examples=30, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), log_mean=st.floats(-3.0, np.log10(199.0)))
+def test_low_mean_quantiles_equal_scipy_stats_poisson_ppf(seed, log_mean):
+    """Below 200 electrons the shot noise is the exact Poisson quantile: scipy.stats.poisson.ppf itself, taken
+    from the same special functions without importing scipy.stats (which costs about a second)."""
+    from scipy.stats import poisson
+
+    from satchain.engine.sensor import _poisson_ppf
+
+    rng = np.random.default_rng(seed)
+    u = rng.random(4096)
+    u[:4] = [1e-300, 1e-12, 1 - 1e-16, 0.5]
+    mean = 10.0**log_mean * rng.uniform(0.5, 1.0, u.size)
+    np.testing.assert_array_equal(_poisson_ppf(u, mean), poisson.ppf(np.clip(u, 1e-300, 1 - 1e-16), mean))

@@ -101,3 +101,19 @@ def test_compact_psf_fits_no_tail():
     cal = measure_auto(5.0 + 100.0 * img, scene.truth(), pixel_m=P, ids=[]).calibration
     assert cal["gain"] == pytest.approx(100.0, rel=1e-6) and cal["offset"] == pytest.approx(5.0, abs=1e-4)
     assert cal["tail_fraction"] is None or abs(cal["tail_fraction"]) < 1e-6
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(
+    ny=st.integers(5, 40), nx=st.integers(5, 40), ky=st.integers(1, 5), kx=st.integers(1, 5), seed=st.integers(0, 999)
+)
+def test_valid_convolution_equals_the_direct_sum(ny, nx, ky, kx, seed):
+    """The tail sum's FFT convolution ('valid' part) equals the direct double sum."""
+    from satchain.measure._auto_calibrate import _convolve_valid
+
+    rng = np.random.default_rng(seed)
+    a, k = rng.normal(size=(ny, nx)), rng.normal(size=(ky, kx))
+    direct = np.array(
+        [[np.sum(a[i : i + ky, j : j + kx] * k[::-1, ::-1]) for j in range(nx - kx + 1)] for i in range(ny - ky + 1)]
+    )
+    np.testing.assert_allclose(_convolve_valid(a, k), direct, rtol=0, atol=1e-12 * (1 + np.abs(direct).max()))

@@ -99,6 +99,17 @@ def _tail_kernel() -> np.ndarray:
     return np.where((r >= TAIL_RMIN_PX) & (r <= r_max), 1.0 / np.maximum(r, 1.0) ** 3, 0.0)
 
 
+def _convolve_valid(a: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """``scipy.signal.fftconvolve(a, kernel, mode="valid")`` by real FFTs of a fast size (scipy.signal itself
+    is not imported: it pulls in scipy.stats, about a second of start-up for one convolution)."""
+    import scipy.fft as sfft
+
+    (ny, nx), (ky, kx) = a.shape, kernel.shape
+    shape = [sfft.next_fast_len(n, real=True) for n in (ny + ky - 1, nx + kx - 1)]
+    full = sfft.irfft2(sfft.rfft2(a, shape) * sfft.rfft2(kernel, shape), shape)
+    return full[ky - 1 : ny, kx - 1 : nx]
+
+
 class _Tail:
     """The r^-3 tail sum over the part of the image within ``TAIL_RMAX_PX`` of ``window`` (the image mirrored
     at its borders), plus ``2 pi / R`` times the mean for what lies beyond ``R``."""
@@ -116,11 +127,9 @@ class _Tail:
         self.weight = float(self.kernel.sum() + 2 * math.pi / r_max)
 
     def sum(self, u: np.ndarray) -> np.ndarray:
-        from scipy.signal import oaconvolve
-
         r_max = TAIL_RMAX_PX
         padded = np.pad(u, r_max, mode="symmetric")
-        return oaconvolve(padded, self.kernel, mode="valid") + (2 * math.pi / r_max) * float(np.mean(u))
+        return _convolve_valid(padded, self.kernel) + (2 * math.pi / r_max) * float(np.mean(u))
 
     def at(self, s: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         return s[rows - self.y0, cols - self.x0]
