@@ -85,10 +85,16 @@ def with_rc(width_in: float):
 
 
 def _figure(w: float, h: float, n_cols: int = 1) -> tuple[Figure, list, list]:
-    fig = Figure(figsize=(w, h), dpi=DPI, layout="constrained")
-    gs = fig.add_gridspec(2, n_cols, height_ratios=(3, 1.25))
-    top = [fig.add_subplot(gs[0, i]) for i in range(n_cols)]
-    bottom = [fig.add_subplot(gs[1, i], sharex=top[i]) for i in range(n_cols)]
+    """A plot above its residual panel, ``n_cols`` side by side (a fixed layout in inches, see
+    :func:`grid_axes`)."""
+    fig = Figure(figsize=(w, h), dpi=DPI)
+    left, right, gap = 0.95, 0.15, 0.95
+    col = (w - left - right - gap * (n_cols - 1)) / n_cols
+    tall = h - 0.45 - 0.3 - 0.62
+    g = grid_axes(fig, [(0.0, tall * 3 / 4.25), (0.3, tall * 1.25 / 4.25)], [(0.0 if i == 0 else gap, col)
+                  for i in range(n_cols)], left=left, top=0.45)  # fmt: skip
+    top = [fig.add_axes(g[0][i]) for i in range(n_cols)]
+    bottom = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(n_cols)]
     for ax in top + bottom:
         ax.grid(alpha=0.3)
     return fig, top, bottom
@@ -127,12 +133,35 @@ def _vline(ax, x, color, ls, label=None):
         ax.axvline(x, color=color, ls=ls, lw=1, label=label)
 
 
+def grid_axes(fig: Figure, rows: list[tuple[float, float]], cols: list[tuple[float, float]], *, left: float,
+              top: float) -> list[list[tuple[float, float, float, float]]]:  # fmt: skip
+    """Axes rectangles (figure fractions) of a fixed layout given in inches: ``rows`` as (gap above, height)
+    from ``top`` (the margin above the first gap) down, ``cols`` as (gap before, width) from ``left``. A fixed
+    layout costs nothing at draw time; constrained layout measures every tick label twice per draw."""
+    w_in, h_in = fig.get_size_inches()
+    out, y = [], h_in - top
+    for gap_r, height in rows:
+        y -= gap_r + height
+        x, row = left, []
+        for gap_c, width in cols:
+            x += gap_c
+            row.append((x / w_in, y / h_in, width / w_in, height / h_in))
+            x += width
+        out.append(row)
+    return out
+
+
 def _edge_figure() -> tuple[Figure, list, list]:
-    """ESF | LSF above, the MTF full width below, each with its residual panel underneath."""
-    fig = Figure(figsize=(PRINT_WIDTH_IN, 9.0), dpi=DPI, layout="constrained")
-    gs = fig.add_gridspec(4, 2, height_ratios=(3, 1.1, 3.4, 1.3))
-    top = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[2, :])]
-    bot = [fig.add_subplot(gs[1, i], sharex=top[i]) for i in range(2)] + [fig.add_subplot(gs[3, :], sharex=top[2])]
+    """ESF | LSF above, the MTF full width below, each with its residual panel underneath (a fixed layout in
+    inches: labels at 9.3 pt fit, see :func:`grid_axes`)."""
+    fig = Figure(figsize=(PRINT_WIDTH_IN, 9.0), dpi=DPI)
+    left, gap = 1.0, 0.95
+    col = (PRINT_WIDTH_IN - left - 0.12 - gap) / 2
+    g = grid_axes(fig, [(0.0, 2.2), (0.3, 0.78), (0.82, 2.45), (0.3, 0.93)], [(0.0, col), (gap, col)], left=left,
+                  top=0.62)  # fmt: skip
+    full = [(x, y, 2 * w + gap / PRINT_WIDTH_IN, h) for (x, y, w, h), _ in (g[2], g[3])]
+    top = [fig.add_axes(g[0][0]), fig.add_axes(g[0][1]), fig.add_axes(full[0])]
+    bot = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(2)] + [fig.add_axes(full[1], sharex=top[2])]
     for ax in top + bot:
         ax.grid(alpha=0.3)
     return fig, top, bot
