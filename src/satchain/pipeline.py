@@ -161,8 +161,10 @@ def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, 
     return predicted, comparison
 
 
-def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> RunResult:
-    """Every stage but the report, in memory (see :func:`satchain.run`)."""
+def run_in_memory(config: RunConfig, *, progress: Progress | None = None, after_stage=None) -> RunResult:
+    """Every stage but the report, in memory (see :func:`satchain.run`). ``after_stage(name, **outputs)``, if
+    given, is called once the scene and once the simulation are ready (the run folder's figure helpers start on
+    what those alone decide while the run measures)."""
     report = progress or (lambda stage, done, total: None)
     timings: dict[str, float] = {}
 
@@ -172,9 +174,12 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None) -> Run
         timings[name] = round(time.perf_counter() - t0, 3)
         return out
 
+    after = after_stage or (lambda name, **outputs: None)
     budget = timed("budget", _stage_budget, config)
     scene = timed("scene", _stage_scene, config)
+    after("scene", budget=budget, scene=scene)
     sim = timed("simulate", _stage_simulate, config, budget, scene)
+    after("simulate", budget=budget, scene=scene, sim=sim)
     measured = timed(  # the image's own GSD and the simulated detector's full scale
         "measure", _stage_measure, sim.system or budget.system, scene, sim, config.simulation.noise
     )
@@ -214,20 +219,39 @@ class ReportInputs:
         return self.result.scene.truth_dict
 
 
-def _write_budget_and_scene(result: RunResult, out: Path, jobs) -> None:
-    """The budget's tables and figures and the scene overview, submitted to ``jobs``
-    (:class:`satchain.report._jobs.FigureJobs`: all their inputs pickle; the OTF is rebuilt from the system)."""
-    from satchain.report import run_figures
-    from satchain.report._save import write_text
-    from satchain.report.budget import write_budget_outputs
+class _EarlyFigures:
+    """The run folder's outputs that the budget and scene alone decide (budget tables and figures, the scene
+    overview), and the thumbnails' ground-truth panels once the simulation fixes the image's extent, handed to
+    ``jobs`` (:class:`satchain.report._jobs.FigureJobs`: all their inputs pickle; the OTF is rebuilt from the
+    system) as the run reaches them: the helpers draw them while this process simulates and measures. Called as
+    :func:`run_in_memory`'s ``after_stage``."""
 
-    b, sc = result.budget, result.scene
-    jobs.submit(write_budget_outputs, b.system, dict(b.budget), out / "budget")
-    (out / "images").mkdir(parents=True, exist_ok=True)
-    truth = sc.truth_dict
-    write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
-    p = result.config.scene.overview_pixel_m
-    jobs.submit(run_figures.render_scene_overview, sc.scene, truth, p, out / "figures" / "fig1_scene.png")
+    def __init__(self, config: RunConfig, out: Path, jobs) -> None:
+        self.config, self.out, self.jobs = config, out, jobs
+        self.thumbnails: list[tuple[dict, tuple, int]] = []  # (item, box, job of its ground-truth panel)
+
+    def __call__(self, stage: str, *, budget: BudgetResult, scene: SceneResult, sim=None) -> None:
+        from satchain.report import run_figures
+        from satchain.report._save import write_text
+        from satchain.report.budget import write_budget_outputs
+        from satchain.report.gallery import thumbnail_boxes, truth_panel
+        from satchain.scene import SiemensStar
+
+        out, jobs = self.out, self.jobs
+        if stage == "scene":
+            jobs.submit(write_budget_outputs, budget.system, dict(budget.budget), out / "budget")
+            (out / "images").mkdir(parents=True, exist_ok=True)
+            truth = scene.truth_dict
+            write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
+            p = self.config.scene.overview_pixel_m
+            jobs.submit(run_figures.render_scene_overview, scene.scene, truth, p, out / "figures" / "fig1_scene.png")
+        elif stage == "simulate":
+            gsd = float((sim.system or budget.system).gsd_act_m)
+            extent = (sim.image.shape[1] * gsd, sim.image.shape[0] * gsd)
+            p = float(self.config.scene.pixel_m)
+            for it, box in thumbnail_boxes(scene.truth_dict, extent):  # the exact star render first: the longest
+                job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
+                self.thumbnails.append((it, box, job))
 
 
 def _write_images(result: RunResult, out: Path) -> None:
@@ -259,35 +283,39 @@ _FIGURE_MODULES = ("satchain.report.compare_plots", "satchain.report.gallery", "
                    "satchain.report.run_figures", "satchain.report.motion_plot", "satchain.scene")  # fmt: skip
 
 
-def write_run_directory(result: RunResult, out: Path, *, progress: Progress | None = None, jobs=None) -> None:
+def write_run_directory(
+    result: RunResult, out: Path, *, progress: Progress | None = None, jobs=None, early: _EarlyFigures | None = None
+) -> None:
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``; ``jobs``: a
-    :class:`satchain.report._jobs.FigureJobs` already launched (its helpers warm), else one made here."""
+    :class:`satchain.report._jobs.FigureJobs` already launched (its helpers warm), else one made here; ``early``:
+    the outputs already handed to it while the run computed (:class:`_EarlyFigures`), else handed here."""
     from satchain.report import curves, html, run_figures
     from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
+    from satchain.report.gallery import assemble_thumbnail, thumbnail_crops
     from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
     view = ReportInputs(result, out, results)
-    from satchain.report.gallery import item_thumbnail, thumbnail_calls
-    from satchain.scene import SiemensStar
-
     if jobs is None:
         jobs = FigureJobs()
         jobs.launch(_FIGURE_MODULES)  # they import while the thumbnails' inputs are cut here
     with jobs:  # plain-data figures in helpers, the rest here
-        # the exact Siemens-star render is the longest call: first, so that it overlaps everything else
-        star = SiemensStar.kind
-        thumbs = [jobs.submit(item_thumbnail, *a, first=a[1]["kind"] == star) for a in thumbnail_calls(view)]
-        _write_budget_and_scene(result, out, jobs)
+        if early is None:
+            early = _EarlyFigures(result.config, out, jobs)
+            early("scene", budget=result.budget, scene=result.scene)
+            early("simulate", budget=result.budget, scene=result.scene, sim=result.simulation)
         shown = run_figures.write_run_figures(view, jobs=jobs)
         _write_images(result, out)
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
-    html.write_report(view, out / "report.html", thumbnails=[jobs.result(i) for i in thumbs])
+        crops = thumbnail_crops(view, [box for _, box, _ in early.thumbnails])
+    thumbnails = [assemble_thumbnail(it, box, jobs.result(job), *c)
+                  for (it, box, job), c in zip(early.thumbnails, crops, strict=True)]  # fmt: skip
+    html.write_report(view, out / "report.html", thumbnails=thumbnails)
     report("report", 1, 1)
     write_text(out / "config.toml", config_to_toml(result.config))
 
@@ -376,10 +404,20 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
                 if progress is not None:
                     progress(stage, done, total)
 
-            result = run_in_memory(config, progress=checked)
+            from satchain.report._jobs import FigureJobs
+
+            jobs = FigureJobs()  # warm helpers: they draw what each stage decides while the next one runs
+            jobs.launch(_FIGURE_MODULES)
+            jobs.start()
+            early = _EarlyFigures(config, staging, jobs)
+            try:
+                result = run_in_memory(config, progress=checked, after_stage=early)
+            except BaseException:
+                jobs.kill()
+                raise
             t0 = time.perf_counter()
             timings = dict(result.timings_s)
-            write_run_directory(result, staging, progress=checked)
+            write_run_directory(result, staging, progress=checked, jobs=jobs, early=early)
             timings["report"] = round(time.perf_counter() - t0, 3)
             result = dataclasses.replace(result, timings_s=timings)
             from satchain.report._save import write_text

@@ -76,3 +76,23 @@ def test_a_helper_that_dies_at_start_leaves_its_calls_to_this_process(tmp_path, 
     with jobs:
         jobs.submit(plot_line_of_sight, tp, 60, tmp_path / "e.png")
     assert (tmp_path / "e.png").is_file()
+
+
+def test_calls_submitted_after_start_go_to_the_waiting_helper():
+    """A run hands figures to its helpers while it still computes: a call submitted after start() is taken by
+    the (idle, waiting) helper before this process waits, and its value comes back."""
+    import os
+    import time
+
+    jobs = FigureJobs(1)
+    jobs.launch()
+    jobs.start()
+    with jobs:
+        time.sleep(0.2)  # the helper is idle, waiting for calls
+        i = jobs.submit(os.getpid)
+        deadline = time.monotonic() + 60
+        while i not in jobs._results and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert i in jobs._results  # drawn before wait(): by the helper
+        j = jobs.submit(os.getpid)
+    assert jobs.result(i) != os.getpid() and jobs.result(j) is not None

@@ -1,12 +1,14 @@
-"""Figures drawn in a helper process while the run folder's other outputs are written (issue 21, point 3).
+"""Figures drawn in a helper process while the run computes and writes its other outputs (issue 21, point 3).
 
 matplotlib draws in Python, so threads do not overlap it. A figure whose inputs are plain data (a comparison's
 curves, a list of edge summaries) is therefore drawn by helper processes: ``python -m satchain.report._jobs``, given
-the pickled calls on its standard input. A fresh interpreter, not a fork of this (possibly multi-threaded) one and
-not :mod:`multiprocessing` (which would re-import a user's script that lacks an ``if __name__ == "__main__"``
-guard). The caller goes on with what needs its live objects and calls :meth:`FigureJobs.wait` before anything
-reads the figures. Every figure is written atomically by its own function; on an error or an interruption the
-helpers are killed before the run removes its staging folder.
+each pickled call on its standard input as it is submitted. A fresh interpreter, not a fork of this (possibly
+multi-threaded) one and not :mod:`multiprocessing` (which would re-import a user's script that lacks an
+``if __name__ == "__main__"`` guard). Calls may be submitted at any time before :meth:`FigureJobs.wait`: a run
+hands the figures of its budget and scene to the helpers while it simulates, and those of its simulation while
+it measures. The caller calls :meth:`FigureJobs.wait` before anything reads the figures. Every figure is written
+atomically by its own function; on an error or an interruption the helpers are killed before the run removes its
+staging folder.
 
 ``SATCHAIN_FIGURE_PROCESSES``: how many helper processes (default: one less than the CPUs, at most 3; 0 draws
 every figure in this process, as on a one-CPU machine).
@@ -49,17 +51,19 @@ def figure_processes() -> int:
 
 class FigureJobs:
     """``submit(fn, *args, **kwargs)`` queues a call (``fn`` a module-level function, the arguments picklable);
-    ``start()`` starts the helper processes on the queue; ``wait()`` draws what the helpers have not taken yet
-    here, waits for them and raises a :class:`~satchain.errors.SatchainError` with a helper's error. The queue is
-    shared: each helper takes the next call from the front when it is free, this process takes from the back
-    once its own work is done, so neither waits while calls are left. As a context manager: leaving it waits,
-    or on an error kills the helpers."""
+    ``start()`` sets the helper processes to work on the queue, which may grow after that; ``wait()`` closes the
+    queue, draws here what the helpers have not taken yet, waits for them and raises a
+    :class:`~satchain.errors.SatchainError` with a helper's error. The queue is shared: each helper takes the
+    next call from the front when it is free, this process takes from the back once its own work is done, so
+    neither waits while calls are left. As a context manager: leaving it waits, or on an error kills the
+    helpers."""
 
     def __init__(self, processes: int | None = None) -> None:
         self.processes = figure_processes() if processes is None else int(processes)
         self._calls: list[tuple[Callable[..., Any], tuple, dict]] = []
         self._todo: collections.deque[int] = collections.deque()
-        self._lock = threading.Lock()
+        self._cond = threading.Condition()
+        self._closed = False  # no more calls: an idle helper may exit
         self._procs: list[subprocess.Popen] = []
         self._feeders: list[threading.Thread] = []
         self._results: dict[int, Any] = {}
@@ -67,7 +71,7 @@ class FigureJobs:
     def submit(self, fn: Callable[..., Any], *args: Any, first: bool = False, **kwargs: Any) -> int:
         """Queue ``fn(*args, **kwargs)``; returns its number for :meth:`result` (its return value must pickle).
         ``first``: a long call, put at the front (a helper takes it early, so nobody waits for it at the end)."""
-        with self._lock:
+        with self._cond:
             i = len(self._calls)
             self._calls.append((fn, args, kwargs))
             if self.processes > 0:
@@ -75,6 +79,7 @@ class FigureJobs:
                     self._todo.appendleft(i)
                 else:
                     self._todo.append(i)
+                self._cond.notify()
         if self.processes <= 0:
             self._results[i] = _draw(fn, args, kwargs)
         return i
@@ -84,10 +89,18 @@ class FigureJobs:
         return self._results.get(i)
 
     def _take(self, front: bool) -> int | None:
-        with self._lock:
+        """The next call: a helper (``front``) waits for one until the queue is closed; this process does not."""
+        with self._cond:
+            while front and not self._todo and not self._closed:
+                self._cond.wait()
             if not self._todo:
                 return None
             return self._todo.popleft() if front else self._todo.pop()
+
+    def _hand_back(self, i: int) -> None:
+        with self._cond:
+            self._todo.append(i)  # not drawn by a helper: this process draws it
+            self._cond.notify()
 
     def launch(self, preload: tuple[str, ...] = ()) -> None:
         """Start the helper processes now, importing ``preload`` (module names) while the caller computes what
@@ -114,41 +127,48 @@ class FigureJobs:
             self._procs.append(p)
 
     def start(self) -> None:
-        """Hand the calls queued so far to the helpers (launched here unless :meth:`launch` did)."""
-        if self._feeders or not self._todo:
+        """Set the helpers (launched here unless :meth:`launch` did, and only once a call is queued) to take
+        calls from the queue, now and as they are submitted."""
+        if self._feeders:
             return
-        if not self._procs:
+        if not self._procs and self._todo:
             self.launch()
-        if not self._procs:
-            return
-        payload = pickle.dumps(self._calls, protocol=pickle.HIGHEST_PROTOCOL)
         for p in self._procs:
-            t = threading.Thread(target=self._feed, args=(p, payload), daemon=True)
+            t = threading.Thread(target=self._feed, args=(p,), daemon=True)
             self._feeders.append(t)
             t.start()
 
-    def _feed(self, p: subprocess.Popen, payload: bytes) -> None:
-        """Hand the helper ``p`` one call at a time from the front of the queue, until none is left."""
+    def _feed(self, p: subprocess.Popen) -> None:
+        """Hand the helper ``p`` one pickled call at a time from the front of the queue, until it is closed."""
         try:
-            p.stdin.write(b"%d\n" % len(payload) + payload)
-            p.stdin.flush()
             while (i := self._take(front=True)) is not None:
-                p.stdin.write(b"%d\n" % i)
+                try:
+                    call = pickle.dumps((i, *self._calls[i]), protocol=pickle.HIGHEST_PROTOCOL)
+                except Exception:  # noqa: BLE001 - an argument that does not pickle: drawn here instead
+                    self._hand_back(i)
+                    continue
+                p.stdin.write(b"%d\n" % len(call) + call)
                 p.stdin.flush()
                 head = p.stdout.readline().split()
                 if len(head) != 2 or head[0] != b"ok":
-                    with self._lock:
-                        self._todo.append(i)  # not drawn: this process draws it
+                    self._hand_back(i)
                     raise BrokenPipeError
                 self._results[i] = pickle.loads(p.stdout.read(int(head[1])))
             p.stdin.close()
         except (BrokenPipeError, OSError, ValueError):
             pass  # the helper died (its error is read in wait) or was killed
 
+    def _close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+
     def wait(self) -> None:
-        """Draw here what the helpers have not taken, wait for them; a call a helper could not finish (it died,
-        or the call raised there) is drawn here again, so only a call that fails here too raises."""
+        """Close the queue, draw here what the helpers have not taken, wait for them; a call a helper could not
+        finish (it died, or the call raised there) is drawn here again, so only a call that fails here too
+        raises."""
         self.start()
+        self._close()
         if not self._feeders:  # launched, given nothing: let them exit
             for p in self._procs:
                 with contextlib.suppress(OSError):
@@ -172,8 +192,10 @@ class FigureJobs:
             _close(p)
 
     def kill(self) -> None:
-        with self._lock:
+        with self._cond:
             self._todo.clear()
+            self._closed = True
+            self._cond.notify_all()
         procs, self._procs = self._procs, []
         for p in procs:
             p.kill()
@@ -210,9 +232,9 @@ def _close(p: subprocess.Popen) -> None:
 
 
 def _main() -> int:
-    """The helper: read the pickled calls, then run call ``i`` for each line ``i`` on standard input, answering
-    ``ok N`` and the N bytes of its pickled return value; a failure's traceback goes to standard error (exit
-    status 1)."""
+    """The helper: for each call on standard input (a line ``N``, then the N bytes of the pickled
+    ``(i, fn, args, kwargs)``), run it and answer ``ok M`` and the M bytes of its pickled return value; a
+    failure's traceback goes to standard error (exit status 1). The end of the input ends it."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -220,15 +242,10 @@ def _main() -> int:
 
     for module in sys.argv[1:]:  # what the calls will need, imported while the caller computes
         importlib.import_module(module)
-    stdin = sys.stdin.buffer
-    head = stdin.readline()
-    if not head.strip():
-        return 0  # given nothing to draw
-    calls = pickle.loads(stdin.read(int(head)))
-    out = sys.stdout.buffer
+    stdin, out = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # what a figure prints cannot corrupt the answers
-    for line in stdin:
-        fn, args, kwargs = calls[int(line)]
+    while head := stdin.readline().strip():
+        _, fn, args, kwargs = pickle.loads(stdin.read(int(head)))
         value = pickle.dumps(fn(*args, **kwargs), protocol=pickle.HIGHEST_PROTOCOL)
         out.write(b"ok %d\n" % len(value) + value)
         out.flush()

@@ -24,12 +24,17 @@ from satchain.scene.objects import Car, House, Railway, Wagon
 
 __all__ = [
     "GALLERY_KINDS",
+    "assemble_thumbnail",
     "draw_image_with_rois",
+    "image_extent",
     "image_rois_args",
     "item_thumbnail",
     "plot_image_with_rois",
     "target_thumbnails",
+    "thumbnail_boxes",
     "thumbnail_calls",
+    "thumbnail_crops",
+    "truth_panel",
 ]
 
 #: Measurement targets (every one is shown) and real-world objects (the first of each kind is shown).
@@ -151,13 +156,34 @@ def _box(it: dict, extent: tuple[float, float]) -> tuple[float, float, float, fl
     return max(x0, 0.0), max(y0, 0.0), min(x1, extent[0]), min(y1, extent[1])
 
 
-def _chosen_items(ctx) -> list[dict]:
-    items = [it for it in ctx.truth["items"] if it["kind"] in GALLERY_KINDS]
+def _chosen_items(truth: dict) -> list[dict]:
+    items = [it for it in truth["items"] if it["kind"] in GALLERY_KINDS]
     for kind in OBJECT_KINDS:
-        first = next((it for it in ctx.truth["items"] if it["kind"] == kind), None)
+        first = next((it for it in truth["items"] if it["kind"] == kind), None)
         if first is not None:
             items.append(first)
     return items
+
+
+def thumbnail_boxes(truth: dict, extent: tuple[float, float]) -> list[tuple[dict, tuple]]:
+    """``({"id", "kind"}, box in metres)`` of every shown item, its box clipped to the image's ``extent``
+    (width, height in metres)."""
+    return [({"id": it["id"], "kind": it["kind"]}, _box(it, extent)) for it in _chosen_items(truth)]
+
+
+def image_extent(ctx) -> tuple[float, float]:
+    """The simulated image's ground extent (width, height in metres)."""
+    gsd = float(ctx.image_gsd_m)
+    return (ctx.image.shape[1] * gsd, ctx.image.shape[0] * gsd)
+
+
+def thumbnail_crops(ctx, boxes) -> list[tuple[np.ndarray, float, np.ndarray, float]]:
+    """Per box (m): the focal-plane and detector crops with their pixel sizes (the detector in reflectance:
+    :func:`_to_reflectance`)."""
+    fp_pixel = float(ctx.config.scene.pixel_m) * float(ctx.simulator.D)
+    gsd = float(ctx.image_gsd_m)
+    fp, det = np.asarray(ctx.focal_plane, float), _to_reflectance(ctx)
+    return [(_crop(fp, box, fp_pixel), fp_pixel, _crop(det, box, gsd), gsd) for box in boxes]
 
 
 def thumbnail_calls(ctx) -> list[tuple]:
@@ -165,36 +191,39 @@ def thumbnail_calls(ctx) -> list[tuple]:
     so that the thumbnails can be made in helper processes (:class:`satchain.report._jobs.FigureJobs`)."""
     p = float(ctx.config.scene.pixel_m)
     scene = _scene(ctx)
-    fp_pixel = p * float(ctx.simulator.D)
-    gsd = float(ctx.image_gsd_m)
-    det = _to_reflectance(ctx)
-    extent = (ctx.image.shape[1] * gsd, ctx.image.shape[0] * gsd)
-    calls = []
-    for it in _chosen_items(ctx):
-        box = _box(it, extent)
-        fp = _crop(np.asarray(ctx.focal_plane, float), box, fp_pixel)
-        calls.append((scene, {"id": it["id"], "kind": it["kind"]}, box, p, fp, fp_pixel, _crop(det, box, gsd), gsd))
-    return calls
+    shown = thumbnail_boxes(ctx.truth, image_extent(ctx))
+    crops = thumbnail_crops(ctx, [box for _, box in shown])
+    return [(scene, it, box, p, *c) for (it, box), c in zip(shown, crops, strict=True)]
+
+
+def truth_panel(scene, box, p: float) -> dict | None:
+    """A thumbnail's ground-truth panel: ``scene`` rendered over ``box`` (m) at ``p`` (its long part, so a
+    run has a helper process make it while it measures)."""
+    x0, y0, x1, y1 = box
+    win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
+    return _panel("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p)
+
+
+def _panel(title: str, arr: np.ndarray, pix: float) -> dict | None:
+    if arr.size == 0:
+        return None
+    png, wpx, hpx = _png(arr)
+    shown_pix = pix * max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
+    return {"title": title, "png": png, "width": wpx, "height": hpx, "pixel_m": shown_pix}
+
+
+def assemble_thumbnail(it: dict, box, truth: dict | None, fp: np.ndarray, fp_pixel: float, det: np.ndarray,
+                       gsd: float) -> dict:  # fmt: skip
+    """One item's thumbnail from its ground-truth panel (:func:`truth_panel`) and its two crops."""
+    panels = [truth, _panel("focal plane", fp, fp_pixel), _panel("detector", det, gsd)]
+    return {"id": it["id"], "kind": it["kind"], "box_m": box, "panels": [q for q in panels if q is not None]}
 
 
 def item_thumbnail(scene, it: dict, box, p: float, fp: np.ndarray, fp_pixel: float, det: np.ndarray,
                    gsd: float) -> dict:  # fmt: skip
     """One item's three panels (ground truth rendered here, focal plane and detector crops): see
     :func:`target_thumbnails`."""
-    x0, y0, x1, y1 = box
-    win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
-    panels = []
-    for title, arr, pix in (
-        ("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p),
-        ("focal plane", fp, fp_pixel),
-        ("detector", det, gsd),
-    ):
-        if arr.size == 0:
-            continue
-        png, wpx, hpx = _png(arr)
-        shown_pix = pix * max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
-        panels.append({"title": title, "png": png, "width": wpx, "height": hpx, "pixel_m": shown_pix})
-    return {"id": it["id"], "kind": it["kind"], "box_m": box, "panels": panels}
+    return assemble_thumbnail(it, box, truth_panel(scene, box, p), fp, fp_pixel, det, gsd)
 
 
 def target_thumbnails(ctx) -> list[dict]:
