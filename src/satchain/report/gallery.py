@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import REPORT_KINDS, measured_entries
 from satchain.scene.objects import Car, House, Railway, Wagon
@@ -72,8 +73,8 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
     scale = min(820.0 / w, 1150.0 / h, 3.0)
     width_in = w * scale / 100 + 1.0
     with matplotlib.rc_context(rc_for(width_in)):
-        fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100, layout="constrained")
-        ax = fig.add_subplot()
+        fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100)  # fixed layout in inches (_style.place_grid)
+        ax = fig.add_axes((0, 0, 1, 1))
         ax.imshow(img, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, w * gsd, h * gsd, 0))
         seen = set()
         for it in items:
@@ -106,6 +107,7 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
         ax.set_title(f"Simulated image, GSD {gsd * 100:.0f} cm")
         if seen:
             ax.legend(loc="upper right", title="other objects", framealpha=0.85)
+        place_grid(fig, [[ax]], top=title_band_in(), bottom=axis_band_in())
         save_figure(fig, path, dpi=100)
 
 
