@@ -16,6 +16,8 @@ __all__ = [
     "axis_band_in",
     "grid_axes",
     "legend_height_in",
+    "pin_title",
+    "pin_titles",
     "place_grid",
     "text_height_in",
     "title_band_in",
@@ -106,7 +108,9 @@ def place_grid(fig: Figure, axes: list[list], *, top: float, bottom: float, righ
     margins and ``vgap`` between rows given; ``left`` (default: :func:`yaxis_width_in` of every axes, measured
     once the axes have about their final size, as their tick locators depend on it) and ``hgap`` between
     columns (default: ``left`` plus room for a tick label's overhang, each panel labelling its own y axis).
-    Call it after the data, limits and labels are set."""
+    Call it after the data, limits, labels and titles are set: a title with nothing between it and its axes
+    (no top ticks or x label, no y offset text) is pinned at its place, so that drawing does not measure every
+    tick label again to find it (its text set anew with ``y=1``, keeping its font and colour)."""
     w, h = fig.get_size_inches()
     n_rows, n_cols = len(axes), len(axes[0])
     flat = [ax for row in axes for ax in row]
@@ -124,3 +128,25 @@ def place_grid(fig: Figure, axes: list[list], *, top: float, bottom: float, righ
         put(0.8, 0.95 if hgap is None else hgap)  # about the final sizes, for the tick locators
         left = yaxis_width_in(*flat)
     put(left, left + 0.15 if hgap is None else hgap)
+    pin_titles(*flat)
+
+
+def pin_titles(*axes) -> None:
+    """:func:`pin_title` of every axes given."""
+    for ax in axes:
+        pin_title(ax)
+
+
+def pin_title(ax) -> None:
+    """Fix ``ax``'s centre title at y = 1 (plus its pad) when matplotlib's automatic placement would put it
+    there anyway (see ``Axes._update_title_position``): nothing drawn above the axes but the title."""
+    if not ax.get_title() or ax.get_title(loc="left") or ax.get_title(loc="right"):
+        return
+    top = ax.xaxis.get_ticks_position() in ("top", "unknown") or ax.xaxis.get_label_position() == "top"
+    lo, hi = sorted(ax.get_ylim())
+    fmt = ax.yaxis.get_major_formatter()
+    fmt.format_ticks([v for v in ax.yaxis.get_major_locator()() if lo <= v <= hi])
+    if top or fmt.get_offset() or ax.child_axes:
+        return
+    t = ax.title
+    ax.set_title(t.get_text(), y=1.0, fontproperties=t.get_fontproperties().copy(), color=t.get_color())

@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from satchain.report._save import save_figure
-from satchain.report._style import grid_axes
+from satchain.report._style import grid_axes, pin_titles
 
 __all__ = [
     "PRINT_WIDTH_IN",
@@ -111,6 +111,7 @@ def _band(ax, tol: float | None, *, x=None, label: str = "tolerance") -> None:
 
 
 def _save(fig: Figure, path: Path) -> None:
+    pin_titles(*fig.axes)  # drawing then does not measure the tick labels again to place the titles
     save_figure(fig, path, dpi=DPI)
 
 

@@ -76,16 +76,18 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
         fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100)  # fixed layout in inches (_style.place_grid)
         ax = fig.add_axes((0, 0, 1, 1))
         ax.imshow(img, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, w * gsd, h * gsd, 0))
+        # the image fixed the limits: the boxes are added without updating the data limits (add_patch's cost)
+        box = ax.add_artist
         seen = set()
         for it in items:
             x0, y0, x1, y1 = it["bbox_m"]
             kind = it["kind"]
             if kind in REPORT_KINDS:
                 c = REPORT_KINDS[kind].colour
-                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
+                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
                 if it["id"] in rois:
                     rx0, ry0, rx1, ry1 = rois[it["id"]]
-                    ax.add_patch(
+                    box(
                         Rectangle(
                             (rx0 * gsd, ry0 * gsd), (rx1 - rx0) * gsd, (ry1 - ry0) * gsd, fill=False, ec=c, lw=1.6
                         )
@@ -101,7 +103,7 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
             else:
                 lab = kind if kind not in seen else None
                 seen.add(kind)
-                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
+                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
         ax.set_xlabel("x, across-track (m)")
         ax.set_ylabel("y, along-track (m)")
         ax.set_title(f"Simulated image, GSD {gsd * 100:.0f} cm")
