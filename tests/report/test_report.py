@@ -59,8 +59,9 @@ def run(tmp_path_factory, reduced_scene_toml):
 
 
 def _text_problems(fig) -> list[str]:
-    """Texts smaller than 9 pt when the figure is shown at its size or scaled to an A4 text block, or
-    sticking out of the figure (clipped)."""
+    """Texts smaller than 9 pt when the figure is shown at its size or scaled to an A4 text block, sticking
+    out of the figure (clipped), or a title, axis label or tick label overlapping another (the fixed layouts'
+    margins too small)."""
     width_in = fig.get_figwidth()
     scale = min(1.0, PRINT_WIDTH_IN / width_in)
     bad = []
@@ -74,7 +75,24 @@ def _text_problems(fig) -> list[str]:
     w, h = fig.get_size_inches()
     if tight.x0 < -0.01 or tight.y0 < -0.01 or tight.x1 > w + 0.01 or tight.y1 > h + 0.01:
         bad.append(f"drawn beyond the figure: {tight} vs {w:.2f} x {h:.2f} in")
-    return bad
+    return bad + _overlaps(fig)
+
+
+def _overlaps(fig) -> list[str]:
+    """Pairs of the figure's frame texts (suptitle, axes titles, axis labels, tick labels) whose boxes overlap."""
+    r = fig.canvas.get_renderer()
+    texts = [fig._suptitle] if fig._suptitle is not None else []
+    for ax in fig.axes:
+        texts += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label]
+        for axis in (ax.xaxis, ax.yaxis):  # the ticks drawn (inside the view)
+            texts += [lab for tick in axis._update_ticks() for lab in (tick.label1, tick.label2)]
+    boxes = [(t.get_text(), t.get_window_extent(r)) for t in texts if t.get_visible() and t.get_text().strip()]
+    return [
+        f"{a!r} overlaps {b!r}"
+        for i, (a, ba) in enumerate(boxes)
+        for b, bb in boxes[i + 1 :]
+        if min(ba.x1, bb.x1) - max(ba.x0, bb.x0) > 0.5 and min(ba.y1, bb.y1) - max(ba.y0, bb.y0) > 0.5
+    ]
 
 
 def _images(html: str) -> list[bytes]:

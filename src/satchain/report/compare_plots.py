@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from satchain.report._save import save_figure
+from satchain.report._style import grid_axes, pin_titles
 
 __all__ = [
     "PRINT_WIDTH_IN",
@@ -110,6 +111,7 @@ def _band(ax, tol: float | None, *, x=None, label: str = "tolerance") -> None:
 
 
 def _save(fig: Figure, path: Path) -> None:
+    pin_titles(*fig.axes)  # drawing then does not measure the tick labels again to place the titles
     save_figure(fig, path, dpi=DPI)
 
 
@@ -131,24 +133,6 @@ def _mark(ax, x: float, text: str, y: float = 0.5) -> None:
 def _vline(ax, x, color, ls, label=None):
     if x is not None and np.isfinite(x):
         ax.axvline(x, color=color, ls=ls, lw=1, label=label)
-
-
-def grid_axes(fig: Figure, rows: list[tuple[float, float]], cols: list[tuple[float, float]], *, left: float,
-              top: float) -> list[list[tuple[float, float, float, float]]]:  # fmt: skip
-    """Axes rectangles (figure fractions) of a fixed layout given in inches: ``rows`` as (gap above, height)
-    from ``top`` (the margin above the first gap) down, ``cols`` as (gap before, width) from ``left``. A fixed
-    layout costs nothing at draw time; constrained layout measures every tick label twice per draw."""
-    w_in, h_in = fig.get_size_inches()
-    out, y = [], h_in - top
-    for gap_r, height in rows:
-        y -= gap_r + height
-        x, row = left, []
-        for gap_c, width in cols:
-            x += gap_c
-            row.append((x / w_in, y / h_in, width / w_in, height / h_in))
-            x += width
-        out.append(row)
-    return out
 
 
 def _edge_figure() -> tuple[Figure, list, list]:

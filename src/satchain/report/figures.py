@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, legend_height_in, place_grid, text_height_in, title_band_in
 from satchain.report.compare_plots import with_rc
 
 __all__ = ["plot_mtf_budget", "plot_square_wave"]
@@ -34,8 +35,10 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
     {"coltman": [...], "fourier_synthesis": [...]} on the same frequencies.
     """
     f = budget.f_cy_per_mm
-    fig = Figure(figsize=(9.6, 5.8), layout="constrained")
-    axes = fig.subplots(1, 2, sharey=True)
+    fig = Figure(figsize=(9.6, 5.8), dpi=100)  # a fixed layout in inches, placed below (_style.place_grid)
+    a0 = fig.add_axes((0, 0, 1, 1))
+    axes = [a0, fig.add_axes((0, 0, 1, 1), sharey=a0)]
+    axes[1].tick_params(labelleft=False)
     for ax, d in zip(axes, ("alt", "act"), strict=True):
         for name, m in getattr(budget, d).items():
             if name != "system" and np.allclose(m, 1.0):
@@ -58,9 +61,12 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(lab, h)
     labels = list(handles)
-    fig.legend([handles[k] for k in labels], labels, loc="outside lower center", ncol=3)
+    fig.legend([handles[k] for k in labels], labels, loc="lower center", ncol=3)
     if title:
         fig.suptitle(title)
+    top = (0.02 * fig.get_figheight() + text_height_in("figure.titlesize") if title else 0.0) + title_band_in()
+    bottom = legend_height_in(-(-len(labels) // 3)) + axis_band_in()
+    place_grid(fig, [axes], top=top, bottom=bottom, hgap=0.2)  # the y axis shared: labelled on the left only
     save_figure(fig, path, dpi=100)
 
 
@@ -75,13 +81,14 @@ def plot_square_wave(
     note: str = "",
 ) -> None:
     """The paper's Figure 3(b): truncated Fourier series of a bar pattern and its MTF-degraded version."""
-    fig = Figure(figsize=(8, 4.6), layout="constrained")
-    ax = fig.subplots()
+    fig = Figure(figsize=(8, 4.6), dpi=100)  # a fixed layout in inches, placed below (_style.place_grid)
+    ax = fig.add_axes((0, 0, 1, 1))
     ax.plot(x_m, square, "k-", label="input square wave (truncated Fourier series)")
     ax.plot(x_m, degraded, "b--", label="degraded by the system MTF")
     ax.set_xlabel("ground position (m)")
     ax.set_ylabel("relative reflectance")
     ax.set_title(f"Square wave of ground period {period_m:g} m{(' - ' + note) if note else ''}")
     ax.grid(alpha=0.3)
-    fig.legend(loc="outside lower center", ncol=2)
+    fig.legend(loc="lower center", ncol=2)
+    place_grid(fig, [[ax]], top=title_band_in(), bottom=legend_height_in(1) + axis_band_in())
     save_figure(fig, path, dpi=100)

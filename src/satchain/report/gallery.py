@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import REPORT_KINDS, measured_entries
 from satchain.scene.objects import Car, House, Railway, Wagon
@@ -77,19 +78,21 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
     scale = min(820.0 / w, 1150.0 / h, 3.0)
     width_in = w * scale / 100 + 1.0
     with matplotlib.rc_context(rc_for(width_in)):
-        fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100, layout="constrained")
-        ax = fig.add_subplot()
+        fig = Figure(figsize=(width_in, h * scale / 100 + 1.0), dpi=100)  # fixed layout in inches (_style.place_grid)
+        ax = fig.add_axes((0, 0, 1, 1))
         ax.imshow(img, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, w * gsd, h * gsd, 0))
+        # the image fixed the limits: the boxes are added without updating the data limits (add_patch's cost)
+        box = ax.add_artist
         seen = set()
         for it in items:
             x0, y0, x1, y1 = it["bbox_m"]
             kind = it["kind"]
             if kind in REPORT_KINDS:
                 c = REPORT_KINDS[kind].colour
-                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
+                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
                 if it["id"] in rois:
                     rx0, ry0, rx1, ry1 = rois[it["id"]]
-                    ax.add_patch(
+                    box(
                         Rectangle(
                             (rx0 * gsd, ry0 * gsd), (rx1 - rx0) * gsd, (ry1 - ry0) * gsd, fill=False, ec=c, lw=1.6
                         )
@@ -105,12 +108,13 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
             else:
                 lab = kind if kind not in seen else None
                 seen.add(kind)
-                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
+                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
         ax.set_xlabel("x, across-track (m)")
         ax.set_ylabel("y, along-track (m)")
         ax.set_title(f"Simulated image, GSD {gsd * 100:.0f} cm")
         if seen:
             ax.legend(loc="upper right", title="other objects", framealpha=0.85)
+        place_grid(fig, [[ax]], top=title_band_in(), bottom=axis_band_in())
         save_figure(fig, path, dpi=100)
 
 

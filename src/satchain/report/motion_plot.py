@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import rc_for
 
 __all__ = ["edge_tracks", "plot_line_of_sight", "row_displacements"]
@@ -67,8 +68,8 @@ def plot_line_of_sight(tp, n_rows: int, path: Path, edges: list[dict] | None = N
     rows = np.arange(n_rows)
     tracks = edge_tracks(edges or [])
     with matplotlib.rc_context(rc_for(9)):
-        fig = Figure(figsize=(9, 8.5 if tracks else 6), dpi=100, layout="constrained")
-        axes = fig.subplots(3 if tracks else 2, 1)
+        fig = Figure(figsize=(9, 8.5 if tracks else 6), dpi=100)  # a fixed layout in inches (_style.place_grid)
+        axes = [fig.add_axes((0, 0, 1, 1)) for _ in range(3 if tracks else 2)]
         a, b = axes[0], axes[1]
         a.plot(t[::step], tp.dx[::step], lw=0.8, label="ACT (x)")
         a.plot(t[::step], tp.dy[::step], lw=0.8, label="ALT (y)")
@@ -95,4 +96,6 @@ def plot_line_of_sight(tp, n_rows: int, path: Path, edges: list[dict] | None = N
             c.set_title("Per-line edge positions of the near-vertical edges against the predicted line of sight")
             c.grid(alpha=0.3)
             c.legend(fontsize=7)
+        band = axis_band_in()
+        place_grid(fig, [[ax] for ax in axes], top=title_band_in(), bottom=band, vgap=band + title_band_in())
         save_figure(fig, path, dpi=100)

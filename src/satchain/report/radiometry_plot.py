@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from satchain.radiometry import RadiometryResult, spectral_per_m_to_per_um
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import with_rc
 
 __all__ = ["plot_spectral_radiance"]
@@ -26,8 +27,8 @@ def plot_spectral_radiance(
     lam = result.wavelength_m
     keep = (lam >= wavelength_range_m[0]) & (lam <= wavelength_range_m[1])
     x_um = lam[keep] * 1e6
-    fig = Figure(figsize=(8, 5))
-    ax = fig.subplots()
+    fig = Figure(figsize=(8, 5), dpi=100)  # a fixed layout in inches, placed below (_style.place_grid)
+    ax = fig.add_axes((0, 0, 1, 1))
     ax.plot(
         x_um,
         spectral_per_m_to_per_um(result.radiance_surface_w_per_m2_sr_per_m[keep]),
@@ -54,6 +55,6 @@ def plot_spectral_radiance(
         f"TOA {result.radiance_toa_band_w_per_m2_sr:.1f} W m$^{{-2}}$ sr$^{{-1}}$"
     )
     ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
+    ax.legend(loc="upper right")  # a fixed corner ("best" searches every point): the spectrum peaks in the visible
+    place_grid(fig, [[ax]], top=title_band_in(2), bottom=axis_band_in())
     save_figure(fig, path, dpi=100)

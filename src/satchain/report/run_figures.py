@@ -13,6 +13,7 @@ from matplotlib.patches import Rectangle
 
 from satchain.report import compare_plots as cp
 from satchain.report._save import save_figure
+from satchain.report._style import axis_band_in, place_grid, text_height_in, title_band_in
 from satchain.report.compare_plots import rc_for
 from satchain.report.kinds import EDGES, REPORT_KINDS, WEDGES
 
@@ -36,8 +37,8 @@ def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Pa
     """The ground truth with every measurable target outlined and labelled (the paper's Figure 1)."""
     h, w = image.shape
     with matplotlib.rc_context(rc_for(8)):
-        fig = Figure(figsize=(8, 8 * h / w + 0.8), dpi=100, layout="constrained")
-        ax = fig.add_subplot()
+        fig = Figure(figsize=(8, 8 * h / w + 0.8), dpi=100)  # a fixed layout in inches (_style.place_grid)
+        ax = fig.add_axes((0, 0, 1, 1))
         ax.imshow(image, cmap="gray", vmin=0, vmax=1, extent=(0, w * pixel_m, h * pixel_m, 0), interpolation="nearest")
         for it in truth["items"]:
             if it["kind"] not in REPORT_KINDS:
@@ -49,6 +50,7 @@ def plot_scene_overview(image: np.ndarray, truth: dict, pixel_m: float, path: Pa
         ax.set_xlabel("x, across-track (m)")
         ax.set_ylabel("y, along-track (m)")
         ax.set_title(f"Synthetic ground truth ({truth.get('scene', '')}), {truth['pixel_m'] * 100:g} cm pixels")
+        place_grid(fig, [[ax]], top=title_band_in(), bottom=axis_band_in())
         save_figure(fig, path, dpi=100)
 
 
@@ -84,15 +86,14 @@ def draw_target_chain(scene, item: dict, p: float, D: int, gsd: float, fp: tuple
     (fp, fp_ext), (det, det_ext) = fp, det
     aspect = (x1 - x0) / max(y1 - y0, 1e-9)
     with matplotlib.rc_context(rc_for(9)):
+        # a fixed layout in inches (_style.place_grid)
         if aspect > 2:  # long targets (a wedge along x): panels one above the other
-            fig = Figure(figsize=(9, 3 * min(9 / aspect, 4) + 1.6), dpi=100, layout="constrained")
-            axes = fig.subplots(3, 1)
+            fig = Figure(figsize=(9, 3 * min(9 / aspect, 4) + 1.6), dpi=100)
         elif aspect < 0.5:  # tall targets: side by side
-            fig = Figure(figsize=(9, 7), dpi=100, layout="constrained")
-            axes = fig.subplots(1, 3)
+            fig = Figure(figsize=(9, 7), dpi=100)
         else:
-            fig = Figure(figsize=(9, 3.8), dpi=100, layout="constrained")
-            axes = fig.subplots(1, 3)
+            fig = Figure(figsize=(9, 3.8), dpi=100)
+        axes = [fig.add_axes((0, 0, 1, 1)) for _ in range(3)]
         panels = (
             (gt, gt_ext, f"(a) ground truth, {p * 100:g} cm"),
             (fp, fp_ext, f"(b) focal plane, {p * D * 100:g} cm samples"),
@@ -104,14 +105,17 @@ def draw_target_chain(scene, item: dict, p: float, D: int, gsd: float, fp: tuple
             ax.set_xlabel("x (m)")
             ax.set_ylabel("y (m)")
         fig.suptitle(f"{item['kind'].replace('_', ' ')} {item['id']}")
+        top = 0.02 * fig.get_figheight() + text_height_in("figure.titlesize") + title_band_in()
+        grid = [[ax] for ax in axes] if aspect > 2 else [axes]
+        place_grid(fig, grid, top=top, bottom=axis_band_in(), vgap=axis_band_in() + title_band_in())
         save_figure(fig, path, dpi=100)
 
 
 def plot_edges_overview(edges: list[dict], path: Path) -> None:
     """Every slanted edge's measured e-SFR and predicted MTF on one plot."""
     with matplotlib.rc_context(rc_for(8)):
-        fig = Figure(figsize=(8, 5), dpi=100, layout="constrained")
-        ax = fig.add_subplot()
+        fig = Figure(figsize=(8, 5), dpi=100)  # a fixed layout in inches (_style.place_grid)
+        ax = fig.add_axes((0, 0, 1, 1))
         for i, e in enumerate(edges):
             c = f"C{i}"
             ax.plot(e["f_cy_per_px"], e["mtf_measured"], "-", color=c, label=f"{e['id']} measured")
@@ -124,6 +128,7 @@ def plot_edges_overview(edges: list[dict], path: Path) -> None:
         ax.set_title("Slanted edges: measured (solid) vs predicted (dashed) MTF")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right")  # the MTFs fall from the top left
+        place_grid(fig, [[ax]], top=title_band_in(), bottom=axis_band_in())
         save_figure(fig, path, dpi=100)
 
 
