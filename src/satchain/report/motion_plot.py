@@ -95,7 +95,7 @@ def plot_line_of_sight(tp, n_rows: int, path: Path, edges: list[dict] | None = N
             c.set_ylabel("edge position, detrended (px)")
             c.set_title("Per-line edge positions of the near-vertical edges against the predicted line of sight")
             c.grid(alpha=0.3)
-            c.legend(fontsize=7)
+            c.legend(loc="upper right", ncols=2)
         band = axis_band_in()
         place_grid(fig, [[ax] for ax in axes], top=title_band_in(), bottom=band, vgap=band + title_band_in())
         save_figure(fig, path, dpi=100)
