@@ -163,8 +163,8 @@ def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, 
 
 def run_in_memory(config: RunConfig, *, progress: Progress | None = None, after_stage=None) -> RunResult:
     """Every stage but the report, in memory (see :func:`satchain.run`). ``after_stage(name, **outputs)``, if
-    given, is called once the scene and once the simulation are ready (the run folder's figure helpers start on
-    what those alone decide while the run measures)."""
+    given, is called once the scene, the simulation and the measurements are ready (the run folder's figure
+    helpers start on what those alone decide while the run goes on)."""
     report = progress or (lambda stage, done, total: None)
     timings: dict[str, float] = {}
 
@@ -183,6 +183,7 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None, after_
     measured = timed(  # the image's own GSD and the simulated detector's full scale
         "measure", _stage_measure, sim.system or budget.system, scene, sim, config.simulation.noise
     )
+    after("measure", budget=budget, scene=scene, sim=sim, measured=measured)
     predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
     return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
 
@@ -221,16 +222,18 @@ class ReportInputs:
 
 class _EarlyFigures:
     """The run folder's outputs that the budget and scene alone decide (budget tables and figures, the scene
-    overview), and the thumbnails' ground-truth panels once the simulation fixes the image's extent, handed to
+    overview), the thumbnails' ground-truth panels once the simulation fixes the image's extent, and the
+    figures the measurement decides (:func:`~satchain.report.run_figures.submit_measured_figures`), handed to
     ``jobs`` (:class:`satchain.report._jobs.FigureJobs`: all their inputs pickle; the OTF is rebuilt from the
-    system) as the run reaches them: the helpers draw them while this process simulates and measures. Called as
-    :func:`run_in_memory`'s ``after_stage``."""
+    system) as the run reaches them: the helpers draw them while this process simulates, measures and compares.
+    Called as :func:`run_in_memory`'s ``after_stage``."""
 
     def __init__(self, config: RunConfig, out: Path, jobs) -> None:
         self.config, self.out, self.jobs = config, out, jobs
         self.thumbnails: list[tuple[dict, tuple, int]] = []  # (item, box, job of its ground-truth panel)
+        self.measured = False  # the measured figures handed over
 
-    def __call__(self, stage: str, *, budget: BudgetResult, scene: SceneResult, sim=None) -> None:
+    def __call__(self, stage: str, *, budget: BudgetResult, scene: SceneResult, sim=None, measured=None) -> None:
         from satchain.report import run_figures
         from satchain.report._save import write_text
         from satchain.report.budget import write_budget_outputs
@@ -252,6 +255,10 @@ class _EarlyFigures:
             for it, box in thumbnail_boxes(scene.truth_dict, extent):  # the exact star render first: the longest
                 job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
                 self.thumbnails.append((it, box, job))
+        elif stage == "measure":  # a view of the run so far: what those figures read
+            partial = RunResult(self.config, budget, scene, sim, measured, None, None, {})  # type: ignore[arg-type]
+            run_figures.submit_measured_figures(ReportInputs(partial, out, {}), jobs)
+            self.measured = True
 
 
 def _write_images(result: RunResult, out: Path) -> None:
@@ -307,7 +314,7 @@ def write_run_directory(
             early = _EarlyFigures(result.config, out, jobs)
             early("scene", budget=result.budget, scene=result.scene)
             early("simulate", budget=result.budget, scene=result.scene, sim=result.simulation)
-        shown = run_figures.write_run_figures(view, jobs=jobs)
+        shown = run_figures.write_run_figures(view, jobs=jobs, measured_figures=not early.measured)
         _write_images(result, out)
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))

@@ -132,18 +132,31 @@ def plot_edges_overview(edges: list[dict], path: Path) -> None:
         save_figure(fig, path, dpi=100)
 
 
-def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
+def submit_measured_figures(ctx, jobs) -> None:
+    """Hand ``jobs`` the figures that the measurement alone decides (a run does so before it compares): the
+    image with every measured region, and each measured wedge's chain (ground truth, focal plane, detector)."""
+    from satchain.report.gallery import draw_image_with_rois, image_rois_args
+
+    d = ctx.out / "figures"
+    jobs.submit(draw_image_with_rois, *image_rois_args(ctx), d / "image_rois.png")
+    measured = {w["id"] for w in (ctx.measured or {}).get(WEDGES.key, [])}  # each one is compared
+    for item in ctx.truth["items"]:
+        if item["kind"] == WEDGES.kind and item["id"] in measured:
+            jobs.submit(draw_target_chain, *target_chain_args(ctx, item), d / f"fig4_wedge_{item['id']}.png")
+
+
+def write_run_figures(ctx, curves: dict | None = None, *, jobs=None, measured_figures: bool = True) -> dict:
     """All run figures into ``ctx.out / "figures"``; returns the curves they show
     (:func:`satchain.report.curves.build_curves`, built here when not given). ``jobs``: a
     :class:`satchain.report._jobs.FigureJobs` that draws the figures made of plain data in helper processes (the
-    caller waits for it); without it every figure is drawn here."""
+    caller waits for it); without it every figure is drawn here. ``measured_figures``: False when
+    :func:`submit_measured_figures` already handed those to ``jobs``."""
     from satchain.report._jobs import FigureJobs
     from satchain.report.curves import build_curves
-    from satchain.report.gallery import draw_image_with_rois, image_rois_args
 
     if jobs is None:
         with FigureJobs(0) as inline:
-            return write_run_figures(ctx, curves, jobs=inline)
+            return write_run_figures(ctx, curves, jobs=inline, measured_figures=measured_figures)
     d = ctx.out / "figures"
     r = ctx.comparison["results"]
     curves = build_curves(ctx) if curves is None else curves
@@ -165,9 +178,7 @@ def write_run_figures(ctx, curves: dict | None = None, *, jobs=None) -> dict:
 
         measured = (ctx.measured or {}).get(EDGES.key, [])  # the summaries with per-line edge positions
         jobs.submit(plot_line_of_sight, tp, int(ctx.image.shape[0]), d / "line_of_sight.png", measured)
-    jobs.submit(draw_image_with_rois, *image_rois_args(ctx), d / "image_rois.png")
-    for item in ctx.truth["items"]:
-        if item["kind"] == WEDGES.kind and any(w["id"] == item["id"] for w in r.get(WEDGES.key, [])):
-            jobs.submit(draw_target_chain, *target_chain_args(ctx, item), d / f"fig4_wedge_{item['id']}.png")
+    if measured_figures:
+        submit_measured_figures(ctx, jobs)
     jobs.start()
     return curves
