@@ -91,25 +91,33 @@ def fit_plateaus(x: np.ndarray, esf: np.ndarray, lim: float):
 
 
 def _plateau_line(xs: np.ndarray, es: np.ndarray):
-    """Level and slope of one plateau: ``a + b x + k / |x|``, dropping the terms not resolved (|t| < 3)."""
+    """Level and slope of one plateau: ``a + b x + k / |x|``, dropping the terms not resolved (|t| < 3).
+
+    Least squares by the normal equations of the columns scaled to unit norm (well conditioned: the same
+    solution as a QR/SVD least squares to rounding), one Gram matrix for every subset of the terms."""
     ax_s = np.abs(xs)
     cols = [np.ones_like(xs)]
     if xs.size >= 8 and np.ptp(xs) > 2.0:
         cols.append(xs)
         if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
             cols.append(1.0 / ax_s)
+    m_all = np.stack(cols, axis=1)
+    norm = np.sqrt(np.einsum("ij,ij->j", m_all, m_all))
+    ms = m_all / norm
+    gram, rhs = ms.T @ ms, ms.T @ es
+    keep = list(range(len(cols)))  # the terms in the model (0: the level, 1: the slope, 2: k / |x|)
     while True:
-        m = np.stack(cols, axis=1)
-        coef, *_ = np.linalg.lstsq(m, es, rcond=None)
-        if len(cols) == 1:
-            return float(coef[0]), 0.0
-        dof = max(xs.size - len(cols), 1)
-        s2 = float(np.sum((es - m @ coef) ** 2)) / dof
-        se = np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))
+        g = gram[np.ix_(keep, keep)]
+        coef = np.linalg.solve(g, rhs[keep])
+        if len(keep) == 1:
+            return float(coef[0] / norm[0]), 0.0
+        dof = max(xs.size - len(keep), 1)
+        s2 = float(np.sum((es - ms[:, keep] @ coef) ** 2)) / dof
+        se = np.sqrt(np.maximum(np.diag(np.linalg.inv(g)) * s2, 1e-300))
         t = np.abs(coef[1:]) / se[1:]
         if np.all(t >= 3.0):
-            return float(coef[0]), float(coef[1]) if len(cols) > 1 and cols[1] is xs else 0.0
-        cols.pop(1 + int(np.argmin(t)))
+            return float(coef[0] / norm[0]), float(coef[1] / norm[1]) if keep[1] == 1 else 0.0
+        keep.pop(1 + int(np.argmin(t)))
 
 
 def check_single_edge(x, esf, counts, sigma, fits, lim) -> None:

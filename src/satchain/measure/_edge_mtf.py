@@ -156,7 +156,7 @@ class _Lsf:
             return (lsf @ e.real.T + 1j * (lsf @ e.imag.T)) * self.w
         return (e.real @ lsf + 1j * (e.imag @ lsf)) * self.w  # real products: complex BLAS is far slower here
 
-    def _s_fourier(self, p: np.ndarray, f: np.ndarray) -> np.ndarray:
+    def _s_fourier(self, p: np.ndarray, f: np.ndarray, out=None) -> np.ndarray:
         """``S`` of rows ``p_f = Re(c_f exp(-2 pi i f xm))``: inside the kernel's reach of the ends a complex
         exponential goes through the convolution multiplied by the kernel's (real) transfer ``H(f)``; the
         ``r`` samples at each end, where the mirror enters, are convolved directly."""
@@ -164,10 +164,13 @@ class _Lsf:
         r = k.size // 2
         m = p.shape[-1]
         if m <= 4 * r + 2:
-            return self._s(p)
+            if out is None:
+                return self._s(p)
+            out[...] = self._s(p)
+            return out
         t = np.arange(1, r + 1) * self.w
         h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, t)) @ k[r + 1 :]
-        out = h[:, None] * p
+        out = np.multiply(h[:, None], p, out=out)
         out[:, :r] = self._s(p[:, : 2 * r + 1])[:, :r]
         out[:, -r:] = self._s(p[:, -(2 * r + 1) :])[:, -r:]
         return out
@@ -185,17 +188,25 @@ class _Lsf:
         m0 = spec2[:, :1].real
         mag = np.abs(spec2)
         u = np.where(mag > 0, np.conj(spec2) / np.maximum(mag, 1e-300), 1.0) * (self.w / m0)
-        p = u.real[..., None] * e.real - u.imag[..., None] * e.imag  # Re(u e) w / m0
-        sp = self._s_fourier(p.reshape(-1, p.shape[-1]), np.tile(f, spec2.shape[0])).reshape(p.shape)
-        y = win[:, None, :] * p + (1 - win[:, None, :]) * sp
+        # few large temporaries, updated in place (each fresh (windows, f, bins) array costs page faults)
+        y = np.multiply(u.real[..., None], e.real)  # p = Re(u e) w / m0
+        tmp = np.multiply(u.imag[..., None], e.imag)
+        y -= tmp
+        p2, t2 = y.reshape(-1, y.shape[-1]), tmp.reshape(-1, y.shape[-1])
+        self._s_fourier(p2, np.tile(f, spec2.shape[0]), out=t2)  # S(p)
+        y -= tmp  # y = S(p) + win (p - S(p)) = win p + (1 - win) S(p)
+        y *= win[:, None, :]
+        y += tmp
         y0 = win * self.w + (1 - win) * self._s(np.full(self.xm.size, self.w))  # sensitivity at f = 0
-        y -= (mag / m0**2)[..., None] * y0[:, None, :]
+        np.multiply((mag / m0**2)[..., None], y0[:, None, :], out=tmp)
+        y -= tmp
         # c = adjoint of diff(.) / w applied to y: c_k = (y_{k-1} - y_k) / w with zero ends
         d = np.empty(y.shape[:-1] + (y.shape[-1] + 1,))
         d[..., 0] = -y[..., 0]
         d[..., -1] = y[..., -1]
         np.subtract(y[..., :-1], y[..., 1:], out=d[..., 1:-1])
-        out = np.sqrt(np.einsum("bij,bij,j->bi", d, d, var_bins)) / abs(self.w) / corr
+        d *= d
+        out = np.sqrt(d @ var_bins) / abs(self.w) / corr
         return out if spec.ndim == 2 else out[0]
 
 
