@@ -12,6 +12,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from satchain.errors import InputError
 from satchain.measure._clipping import find_clipping
+from satchain.measure._common import median
 from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
@@ -288,7 +289,7 @@ def quantisation_flags(q: float, x: np.ndarray, esf: np.ndarray, resid: np.ndarr
     the binned ESF (the robust sigma sees only the mode of rounded noise) measures it.
     """
     q4 = max(2, esf.size // 4)
-    step = abs(float(np.median(esf[-q4:]) - np.median(esf[:q4])))
+    step = abs(float(median(esf[-q4:]) - median(esf[:q4])))
     levels = step / q
     keep = np.abs(resid) < max(0.1 * step, 2 * q)
     dither = float(np.sqrt(np.mean(resid[keep] ** 2))) / q if np.any(keep) else 0.0

@@ -31,6 +31,7 @@ from scipy.interpolate import BSpline
 from scipy.linalg.lapack import dpbsv
 
 from satchain.errors import InputError
+from satchain.measure._common import median as _median
 from satchain.measure._common import robust_sigma
 
 __all__ = ["edge_line_fields", "line_numbers", "line_positions", "rough_line"]
@@ -377,16 +378,6 @@ def _accept(ok, x, start, fit, half: int):
     noise2 = float(np.sum(r[ok] ** 2)) / max(n_ok * (r.shape[1] - 3), 1)
     pos = np.where(ok, x, np.nan)
     return pos, np.where(ok, np.sqrt(noise2 * _inv22(jtj, ok)), np.nan)
-
-
-def _median(v: np.ndarray) -> float:
-    """``np.median`` of a 1-D array (the same value, NaN propagated), by one partition."""
-    n = v.size
-    if n == 0 or np.isnan(v).any():
-        return float("nan")
-    lo, hi = (n - 1) // 2, n // 2
-    p = np.partition(v, [lo, hi]) if lo != hi else np.partition(v, lo)
-    return float((p[lo] + p[hi]) / 2)
 
 
 def _inv22(a, ok):

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter
 
 from satchain.errors import InputError
-from satchain.measure._common import crop_roi, fill_invalid, valid_mask, zero_fill_mask
+from satchain.measure._common import crop_roi, fill_invalid, median, robust_sigma, valid_mask, zero_fill_mask
 
 __all__ = ["MIN_ROWS", "curvature", "edge_region", "locate_edge", "orient_edge", "project"]
 
@@ -40,8 +40,9 @@ def edge_region(image, roi, valid, nodata):
 def orient_edge(data: np.ndarray, ok=None):
     """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
     the ESF rise)."""
-    gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
-    gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
+    sm = uniform_filter(data, 3)
+    gx = np.abs(np.diff(sm, axis=1)).sum()
+    gy = np.abs(np.diff(sm, axis=0)).sum()
     transposed = gy > gx
     work = data.T if transposed else data
     q = max(2, work.shape[1] // 4)
@@ -50,21 +51,8 @@ def orient_edge(data: np.ndarray, ok=None):
     return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
-def _median(v: np.ndarray) -> float:
-    """``np.median`` of a 1-D float array (the same value: the mean of the two middle elements)."""
-    n = v.size
-    if n == 0:
-        return float("nan")
-    lo, hi = (n - 1) // 2, n // 2
-    p = np.partition(v, [lo, hi]) if lo != hi else np.partition(v, lo)
-    return float((p[lo] + p[hi]) / 2)
-
-
-def _robust_sigma(v: np.ndarray) -> float:
-    """:func:`satchain.measure._common.robust_sigma` of a 1-D float array (1.4826 MAD), without its overhead."""
-    if v.size == 0:
-        return 0.0
-    return float(1.482602218505602 * _median(np.abs(v - _median(v))))
+_median = median
+_robust_sigma = robust_sigma
 
 
 def _polyfit(t: np.ndarray, y: np.ndarray, deg: int, w=None) -> np.ndarray:
@@ -244,7 +232,7 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
         if cur == last and prev.shape == coef.shape and np.array_equal(prev, coef):
             break  # the same fit again: further passes repeat it exactly
     inl = w > 0
-    med = float(np.median(step[inl]))
+    med = median(step[inl])
     odd = inl & (np.abs(step - med) > 0.3 * abs(med))
     bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
     if bad > 0.2 * n_keep:

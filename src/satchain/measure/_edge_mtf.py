@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import convolve1d, gaussian_filter1d
 
+from satchain.measure._common import median
 from satchain.measure._edge_locate import MIN_ROWS
 
 __all__ = ["adaptive_mtf", "bin_esf", "choose_bins", "flatten_rows", "rise_width", "trim_ends", "window_mtf"]
@@ -307,7 +308,7 @@ def window_mtf(x, esf, half_w: float, f) -> np.ndarray:
 def rise_width(x: np.ndarray, esf: np.ndarray) -> float:
     """10-90 % rise distance (px) of the ESF, levels from its two outer quarters."""
     q = max(2, x.size // 4)
-    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    lo, hi = median(esf[:q]), median(esf[-q:])
     e = (esf - lo) / (hi - lo) if hi != lo else esf * 0
     inside = np.abs(x) < 10
     xs, es = x[inside], e[inside]
@@ -324,11 +325,11 @@ def trim_ends(x, esf, counts, frac: float = 0.3):
     compared as means over 2 px: near a critical tilt the rows' phases bunch, so neighbouring bins alternate
     between many samples and few, which is not a corner (at 44.5 deg in a 60 px region it cut one side to
     nothing)."""
-    step = float(np.median(np.diff(x))) if x.size > 1 else 1.0
+    step = median(np.diff(x)) if x.size > 1 else 1.0
     k = max(1, int(round(2.0 / step)))
     smooth = np.convolve(counts.astype(float), np.ones(k) / k, mode="same") if x.size > k else counts.astype(float)
     near = np.abs(x) < 5
-    typical = float(np.median(smooth[near])) if np.any(near) else float(np.median(smooth))
+    typical = median(smooth[near]) if np.any(near) else median(smooth)
     low = smooth < frac * typical
     i0 = int(np.argmin(np.abs(x)))
     left = np.nonzero(low[:i0])[0]
@@ -347,7 +348,7 @@ def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
     Returns (values, flags).
     """
     q = max(2, esf.size // 8)
-    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    lo, hi = median(esf[:q]), median(esf[-q:])
     if not hi > lo:
         return v, []
     e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
