@@ -39,7 +39,7 @@ _QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the qua
 _CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
-def check_saturation(data: np.ndarray, full_scale: float | None, valid=None) -> list[tuple[str, str]]:
+def check_saturation(data: np.ndarray, full_scale: float | None, valid=None, unique=None) -> list[tuple[str, str]]:
     """Refuse a clipped edge; flag a few pixels touching the full scale.
 
     Clipping is named only on evidence (:func:`satchain.measure._clipping.find_clipping`): pixels at the
@@ -47,13 +47,14 @@ def check_saturation(data: np.ndarray, full_scale: float | None, valid=None) -> 
     saturation -- a flat run at an extreme while the noise is visible elsewhere, or, noise-free, a plateau
     reached with a kink on one side only (a profile cut flat).  A clipped plateau biases the ESF and the
     MTF (+0.045 at Nyquist for a 0.05-0.8 edge cut at 0.7): refused.  An edge's own smooth plateau, exactly
-    constant in a noise-free render, is not clipping.
+    constant in a noise-free render, is not clipping.  ``unique``: ``np.unique`` of the considered pixels, when
+    known.
     """
     vals = data if valid is None else data[valid]
     lo, hi = float(vals.min()), float(vals.max())
     if hi == lo:
         raise InputError(f"image: the region is flat (every pixel = {lo:g}); no edge to measure")
-    clip = find_clipping(data, full_scale=full_scale, valid=valid)
+    clip = find_clipping(data, full_scale=full_scale, valid=valid, unique=unique)
     if clip is None:
         return []
     if clip.evidence == "full_scale":
@@ -262,11 +263,12 @@ def curvature_bias_flag(deg: int, shift: float, f_at: float, spread_px: float, k
     )
 
 
-def quantisation_step(data: np.ndarray) -> float | None:
+def quantisation_step(data: np.ndarray, unique=None) -> float | None:
     """The step of the value lattice the region's pixels sit on (1 for most integer images), or None.
 
-    None for continuous data (more distinct values than half the pixels, or values off any lattice)."""
-    u = np.unique(data)
+    None for continuous data (more distinct values than half the pixels, or values off any lattice).
+    ``unique``: ``np.unique(data)`` when known."""
+    u = np.unique(data) if unique is None else unique
     if u.size < 2 or u.size > 0.5 * data.size:
         return None
     q = float(np.min(np.diff(u)))
