@@ -102,7 +102,7 @@ def line_positions(work: np.ndarray, coef, usable=None):
     nan = np.full(start.shape, np.nan)
     if np.count_nonzero(np.isfinite(start)) < 4:
         return nan, nan
-    cols = np.rint(np.nan_to_num(start))[:, None] + np.arange(-half_t, half_t + 1)[None, :]
+    cols = np.rint(_nan0(start))[:, None] + np.arange(-half_t, half_t + 1)[None, :]
     spline = _template(work, ok_px, cols, np.broadcast_to(start[:, None], cols.shape))
     half = _half_width(spline)
     pos = start
@@ -148,7 +148,7 @@ def _template(work, ok_px, cols, place):
     """The edge's line profile ``T(u)``: a least-squares cubic B-spline through the pixels ``cols`` (lines x
     samples) at ``u = column - place`` (NaN places and unusable pixels left out)."""
     nx = work.shape[1]
-    kc = np.clip(np.nan_to_num(cols), 0, nx - 1).astype(int)
+    kc = _clip(cols, 0, nx - 1).astype(int)  # cols are finite (placed from finite or zeroed starts)
     take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & np.take_along_axis(ok_px, kc, axis=1)
     u = (cols - place)[take]
     v = np.take_along_axis(work, kc, axis=1)[take]
@@ -292,12 +292,12 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     Returns (x, sigma_x, the pixels' columns)."""
     ny, nx = work.shape
     lo_u, hi_u = spline.t[0], spline.t[-1]
-    k = np.rint(np.nan_to_num(start))[:, None] + np.arange(-half, half + 1)[None, :]
+    x = _nan0(start)
+    k = np.rint(x)[:, None] + np.arange(-half, half + 1)[None, :]
     kc = np.clip(k, 0, nx - 1).astype(int)
     ok = np.isfinite(start) & (k[:, 0] >= 0) & (k[:, -1] <= nx - 1)
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
-    x = np.nan_to_num(start).copy()
     cubic = _Cubic(spline)
     a, c = _levels(v, cubic(_clip(k - x[:, None], lo_u, hi_u))[0])
     scale = np.abs(c) + np.abs(a) + 1e-300
@@ -321,6 +321,11 @@ def _fit_lines(work, start, ok_px, spline, half: int):
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
     return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
+
+
+def _nan0(a: np.ndarray) -> np.ndarray:
+    """``np.nan_to_num`` of positions (NaN or finite, never inf: NaN -> 0), without its overhead."""
+    return np.where(np.isnan(a), 0.0, a)
 
 
 def _clip(a, lo, hi):
@@ -367,7 +372,7 @@ def _accept(ok, x, start, fit, half: int):
     """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
     normal matrices J^T J)``."""
     a, c, r, jtj = fit
-    ok = ok & np.isfinite(x) & (np.abs(x - np.nan_to_num(start)) <= 0.5 * half)
+    ok = ok & np.isfinite(x) & (np.abs(x - _nan0(start)) <= 0.5 * half)
     if np.count_nonzero(ok) < 3:
         return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
     c_med = _median(c[ok])
