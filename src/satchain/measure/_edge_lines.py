@@ -240,9 +240,18 @@ class _Cubic:
         inner = np.diff(self.bx[1:-1])
         # the template's knots are uniform inside (np.arange): the interval by arithmetic, not a search (at a
         # knot it may pick the neighbouring piece, whose value and slope agree there to rounding: C2 spline)
-        self.uniform = inner.size >= 2 and float(np.ptp(inner)) <= 1e-9 * float(inner[0])
+        self.uniform = inner.size >= 2 and float(inner.max() - inner.min()) <= 1e-9 * float(inner[0])
         if self.uniform:
             self.inv = (inner.size) / float(self.bx[-2] - self.bx[1])
+
+    @classmethod
+    def of(cls, spline) -> _Cubic:
+        """The piecewise form of ``spline``, made once per spline (kept on it)."""
+        cubic = getattr(spline, "_satchain_cubic", None)
+        if cubic is None:
+            cubic = cls(spline)
+            spline._satchain_cubic = cubic
+        return cubic
 
     def index(self, u):
         """The knot interval of each ``u`` (the ends extended)."""
@@ -263,7 +272,7 @@ def _rise(spline):
     """(u grid, profile normalised to its plateaus 0 -> 1) over the spline's range."""
     lo_u, hi_u = spline.t[0], spline.t[-1]
     uu = np.arange(lo_u, hi_u, 0.01)
-    t = spline(uu)
+    t = _Cubic.of(spline)(uu)[0]  # the spline's value (its pieces, as the fits use it)
     a, b = float(np.mean(t[:150])), float(np.mean(t[-150:]))
     return uu, ((t - a) / (b - a) if b != a else np.zeros_like(t))
 
@@ -298,7 +307,7 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     ok = np.isfinite(start) & (k[:, 0] >= 0) & (k[:, -1] <= nx - 1)
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
-    cubic = _Cubic(spline)
+    cubic = _Cubic.of(spline)
     a, c = _levels(v, cubic(_clip(k - x[:, None], lo_u, hi_u))[0])
     scale = np.abs(c) + np.abs(a) + 1e-300
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
@@ -391,11 +400,10 @@ def _inv22(a, ok):
     a00, a01, a02, a11, a12, a22 = (a[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
     cof = a00 * a11 - a01 * a[:, 1, 0]
     det = a00 * (a11 * a22 - a12 * a12) + a01 * (a02 * a12 - a01 * a22) + a02 * (a01 * a12 - a02 * a11)
-    diag = np.abs(a[:, 0, 0] * a[:, 1, 1] * a[:, 2, 2])
+    diag = np.abs(a00 * a11 * a22)
     with np.errstate(all="ignore"):
         out = cof / det
-    weak = ok & ~(np.abs(det) > 1e-10 * diag)
-    if np.any(weak):
-        with np.errstate(all="ignore"):
+        weak = ok & ~(np.abs(det) > 1e-10 * diag)
+        if weak.any():
             out[weak] = np.linalg.pinv(a[weak])[:, 2, 2]
     return out
