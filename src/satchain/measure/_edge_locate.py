@@ -75,22 +75,22 @@ class _Poly:
     def __init__(self, t: np.ndarray, max_deg: int = 3):
         lo, hi = float(t.min()), float(t.max())
         self.m, self.h = 0.5 * (lo + hi), max(0.5 * (hi - lo), 0.5)
-        self.p = ((t - self.m) / self.h)[:, None] ** np.arange(2 * max_deg + 1)[None, :]  # (n, 2 deg + 1)
+        self.pt = ((t - self.m) / self.h)[None, :] ** np.arange(2 * max_deg + 1)[:, None]  # (2 deg + 1, n)
 
     def fit(self, y: np.ndarray, deg: int, w=None) -> np.ndarray:
         """Ascending coefficients in ``s`` minimising ``sum w (y - poly)^2`` (``w`` None: all 1)."""
         n1 = deg + 1
-        mom = self.p[:, : 2 * deg + 1].sum(axis=0) if w is None else w @ self.p[:, : 2 * deg + 1]
-        rhs = (y if w is None else w * y) @ self.p[:, :n1]
+        mom = self.pt[: 2 * deg + 1].sum(axis=1) if w is None else self.pt[: 2 * deg + 1] @ w
+        rhs = self.pt[:n1] @ (y if w is None else w * y)
         q = _cholesky_solve(mom.tolist(), rhs.tolist())
         if q is None:  # degenerate abscissae: the minimum-norm least squares
             sw = np.ones_like(y) if w is None else np.sqrt(w)
-            return np.linalg.lstsq(self.p[:, :n1] * sw[:, None], y * sw, rcond=None)[0]
+            return np.linalg.lstsq(self.pt[:n1].T * sw[:, None], y * sw, rcond=None)[0]
         return np.array(q)
 
     def value(self, q: np.ndarray) -> np.ndarray:
         """The polynomial of ascending coefficients ``q`` at the abscissae."""
-        return self.p[:, : q.size] @ q
+        return q @ self.pt[: q.size]
 
     def coef(self, q: np.ndarray) -> np.ndarray:
         """``q`` as ``np.polyval`` coefficients in ``t`` (descending): ``sum_j q_j (t - m)^j / h^j`` expanded."""
@@ -141,8 +141,9 @@ def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
         r = y - fit
         s = max(_robust_sigma(r), scale_floor)
         u = r / (4.685 * s)
-        uu = u * u  # |u| < 1 exactly where u * u < 1 (and 1 - u * u is then what the weight uses)
-        w = np.where(uu < 1, (1 - uu) ** 2, 0.0)
+        w = 1.0 - u * u  # (1 - u^2)^2 where |u| < 1 (exactly where u * u < 1), else 0
+        np.fmax(w, 0.0, out=w)  # (NaN -> 0 as well)
+        w *= w
         if np.count_nonzero(w) <= deg + 2:
             raise InputError("image: no straight edge found (edge positions do not line up)")
         q = poly.fit(y, deg, w)
