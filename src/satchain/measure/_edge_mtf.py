@@ -28,6 +28,7 @@ __all__ = ["adaptive_mtf", "bin_esf", "choose_bins", "flatten_rows", "rise_width
 
 _W_MIN_PX = 5.0  # smallest half-width of the raw-LSF window (px)
 _W_MIN_RISE = 2.5  # ... and in units of the 10-90 % rise distance
+_ENDS: dict = {}  # kernel -> the smoothing's end matrices (:meth:`_Lsf._s_ends`), a few kernels per run
 _CHUNK_F = 48  # frequencies per chunk of the noise propagation (arrays of 48 x bins stay in cache)
 _TAIL_SMOOTH_PX = 1.25  # Gaussian smoothing of the ESF outside the window (px); 0.75 doubled the noise at 0.25 cy/px
 
@@ -196,9 +197,23 @@ class _Lsf:
         t = np.arange(1, r + 1) * self.w
         h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, t)) @ k[r + 1 :]
         out = np.multiply(h[:, None], p, out=out)
-        out[:, :r] = self._s(p[:, : 2 * r + 1])[:, :r]
-        out[:, -r:] = self._s(p[:, -(2 * r + 1) :])[:, -r:]
+        left, right = self._s_ends()
+        out[:, :r] = p[:, : 2 * r + 1] @ left
+        out[:, -r:] = p[:, -(2 * r + 1) :] @ right
         return out
+
+    def _s_ends(self):
+        """The matrices of :meth:`_s` from the ``2 r + 1`` samples at each end to the ``r`` outputs there (the
+        mirror's reach; linear, so read off the response to the unit vectors)."""
+        key = self.kernel.tobytes()
+        ends = _ENDS.get(key)
+        if ends is None:
+            r = self.kernel.size // 2
+            s_eye = self._s(np.eye(2 * r + 1))
+            ends = _ENDS[key] = (s_eye[:, :r].copy(), s_eye[:, -r:].copy())
+            if len(_ENDS) > 64:
+                _ENDS.pop(next(iter(_ENDS)))
+        return ends
 
     def mtf_sigma(self, spec: np.ndarray, f: np.ndarray, e: np.ndarray, var_bins, corr, m0=None) -> np.ndarray:
         """First-order standard deviation of the normalised MTF ``|spec(f)| / spec(0) / corr`` (magnitude and
