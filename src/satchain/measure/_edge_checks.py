@@ -13,6 +13,7 @@ from scipy.ndimage import gaussian_filter1d
 from satchain.errors import InputError
 from satchain.measure._clipping import find_clipping
 from satchain.measure._common import median
+from satchain.measure._edge_locate import _Poly
 from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
@@ -208,11 +209,12 @@ def unfitted_curvature(lines, pos, coef, f, mtf):
     rss_used = float(np.sum((pos - used) ** 2))
     band = (f > 0) & (f <= 0.5 + 1e-9)
     worst = None
+    poly = _Poly(tc)
     for k in range(deg + 1, 4):
         dof = n - k - 1
         if dof < 4 or not np.any(band):
             break
-        fit = np.polyval(np.polyfit(tc, pos, k), tc)
+        fit = poly.value(poly.fit(pos, k))  # np.polyfit's least squares (moments in a centred variable)
         rss = float(np.sum((pos - fit) ** 2))
         if not (rss_used - rss) / (k - deg) > _CURVE_F_STAT * max(rss / dof, 1e-30):
             continue
