@@ -13,10 +13,18 @@ Printed:
   angle between the two;
 * ``measure find`` on a 4000 x 4000 float32 chart (tests/measure/_render_chart.py tiled, fresh noise):
   ``find_edges`` throughput (Mpx/s; target >= 4) and the time per measured edge of ``measure_found_edges`` on
-  the 200 longest edges (ms; target <= 20), for the new (and old) code.
+  the 200 longest edges (ms; target <= 20), for the new (and old) code;
+* with ``SATCHAIN_OLD_SRC`` and ``--compare N``: every field of the two codes' results (or their refusals) on
+  N random ROIs plus fixed cases (:func:`varied_cases`: tilts 1-44 deg and the critical ones, noise from none
+  to SNR ~ 5, blur 0.3-2 px, curved, short (12 lines), ALT and falling edges, ``valid`` masks, NaN
+  ``nodata``, quantised and clipped integer images, forced degrees, the row axis, ``debias``, 8x
+  oversampling, ``roi`` and ``edge_line``): the largest difference of each field (relative for ``cnr`` and
+  the numbers inside ``warnings``), any field that differs in kind or shape, or any different outcome.
 
-Run:  PYTHONPATH=src python benchmarks/bench_edge_speed.py [--quick] [--repeats N] [--no-find]
+Run:  PYTHONPATH=src python benchmarks/bench_edge_speed.py [--quick] [--repeats N] [--no-find] [--no-time]
       SATCHAIN_OLD_SRC=/work/main/src PYTHONPATH=src python benchmarks/bench_edge_speed.py   (side by side)
+      SATCHAIN_OLD_SRC=/work/main/src PYTHONPATH=src python benchmarks/bench_edge_speed.py --compare 150 \
+          --no-time --no-find
 """
 
 from __future__ import annotations
