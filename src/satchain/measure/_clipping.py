@@ -189,9 +189,11 @@ def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | No
     a kink while the other extreme is reached smoothly (see the module docstring)."""
     span = hi - lo
     tol = _TIE_REL * span
+    plateaus = {side: _plateau(d, v, tol, ok) for side, v in (("maximum", hi), ("minimum", lo))}
+    if plateaus["maximum"] is None and plateaus["minimum"] is None:
+        return None  # no flat run at either extreme: no evidence (the noise and the quantum are not needed)
     quantum = _quantum(d[ok] if unique is None else None, unique)
     step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
-    plateaus = {side: _plateau(d, v, tol, ok) for side, v in (("maximum", hi), ("minimum", lo))}
     if noise_std is None:  # estimated: trusted where the other extreme is no exact plateau (noise-free there)
         sigma = _pixel_noise(d, lo, hi, tol, ok)
         trusted = {"maximum": plateaus["minimum"] is None, "minimum": plateaus["maximum"] is None}
