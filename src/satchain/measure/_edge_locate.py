@@ -108,6 +108,19 @@ def _cholesky_solve(mom: list, rhs: list):
     Cholesky factorisation in plain floats (a LAPACK call costs more than the arithmetic here); None when it is
     not positive definite."""
     n = len(rhs)
+    if n == 2:  # a straight line (most fits): the same steps, unrolled
+        if not mom[0] > 0.0:
+            return None
+        l00 = math.sqrt(mom[0])
+        l10 = mom[1] / l00
+        v = mom[2] - l10 * l10
+        if not v > 1e-13 * abs(mom[2]):
+            return None
+        l11 = math.sqrt(v)
+        z0 = rhs[0] / l00
+        z1 = (rhs[1] - l10 * z0) / l11
+        q1 = z1 / l11
+        return [(z0 - l10 * q1) / l00, q1]
     lo = [[0.0] * n for _ in range(n)]
     for i in range(n):
         for j in range(i + 1):
