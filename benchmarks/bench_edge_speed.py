@@ -13,10 +13,18 @@ Printed:
   angle between the two;
 * ``measure find`` on a 4000 x 4000 float32 chart (tests/measure/_render_chart.py tiled, fresh noise):
   ``find_edges`` throughput (Mpx/s; target >= 4) and the time per measured edge of ``measure_found_edges`` on
-  the 200 longest edges (ms; target <= 20), for the new (and old) code.
+  the 200 longest edges (ms; target <= 20), for the new (and old) code;
+* with ``SATCHAIN_OLD_SRC`` and ``--compare N``: every field of the two codes' results (or their refusals) on
+  N random ROIs plus fixed cases (:func:`varied_cases`: tilts 1-44 deg and the critical ones, noise from none
+  to SNR ~ 5, blur 0.3-2 px, curved, short (12 lines), ALT and falling edges, ``valid`` masks, NaN
+  ``nodata``, quantised and clipped integer images, forced degrees, the row axis, ``debias``, 8x
+  oversampling, ``roi`` and ``edge_line``): the largest difference of each field (relative for ``cnr`` and
+  the numbers inside ``warnings``), any field that differs in kind or shape, or any different outcome.
 
-Run:  PYTHONPATH=src python benchmarks/bench_edge_speed.py [--quick] [--repeats N] [--no-find]
+Run:  PYTHONPATH=src python benchmarks/bench_edge_speed.py [--quick] [--repeats N] [--no-find] [--no-time]
       SATCHAIN_OLD_SRC=/work/main/src PYTHONPATH=src python benchmarks/bench_edge_speed.py   (side by side)
+      SATCHAIN_OLD_SRC=/work/main/src PYTHONPATH=src python benchmarks/bench_edge_speed.py --compare 150 \
+          --no-time --no-find
 """
 
 from __future__ import annotations
@@ -24,6 +32,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -49,18 +58,32 @@ def _esf_pixel(d: np.ndarray, s: float) -> np.ndarray:
     return prim(d + 0.5) - prim(d - 0.5)
 
 
-def render_roi(seed: int, angle_deg: float = ANGLE_DEG, n: int = N_PX) -> np.ndarray:
-    """A noisy slanted edge: exact blurred step, sub-sampled 4 x 4 over each pixel's area."""
+def render_roi(
+    seed: int,
+    angle_deg: float = ANGLE_DEG,
+    n: int = N_PX,
+    *,
+    blur: float = BLUR_PX,
+    noise: float = 1.0,
+    ny: int | None = None,
+    radius: float | None = None,
+) -> np.ndarray:
+    """A noisy slanted edge: exact blurred step, sub-sampled 4 x 4 over each pixel's area.  ``noise`` scales
+    the noise's standard deviation, ``ny`` gives a region of ``ny`` rows (``n`` by default), ``radius`` bends
+    the edge (x offset ``y^2 / (2 R)`` about the middle row)."""
     t = np.deg2rad(angle_deg)
+    ny = n if ny is None else ny
     sub = (np.arange(4) + 0.5) / 4 - 0.5
-    yy, xx = np.mgrid[0:n, 0:n].astype(float)
-    acc = np.zeros((n, n))
+    yy, xx = np.mgrid[0:ny, 0:n].astype(float)
+    acc = np.zeros((ny, n))
     for dy in sub:  # the pixel's extent along the edge (the ESF is already integrated across it)
-        d = (xx - (n / 2 + 0.3) - (yy + dy - n / 2) * np.tan(t)) * np.cos(t)
-        acc += _esf_pixel(d, BLUR_PX)
+        yr = yy + dy - ny / 2
+        bend = 0.0 if radius is None else yr**2 / (2 * radius)
+        d = (xx - (n / 2 + 0.3) - yr * np.tan(t) - bend) * np.cos(t)
+        acc += _esf_pixel(d, blur)
     sig = 0.2 + 0.6 * acc / 4
     rng = np.random.default_rng(seed)
-    return sig + rng.normal(0.0, 1.0, sig.shape) * np.sqrt(1e-5 + 2e-5 * sig)
+    return sig + noise * rng.normal(0.0, 1.0, sig.shape) * np.sqrt(1e-5 + 2e-5 * sig)
 
 
 # -------------------------------------------------------------------------------------------- lean e-SFR
@@ -161,6 +184,136 @@ def edge_figures(impls: dict, repeats: int) -> None:
         print(f"  new vs old on the {len(rois)} ROIs: max |dMTF| {dm:.2e}, |dsigma| {ds:.2e}, |dangle| {da:.2e} deg")
 
 
+def varied_cases(n_random: int, seed: int = 2024):
+    """(name, image, keywords) of varied ROIs for the side-by-side comparison: tilts 1-44 deg, noise from none
+    to SNR ~ 5, blur 0.3-2 px, curved and short edges, ALT edges, falling edges, masks, NaN nodata, integer
+    (quantised, clipped) images and the options that change the path (forced degree, row axis, debias, a given
+    edge line, a region given by ``roi``)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(n_random):
+        ang = float(rng.uniform(1.0, 44.0))
+        noise = float(rng.choice([0.0, 0.3, 1.0, 3.0, 10.0]))
+        blur = float(rng.choice([0.3, 0.5, 0.8, 1.2, 2.0]))
+        nx = int(rng.choice([40, 60, 100, 140]))
+        ny = int(rng.choice([12, 20, 40, nx, 160]))
+        radius = None if rng.uniform() < 0.7 else float(rng.uniform(150.0, 2000.0))
+        img = render_roi(1000 + i, ang, nx, blur=blur, noise=noise, ny=ny, radius=radius)
+        kw = {}
+        tag = f"a{ang:.1f} n{noise:g} b{blur:g} {ny}x{nx}" + ("" if radius is None else f" R{radius:.0f}")
+        r = rng.uniform()
+        if r < 0.15:
+            img = img.T
+            tag += " ALT"
+        elif r < 0.25:
+            img = 1.0 - img
+            tag += " falling"
+        r = rng.uniform()
+        if r < 0.08:
+            valid = np.ones(img.shape, bool)
+            valid[: img.shape[0] // 4, : img.shape[1] // 3] = False
+            kw["valid"] = valid
+            tag += " valid"
+        elif r < 0.14:
+            img = img.copy()
+            img[-3:, -5:] = np.nan
+            kw["nodata"] = float("nan")
+            tag += " nan"
+        elif r < 0.22:
+            img = np.round(img * float(rng.choice([60.0, 255.0, 4000.0]))).astype(np.uint16)
+            tag += " int"
+        elif r < 0.26:
+            img = np.clip(img, None, 0.7)
+            tag += " clipped"
+        r = rng.uniform()
+        if r < 0.1:
+            kw["fit_degree"] = int(rng.integers(1, 4))
+        elif r < 0.18:
+            kw["frequency_axis"] = "row"
+        elif r < 0.24:
+            kw["debias"] = True
+        elif r < 0.28:
+            kw["f_max_cy_per_px"] = 0.5
+        elif r < 0.32:
+            kw["oversampling"] = 8
+            kw["f_max_cy_per_px"] = 1.5
+        if kw:
+            tag += " " + " ".join(f"{k}={v}" for k, v in kw.items() if k != "valid")
+        out.append((tag, img, kw))
+    for ang in (1.0, 2.0, 5.0, 14.036, 18.43, 26.57, 40.0, 45.0):
+        out.append((f"critical {ang}", render_roi(7, ang, 100), {}))
+    big = render_roi(8, 6.0, 140, ny=120)
+    out.append(("roi", big, {"roi": (20, 10, 120, 110)}))
+    out.append(("edge_line", big, {"edge_line": (70.3, 60.0, 6.0)}))
+    return out
+
+
+_NUM = re.compile(r"[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?")
+
+
+def _diff(a, b) -> float:
+    """Largest |difference| of two result fields (inf where they differ in kind, shape or NaN pattern); the
+    warnings' texts must be equal but for their numbers, whose largest relative difference is returned."""
+    if isinstance(a, tuple | list) and a and isinstance(a[0], str) and len(a) == len(b) and a != b:
+        na = [_NUM.findall(x) for x in a]
+        nb = [_NUM.findall(x) for x in b]
+        if [_NUM.sub("#", x) for x in a] != [_NUM.sub("#", x) for x in b] or list(map(len, na)) != list(map(len, nb)):
+            return float("inf")
+        x = np.array([float(v) for v in sum(na, [])])
+        y = np.array([float(v) for v in sum(nb, [])])
+        return float(np.max(np.abs(x - y) / np.maximum(np.abs(y), 1e-300)))
+    if isinstance(a, dict) or isinstance(b, dict) or a is None or b is None or isinstance(a, str | bool):
+        return 0.0 if a == b else float("inf")
+    if isinstance(a, list | tuple) and (not a or isinstance(a[0], str)):
+        return 0.0 if list(a) == list(b) else float("inf")
+    x = np.asarray(a, dtype=float)
+    y = np.asarray(b, dtype=float)
+    if x.shape != y.shape or not np.array_equal(np.isnan(x), np.isnan(y)):
+        return float("inf")
+    ok = np.isfinite(x)
+    if not np.array_equal(x[~ok], y[~ok], equal_nan=True):
+        return float("inf")
+    return float(np.max(np.abs(x[ok] - y[ok]), initial=0.0))
+
+
+def compare_figures(impls: dict, n_random: int) -> None:
+    """Every result field of the new and the old code on :func:`varied_cases` (or the same refusal)."""
+    (_, a), (_, b) = impls.items()
+    worst: dict[str, tuple[float, str]] = {}
+    n_refused = n_same = 0
+    cases = varied_cases(n_random)
+    for tag, img, kw in cases:
+        try:
+            ra = a[0](img, **kw).__dict__
+        except Exception as exc:  # noqa: BLE001 - compare the refusal itself
+            ra = f"{type(exc).__name__}: {exc}"
+        try:
+            rb = b[0](img, **kw).__dict__
+        except Exception as exc:  # noqa: BLE001
+            rb = f"{type(exc).__name__}: {exc}"
+        if isinstance(ra, str) or isinstance(rb, str):
+            n_refused += isinstance(ra, str) and isinstance(rb, str)
+            if ra != rb:
+                print(f"  DIFFERENT OUTCOME [{tag}]:\n    new: {str(ra)[:200]}\n    old: {str(rb)[:200]}")
+                worst["outcome"] = (float("inf"), tag)
+            else:
+                n_same += 1
+            continue
+        n_same += 1
+        for k in ra:
+            d = _diff(ra[k], rb[k])
+            if k == "cnr" and np.isfinite(d):  # contrast / noise: huge on noise-free ROIs, compared relatively
+                d /= max(abs(rb[k]), 1.0)
+            if d > worst.get(k, (-1.0, ""))[0]:
+                worst[k] = (d, tag)
+    print(f"new vs old on {len(cases)} varied ROIs ({n_refused} refused by both, {n_same} alike):")
+    for k, (d, tag) in sorted(worst.items(), key=lambda kv: -kv[1][0]):
+        if d > 0:
+            how = "relative" if k in ("cnr", "warnings") else ""
+            print(f"  max |d {k}| = {d:.2e} {how} [{tag}]")
+    print("  every other field identical" if worst else "  all fields identical")
+
+
 def make_chart(size: int, seed: int = 12345) -> np.ndarray:
     """A ``size`` x ``size`` float32 chart: 5 x 5 squares (as benchmarks/bench_find.py) tiled, fresh noise."""
     rng = np.random.default_rng(seed)
@@ -202,13 +355,18 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeats", type=int, default=None)
     ap.add_argument("--no-find", action="store_true")
+    ap.add_argument("--compare", type=int, default=0, metavar="N", help="with SATCHAIN_OLD_SRC: N random ROIs")
+    ap.add_argument("--no-time", action="store_true", help="skip the slanted-edge timing")
     args = ap.parse_args()
     repeats = args.repeats or (10 if args.quick else 30)
     impls = {"new": load_satchain(None)}
     old = os.environ.get("SATCHAIN_OLD_SRC")
     if old:
         impls["old"] = load_satchain(old)
-    edge_figures(impls, repeats)
+    if args.compare and old:
+        compare_figures(impls, args.compare)
+    if not args.no_time:
+        edge_figures(impls, repeats)
     if not args.no_find:
         find_figures(impls, 2000 if args.quick else 4000, 1 if args.quick else 3)
 

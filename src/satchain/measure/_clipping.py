@@ -110,7 +110,7 @@ def resolve_full_scale(image, full_scale=None, saturation_level=None) -> float |
 
 
 def find_clipping(
-    data, *, full_scale: float | None = None, noise_std: float | None = None, valid=None
+    data, *, full_scale: float | None = None, noise_std: float | None = None, valid=None, unique=None
 ) -> Clipping | None:
     """Evidence that ``data`` is clipped (see the module docstring for the criterion), or None.
 
@@ -126,6 +126,8 @@ def find_clipping(
     valid : array_like of bool, optional
         Pixels to consider (the shape of ``data``); excluded pixels (nodata, outside an area of interest)
         are never clipping, never a plateau's neighbour and never enter the noise estimate.
+    unique : ndarray, optional
+        ``np.unique`` of the considered pixels' values when the caller has it already (saves a sort).
 
     Examples
     --------
@@ -152,7 +154,7 @@ def find_clipping(
             return Clipping("maximum", full_scale, n, frac, "full_scale", msg)
     if span <= 0:
         return None
-    return _plateau_evidence(d, lo, hi, noise_std, ok)
+    return _plateau_evidence(d, lo, hi, noise_std, ok, unique)
 
 
 def _check_valid(valid, shape) -> np.ndarray:
@@ -182,14 +184,16 @@ def _check_args(data, full_scale, noise_std, valid=None):
     return d, full_scale, noise_std, ok
 
 
-def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | None, ok: np.ndarray):
+def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | None, ok: np.ndarray, unique=None):
     """A flat run at the region's maximum (minimum) that shows clipping: where noise is expected, or met with
     a kink while the other extreme is reached smoothly (see the module docstring)."""
     span = hi - lo
     tol = _TIE_REL * span
-    quantum = _quantum(d[ok])
-    step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
     plateaus = {side: _plateau(d, v, tol, ok) for side, v in (("maximum", hi), ("minimum", lo))}
+    if plateaus["maximum"] is None and plateaus["minimum"] is None:
+        return None  # no flat run at either extreme: no evidence (the noise and the quantum are not needed)
+    quantum = _quantum(d[ok] if unique is None else None, unique)
+    step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
     if noise_std is None:  # estimated: trusted where the other extreme is no exact plateau (noise-free there)
         sigma = _pixel_noise(d, lo, hi, tol, ok)
         trusted = {"maximum": plateaus["minimum"] is None, "minimum": plateaus["maximum"] is None}
@@ -226,9 +230,10 @@ def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | No
     return None
 
 
-def _quantum(d: np.ndarray) -> float:
-    """The smallest gap between distinct values (a DN step in quantised data; ~0 in continuous data)."""
-    u = np.unique(d)
+def _quantum(d: np.ndarray | None, u: np.ndarray | None = None) -> float:
+    """The smallest gap between distinct values (a DN step in quantised data; ~0 in continuous data); ``u``:
+    the distinct values when known."""
+    u = np.unique(d) if u is None else u
     return float(np.min(np.diff(u))) if u.size > 1 else 0.0
 
 
@@ -278,11 +283,14 @@ def _pixel_noise(d: np.ndarray, lo: float, hi: float, tol: float, ok: np.ndarray
         if a.shape[1] < 5:
             continue
         c = a[:, 2:-2]
-        inside = o[:, :-4] & o[:, 1:-3] & o[:, 2:-2] & o[:, 3:-1] & o[:, 4:]
+        every = o.all()  # no excluded pixel: every stencil inside
+        inside = True if every else o[:, :-4] & o[:, 1:-3] & o[:, 2:-2] & o[:, 3:-1] & o[:, 4:]
         keep = (np.abs(c - lo) > tol) & (np.abs(c - hi) > tol) & inside
-        if np.count_nonzero(keep) < max(0.2 * np.count_nonzero(inside), 20):
+        n_keep, n_inside = np.count_nonzero(keep), (c.size if every else np.count_nonzero(inside))
+        if n_keep < max(0.2 * n_inside, 20):
             return 0.0
-        d2 = (a[:, 3:-1] - 2 * c + a[:, 1:-3])[keep]
-        d4 = (a[:, 4:] - 4 * a[:, 3:-1] + 6 * c - 4 * a[:, 1:-3] + a[:, :-4])[keep]
+        sel = slice(None) if n_keep == keep.size else keep  # all kept: the same values, without a copy
+        d2 = (a[:, 3:-1] - 2 * c + a[:, 1:-3])[sel]
+        d4 = (a[:, 4:] - 4 * a[:, 3:-1] + 6 * c - 4 * a[:, 1:-3] + a[:, :-4])[sel]
         out.append(min(robust_sigma(d2) / math.sqrt(6.0), robust_sigma(d4) / math.sqrt(70.0)))
     return float(min(out)) if out else 0.0

@@ -12,6 +12,8 @@ from scipy.ndimage import gaussian_filter1d
 
 from satchain.errors import InputError
 from satchain.measure._clipping import find_clipping
+from satchain.measure._common import median
+from satchain.measure._edge_locate import _Poly
 from satchain.measure._edge_mtf import window_mtf
 
 __all__ = [
@@ -38,7 +40,7 @@ _QUANT_DITHER = 0.45  # residual rms (in steps) from which noise dithers the qua
 _CURVE_F_STAT = 9.0  # higher-degree terms of the edge positions count when resolved (F > 9: ~3 sigma for one)
 
 
-def check_saturation(data: np.ndarray, full_scale: float | None, valid=None) -> list[tuple[str, str]]:
+def check_saturation(data: np.ndarray, full_scale: float | None, valid=None, unique=None) -> list[tuple[str, str]]:
     """Refuse a clipped edge; flag a few pixels touching the full scale.
 
     Clipping is named only on evidence (:func:`satchain.measure._clipping.find_clipping`): pixels at the
@@ -46,13 +48,14 @@ def check_saturation(data: np.ndarray, full_scale: float | None, valid=None) -> 
     saturation -- a flat run at an extreme while the noise is visible elsewhere, or, noise-free, a plateau
     reached with a kink on one side only (a profile cut flat).  A clipped plateau biases the ESF and the
     MTF (+0.045 at Nyquist for a 0.05-0.8 edge cut at 0.7): refused.  An edge's own smooth plateau, exactly
-    constant in a noise-free render, is not clipping.
+    constant in a noise-free render, is not clipping.  ``unique``: ``np.unique`` of the considered pixels, when
+    known.
     """
     vals = data if valid is None else data[valid]
     lo, hi = float(vals.min()), float(vals.max())
     if hi == lo:
         raise InputError(f"image: the region is flat (every pixel = {lo:g}); no edge to measure")
-    clip = find_clipping(data, full_scale=full_scale, valid=valid)
+    clip = find_clipping(data, full_scale=full_scale, valid=valid, unique=unique)
     if clip is None:
         return []
     if clip.evidence == "full_scale":
@@ -91,25 +94,33 @@ def fit_plateaus(x: np.ndarray, esf: np.ndarray, lim: float):
 
 
 def _plateau_line(xs: np.ndarray, es: np.ndarray):
-    """Level and slope of one plateau: ``a + b x + k / |x|``, dropping the terms not resolved (|t| < 3)."""
+    """Level and slope of one plateau: ``a + b x + k / |x|``, dropping the terms not resolved (|t| < 3).
+
+    Least squares by the normal equations of the columns scaled to unit norm (well conditioned: the same
+    solution as a QR/SVD least squares to rounding), one Gram matrix for every subset of the terms."""
     ax_s = np.abs(xs)
     cols = [np.ones_like(xs)]
     if xs.size >= 8 and np.ptp(xs) > 2.0:
         cols.append(xs)
         if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
             cols.append(1.0 / ax_s)
+    m_all = np.stack(cols, axis=1)
+    norm = np.sqrt(np.einsum("ij,ij->j", m_all, m_all))
+    ms = m_all / norm
+    gram, rhs = ms.T @ ms, ms.T @ es
+    keep = list(range(len(cols)))  # the terms in the model (0: the level, 1: the slope, 2: k / |x|)
     while True:
-        m = np.stack(cols, axis=1)
-        coef, *_ = np.linalg.lstsq(m, es, rcond=None)
-        if len(cols) == 1:
-            return float(coef[0]), 0.0
-        dof = max(xs.size - len(cols), 1)
-        s2 = float(np.sum((es - m @ coef) ** 2)) / dof
-        se = np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))
+        g = gram[np.ix_(keep, keep)]
+        coef = np.linalg.solve(g, rhs[keep])
+        if len(keep) == 1:
+            return float(coef[0] / norm[0]), 0.0
+        dof = max(xs.size - len(keep), 1)
+        s2 = float(np.sum((es - ms[:, keep] @ coef) ** 2)) / dof
+        se = np.sqrt(np.maximum(np.diag(np.linalg.inv(g)) * s2, 1e-300))
         t = np.abs(coef[1:]) / se[1:]
         if np.all(t >= 3.0):
-            return float(coef[0]), float(coef[1]) if len(cols) > 1 and cols[1] is xs else 0.0
-        cols.pop(1 + int(np.argmin(t)))
+            return float(coef[0] / norm[0]), float(coef[1] / norm[1]) if keep[1] == 1 else 0.0
+        keep.pop(1 + int(np.argmin(t)))
 
 
 def check_single_edge(x, esf, counts, sigma, fits, lim) -> None:
@@ -198,11 +209,12 @@ def unfitted_curvature(lines, pos, coef, f, mtf):
     rss_used = float(np.sum((pos - used) ** 2))
     band = (f > 0) & (f <= 0.5 + 1e-9)
     worst = None
+    poly = _Poly(tc)
     for k in range(deg + 1, 4):
         dof = n - k - 1
         if dof < 4 or not np.any(band):
             break
-        fit = np.polyval(np.polyfit(tc, pos, k), tc)
+        fit = poly.value(poly.fit(pos, k))  # np.polyfit's least squares (moments in a centred variable)
         rss = float(np.sum((pos - fit) ** 2))
         if not (rss_used - rss) / (k - deg) > _CURVE_F_STAT * max(rss / dof, 1e-30):
             continue
@@ -253,11 +265,12 @@ def curvature_bias_flag(deg: int, shift: float, f_at: float, spread_px: float, k
     )
 
 
-def quantisation_step(data: np.ndarray) -> float | None:
+def quantisation_step(data: np.ndarray, unique=None) -> float | None:
     """The step of the value lattice the region's pixels sit on (1 for most integer images), or None.
 
-    None for continuous data (more distinct values than half the pixels, or values off any lattice)."""
-    u = np.unique(data)
+    None for continuous data (more distinct values than half the pixels, or values off any lattice).
+    ``unique``: ``np.unique(data)`` when known."""
+    u = np.unique(data) if unique is None else unique
     if u.size < 2 or u.size > 0.5 * data.size:
         return None
     q = float(np.min(np.diff(u)))
@@ -280,7 +293,7 @@ def quantisation_flags(q: float, x: np.ndarray, esf: np.ndarray, resid: np.ndarr
     the binned ESF (the robust sigma sees only the mode of rounded noise) measures it.
     """
     q4 = max(2, esf.size // 4)
-    step = abs(float(np.median(esf[-q4:]) - np.median(esf[:q4])))
+    step = abs(float(median(esf[-q4:]) - median(esf[:q4])))
     levels = step / q
     keep = np.abs(resid) < max(0.1 * step, 2 * q)
     dither = float(np.sqrt(np.mean(resid[keep] ** 2))) / q if np.any(keep) else 0.0

@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import BSpline
-from scipy.linalg import solveh_banded
+from scipy.linalg.lapack import dpbsv
 
 from satchain.errors import InputError
+from satchain.measure._common import median as _median
 from satchain.measure._common import robust_sigma
 
 __all__ = ["edge_line_fields", "line_numbers", "line_positions", "rough_line"]
@@ -101,7 +102,7 @@ def line_positions(work: np.ndarray, coef, usable=None):
     nan = np.full(start.shape, np.nan)
     if np.count_nonzero(np.isfinite(start)) < 4:
         return nan, nan
-    cols = np.rint(np.nan_to_num(start))[:, None] + np.arange(-half_t, half_t + 1)[None, :]
+    cols = np.rint(_nan0(start))[:, None] + np.arange(-half_t, half_t + 1)[None, :]
     spline = _template(work, ok_px, cols, np.broadcast_to(start[:, None], cols.shape))
     half = _half_width(spline)
     pos = start
@@ -147,12 +148,11 @@ def _template(work, ok_px, cols, place):
     """The edge's line profile ``T(u)``: a least-squares cubic B-spline through the pixels ``cols`` (lines x
     samples) at ``u = column - place`` (NaN places and unusable pixels left out)."""
     nx = work.shape[1]
-    kc = np.clip(np.nan_to_num(cols), 0, nx - 1).astype(int)
+    kc = _clip(cols, 0, nx - 1).astype(int)  # cols are finite (placed from finite or zeroed starts)
     take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & np.take_along_axis(ok_px, kc, axis=1)
     u = (cols - place)[take]
     v = np.take_along_axis(work, kc, axis=1)[take]
-    frac = np.sort(np.mod(u, 1.0))
-    gap = float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0])))) if frac.size else 1.0
+    gap = _phase_gap(u)
     if gap > _MAX_GAP_PX:
         raise InputError(
             f"image: the lines' sub-pixel edge phases leave a {gap:.2f} px gap (> {_MAX_GAP_PX}); the edge is "
@@ -169,6 +169,29 @@ def _template(work, ok_px, cols, place):
         raise InputError("image: the edge's line profile cannot be estimated (too few lines or phases)") from None
 
 
+def _phase_gap(u: np.ndarray) -> float:
+    """The largest gap in the sub-pixel phases ``frac(u)`` (cyclic), exact where it matters: when 64 bins of
+    the phases leave no empty run longer than 23 bins the gap is below 25 / 64 < 0.4 px, where the template
+    neither refuses (> 0.75) nor widens its knots (1.25 x gap > 0.5), and the bound is returned; else the exact
+    gap from the sorted phases."""
+    if u.size == 0:
+        return 1.0
+    frac = np.mod(u, 1.0)
+    nb = 64
+    empty = np.bincount(np.minimum((frac * nb).astype(np.intp), nb - 1), minlength=nb) == 0
+    if not empty.any():
+        return 2.0 / nb
+    if not empty.all():
+        # longest cyclic run of empty bins: start from a filled bin
+        e = np.roll(empty, -int(np.argmin(empty)))
+        edges = np.diff(np.concatenate([[0], e.view(np.int8), [0]]))
+        run = int(np.max(np.nonzero(edges == -1)[0] - np.nonzero(edges == 1)[0]))
+        if run + 2 <= 25:
+            return (run + 2) / nb
+    frac = np.sort(frac)
+    return float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0]))))
+
+
 def _lsq_spline(u, v, knots) -> BSpline:
     """Least-squares cubic B-spline on ``knots`` through (u, v): the banded normal equations (each sample
     touches 4 basis functions) solved by Cholesky; the B-spline basis is well conditioned, so this agrees with
@@ -176,15 +199,17 @@ def _lsq_spline(u, v, knots) -> BSpline:
     nc = len(knots) - 4
     first, vals = _basis(u, knots, nc)
     ab = np.zeros((4, nc))  # upper band storage: ab[3 + i - j, j] = A[i, j]
+    idx = first[:, None] + np.arange(4)[None, :]
     for d in range(4):
         w = (vals[:, : 4 - d] * vals[:, d:]).ravel()
-        idx = (first[:, None] + np.arange(4 - d)[None, :]).ravel()
-        ab[3 - d, d:] = np.bincount(idx, weights=w, minlength=nc)[: nc - d]
-    idx = (first[:, None] + np.arange(4)[None, :]).ravel()
-    rhs = np.bincount(idx, weights=(vals * v[:, None]).ravel(), minlength=nc)
-    if np.any(ab[3] <= 0.0):
+        ab[3 - d, d:] = np.bincount(idx[:, : 4 - d].ravel(), weights=w, minlength=nc)[: nc - d]
+    rhs = np.bincount(idx.ravel(), weights=(vals * v[:, None]).ravel(), minlength=nc)
+    if np.any(ab[3] <= 0.0) or not np.all(np.isfinite(ab)) or not np.all(np.isfinite(rhs)):
         raise np.linalg.LinAlgError("a basis function holds no sample")
-    return BSpline(knots, solveh_banded(ab, rhs), 3)
+    _, coef, info = dpbsv(ab, rhs, lower=0)  # scipy.linalg.solveh_banded's own LAPACK call
+    if info != 0:
+        raise np.linalg.LinAlgError("the spline's normal matrix is not positive definite")
+    return BSpline.construct_fast(knots, coef, 3)
 
 
 def _basis(u, t, nc: int):
@@ -212,11 +237,34 @@ class _Cubic:
         self.bx = np.unique(t[3:-3])
         left = self.bx[:-1]
         self.c = [spline(left, nu=k) / f for k, f in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))]
+        inner = np.diff(self.bx[1:-1])
+        # the template's knots are uniform inside (np.arange): the interval by arithmetic, not a search (at a
+        # knot it may pick the neighbouring piece, whose value and slope agree there to rounding: C2 spline)
+        self.uniform = inner.size >= 2 and float(inner.max() - inner.min()) <= 1e-9 * float(inner[0])
+        if self.uniform:
+            self.inv = (inner.size) / float(self.bx[-2] - self.bx[1])
+
+    @classmethod
+    def of(cls, spline) -> _Cubic:
+        """The piecewise form of ``spline``, made once per spline (kept on it)."""
+        cubic = getattr(spline, "_satchain_cubic", None)
+        if cubic is None:
+            cubic = cls(spline)
+            spline._satchain_cubic = cubic
+        return cubic
+
+    def index(self, u):
+        """The knot interval of each ``u`` (the ends extended)."""
+        if not self.uniform:
+            return np.clip(np.searchsorted(self.bx, u, side="right") - 1, 0, self.bx.size - 2)
+        i = np.floor((u - self.bx[1]) * self.inv).astype(np.intp)
+        i += 1
+        return np.minimum(np.maximum(i, 0, out=i), self.bx.size - 2, out=i)
 
     def __call__(self, u):
-        i = np.clip(np.searchsorted(self.bx, u, side="right") - 1, 0, self.bx.size - 2)
-        dx = u - self.bx[i]
-        c0, c1, c2, c3 = (c[i] for c in self.c)
+        i = self.index(u)
+        dx = u - np.take(self.bx, i)
+        c0, c1, c2, c3 = (np.take(c, i) for c in self.c)
         return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
 
 
@@ -224,7 +272,7 @@ def _rise(spline):
     """(u grid, profile normalised to its plateaus 0 -> 1) over the spline's range."""
     lo_u, hi_u = spline.t[0], spline.t[-1]
     uu = np.arange(lo_u, hi_u, 0.01)
-    t = spline(uu)
+    t = _Cubic.of(spline)(uu)[0]  # the spline's value (its pieces, as the fits use it)
     a, b = float(np.mean(t[:150])), float(np.mean(t[-150:]))
     return uu, ((t - a) / (b - a) if b != a else np.zeros_like(t))
 
@@ -253,33 +301,45 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     Returns (x, sigma_x, the pixels' columns)."""
     ny, nx = work.shape
     lo_u, hi_u = spline.t[0], spline.t[-1]
-    k = np.rint(np.nan_to_num(start))[:, None] + np.arange(-half, half + 1)[None, :]
+    x = _nan0(start)
+    k = np.rint(x)[:, None] + np.arange(-half, half + 1)[None, :]
     kc = np.clip(k, 0, nx - 1).astype(int)
     ok = np.isfinite(start) & (k[:, 0] >= 0) & (k[:, -1] <= nx - 1)
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
-    x = np.nan_to_num(start).copy()
-    cubic = _Cubic(spline)
-    a, c = _levels(v, cubic(np.clip(k - x[:, None], lo_u, hi_u))[0])
+    cubic = _Cubic.of(spline)
+    a, c = _levels(v, cubic(_clip(k - x[:, None], lo_u, hi_u))[0])
     scale = np.abs(c) + np.abs(a) + 1e-300
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
     q[..., 0] = 1.0
+    tol_ac = 1e-9 * scale[ok, None]
     for it in range(9):
-        q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+        q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
         np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
         gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
         if it == 8:
             break
         step = _solve(gram, c)
         a, c = a + step[:, 0], c + step[:, 1]
-        x = x + np.clip(step[:, 2], -0.5, 0.5)
+        x = x + _clip(step[:, 2], -0.5, 0.5)
         # converged (every measurable line's step below 1e-9 px): the next steps move it by ~1e-10 px
-        if np.all(np.abs(step[ok, 2]) < 1e-9) and np.all(np.abs(step[ok, :2]) < 1e-9 * scale[ok, None]):
-            q[..., 1], q[..., 2] = cubic(np.clip(k - x[:, None], lo_u, hi_u))
+        s_ok = np.abs(step[ok])
+        if (s_ok[:, 2] < 1e-9).all() and (s_ok[:, :2] < tol_ac).all():
+            q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
             np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
     return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
+
+
+def _nan0(a: np.ndarray) -> np.ndarray:
+    """``np.nan_to_num`` of positions (NaN or finite, never inf: NaN -> 0), without its overhead."""
+    return np.where(np.isnan(a), 0.0, a)
+
+
+def _clip(a, lo, hi):
+    """``np.clip`` (NaN kept) without its dispatch overhead."""
+    return np.minimum(np.maximum(a, lo), hi)
 
 
 def _levels(v, t):
@@ -300,29 +360,34 @@ def _normal(gram, c):
 
 def _solve(gram, c):
     """Per line least-squares Gauss-Newton step (lines with a singular system: no step), by the adjugate of
-    the 3 x 3 normal matrix."""
-    a, b = _normal(gram, c)
-    a00, a01, a02, a11, a12, a22 = (a[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
+    the 3 x 3 normal matrix (:func:`_normal`'s entries, written out: the lines as the vector axis)."""
+    m = -c
+    a00, a01, a11 = gram[:, 0, 0], gram[:, 0, 1], gram[:, 1, 1]
+    a02, a12, a22 = gram[:, 0, 2] * m, gram[:, 1, 2] * m, gram[:, 2, 2] * m * m
+    b0, b1, b2 = gram[:, 0, 3], gram[:, 1, 3], gram[:, 2, 3] * m
     c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
     c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
     det = a00 * c00 + a01 * c01 + a02 * c02
     good = np.abs(det) > 1e-300
-    adj = np.stack([c00, c01, c02, c01, c11, c12, c02, c12, c22], axis=1).reshape(-1, 3, 3)
     inv_det = np.where(good, 1.0 / np.where(good, det, 1.0), 0.0)
-    return np.matmul(adj, b[:, :, None])[:, :, 0] * inv_det[:, None]
+    out = np.empty((c.size, 3))
+    out[:, 0] = (c00 * b0 + c01 * b1 + c02 * b2) * inv_det
+    out[:, 1] = (c01 * b0 + c11 * b1 + c12 * b2) * inv_det
+    out[:, 2] = (c02 * b0 + c12 * b1 + c22 * b2) * inv_det
+    return out
 
 
 def _accept(ok, x, start, fit, half: int):
     """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
     normal matrices J^T J)``."""
     a, c, r, jtj = fit
-    ok = ok & np.isfinite(x) & (np.abs(x - np.nan_to_num(start)) <= 0.5 * half)
+    ok = ok & np.isfinite(x) & (np.abs(x - _nan0(start)) <= 0.5 * half)
     if np.count_nonzero(ok) < 3:
         return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
-    c_med = float(np.median(c[ok]))
+    c_med = _median(c[ok])
     rms = np.sqrt(np.mean(r * r, axis=1))
     ok &= np.abs(c - c_med) <= _CONTRAST_TOL * abs(c_med)
-    ok &= rms <= _RMS_TOL * float(np.median(rms[ok])) + 0.005 * abs(c_med)
+    ok &= rms <= _RMS_TOL * _median(rms[ok]) + 0.005 * abs(c_med)
     n_ok = np.count_nonzero(ok)
     noise2 = float(np.sum(r[ok] ** 2)) / max(n_ok * (r.shape[1] - 3), 1)
     pos = np.where(ok, x, np.nan)
@@ -332,13 +397,13 @@ def _accept(ok, x, start, fit, half: int):
 def _inv22(a, ok):
     """Element (2, 2) of the inverse of each 3 x 3 symmetric ``a`` (its cofactor over the determinant); the
     pseudo-inverse's for the ``ok`` lines whose matrix is near singular."""
-    det = np.linalg.det(a)
-    cof = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
-    diag = np.abs(a[:, 0, 0] * a[:, 1, 1] * a[:, 2, 2])
+    a00, a01, a02, a11, a12, a22 = (a[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
+    cof = a00 * a11 - a01 * a[:, 1, 0]
+    det = a00 * (a11 * a22 - a12 * a12) + a01 * (a02 * a12 - a01 * a22) + a02 * (a01 * a12 - a02 * a11)
+    diag = np.abs(a00 * a11 * a22)
     with np.errstate(all="ignore"):
         out = cof / det
-    weak = ok & ~(np.abs(det) > 1e-10 * diag)
-    if np.any(weak):
-        with np.errstate(all="ignore"):
+        weak = ok & ~(np.abs(det) > 1e-10 * diag)
+        if weak.any():
             out[weak] = np.linalg.pinv(a[weak])[:, 2, 2]
     return out

@@ -5,11 +5,13 @@ and the projection of every pixel onto the fitted edge's local normal; the regio
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.ndimage import uniform_filter
 
 from satchain.errors import InputError
-from satchain.measure._common import crop_roi, fill_invalid, valid_mask, zero_fill_mask
+from satchain.measure._common import crop_roi, fill_invalid, median, robust_sigma, valid_mask, zero_fill_mask
 
 __all__ = ["MIN_ROWS", "curvature", "edge_region", "locate_edge", "orient_edge", "project"]
 
@@ -38,8 +40,9 @@ def edge_region(image, roi, valid, nodata):
 def orient_edge(data: np.ndarray, ok=None):
     """Return (work array whose rows cross the edge, its valid mask or None, direction, transposed, sign making
     the ESF rise)."""
-    gx = np.abs(np.diff(uniform_filter(data, 3), axis=1)).sum()
-    gy = np.abs(np.diff(uniform_filter(data, 3), axis=0)).sum()
+    sm = uniform_filter(data, 3)
+    gx = np.abs(np.diff(sm, axis=1)).sum()
+    gy = np.abs(np.diff(sm, axis=0)).sum()
     transposed = gy > gx
     work = data.T if transposed else data
     q = max(2, work.shape[1] // 4)
@@ -48,21 +51,8 @@ def orient_edge(data: np.ndarray, ok=None):
     return work * sign, okw, ("ALT" if transposed else "ACT"), transposed, sign
 
 
-def _median(v: np.ndarray) -> float:
-    """``np.median`` of a 1-D float array (the same value: the mean of the two middle elements)."""
-    n = v.size
-    if n == 0:
-        return float("nan")
-    lo, hi = (n - 1) // 2, n // 2
-    p = np.partition(v, [lo, hi]) if lo != hi else np.partition(v, lo)
-    return float((p[lo] + p[hi]) / 2)
-
-
-def _robust_sigma(v: np.ndarray) -> float:
-    """:func:`satchain.measure._common.robust_sigma` of a 1-D float array (1.4826 MAD), without its overhead."""
-    if v.size == 0:
-        return 0.0
-    return float(1.482602218505602 * _median(np.abs(v - _median(v))))
+_median = median
+_robust_sigma = robust_sigma
 
 
 def _polyfit(t: np.ndarray, y: np.ndarray, deg: int, w=None) -> np.ndarray:
@@ -77,6 +67,79 @@ def _polyfit(t: np.ndarray, y: np.ndarray, deg: int, w=None) -> np.ndarray:
     return c / scale
 
 
+class _Poly:
+    """Weighted least-squares polynomials of degree <= 3 on fixed abscissae ``t``, by the normal equations in
+    the centred, scaled variable ``s = (t - m) / h`` (in [-1, 1]: the moment matrix is well conditioned, so
+    the fit equals ``np.polyfit``'s QR solution to rounding).  Coefficients are ascending in ``s``."""
+
+    def __init__(self, t: np.ndarray, max_deg: int = 3):
+        lo, hi = float(t.min()), float(t.max())
+        self.m, self.h = 0.5 * (lo + hi), max(0.5 * (hi - lo), 0.5)
+        self.pt = ((t - self.m) / self.h)[None, :] ** np.arange(2 * max_deg + 1)[:, None]  # (2 deg + 1, n)
+
+    def fit(self, y: np.ndarray, deg: int, w=None) -> np.ndarray:
+        """Ascending coefficients in ``s`` minimising ``sum w (y - poly)^2`` (``w`` None: all 1)."""
+        n1 = deg + 1
+        mom = self.pt[: 2 * deg + 1].sum(axis=1) if w is None else self.pt[: 2 * deg + 1] @ w
+        rhs = self.pt[:n1] @ (y if w is None else w * y)
+        q = _cholesky_solve(mom.tolist(), rhs.tolist())
+        if q is None:  # degenerate abscissae: the minimum-norm least squares
+            sw = np.ones_like(y) if w is None else np.sqrt(w)
+            return np.linalg.lstsq(self.pt[:n1].T * sw[:, None], y * sw, rcond=None)[0]
+        return np.array(q)
+
+    def value(self, q: np.ndarray) -> np.ndarray:
+        """The polynomial of ascending coefficients ``q`` at the abscissae."""
+        return q @ self.pt[: q.size]
+
+    def coef(self, q: np.ndarray) -> np.ndarray:
+        """``q`` as ``np.polyval`` coefficients in ``t`` (descending): ``sum_j q_j (t - m)^j / h^j`` expanded."""
+        n = len(q)
+        a = [0.0] * n
+        for j, qj in enumerate(q.tolist()):
+            qj /= self.h**j
+            for i in range(j + 1):
+                a[i] += qj * math.comb(j, i) * (-self.m) ** (j - i)
+        return np.array(a[::-1])
+
+
+def _cholesky_solve(mom: list, rhs: list):
+    """Solve the Hankel system ``sum_j mom[i + j] q_j = rhs[i]`` (symmetric positive definite, n <= 4) by a
+    Cholesky factorisation in plain floats (a LAPACK call costs more than the arithmetic here); None when it is
+    not positive definite."""
+    n = len(rhs)
+    if n == 2:  # a straight line (most fits): the same steps, unrolled
+        if not mom[0] > 0.0:
+            return None
+        l00 = math.sqrt(mom[0])
+        l10 = mom[1] / l00
+        v = mom[2] - l10 * l10
+        if not v > 1e-13 * abs(mom[2]):
+            return None
+        l11 = math.sqrt(v)
+        z0 = rhs[0] / l00
+        z1 = (rhs[1] - l10 * z0) / l11
+        q1 = z1 / l11
+        return [(z0 - l10 * q1) / l00, q1]
+    lo = [[0.0] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i + 1):
+            v = mom[i + j] - sum(lo[i][k] * lo[j][k] for k in range(j))
+            if i == j:
+                if not v > 1e-13 * abs(mom[2 * i]):
+                    return None
+                lo[i][i] = math.sqrt(v)
+            else:
+                lo[i][j] = v / lo[j][j]
+    z = [0.0] * n
+    for i in range(n):
+        z[i] = (rhs[i] - sum(lo[i][k] * z[k] for k in range(i))) / lo[i][i]
+    q = [0.0] * n
+    for i in reversed(range(n)):
+        q[i] = (z[i] - sum(lo[k][i] * q[k] for k in range(i + 1, n))) / lo[i][i]
+    return q
+
+
 def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
     """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights).
 
@@ -84,38 +147,41 @@ def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     w = np.ones_like(y)
-    coef = _polyfit(t, y, deg)
-    fit = np.polyval(coef, t)
+    poly = _Poly(t, deg)
+    q = poly.fit(y, deg)
+    fit = poly.value(q)
     for _ in range(10):
         r = y - fit
         s = max(_robust_sigma(r), scale_floor)
         u = r / (4.685 * s)
-        w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
+        w = 1.0 - u * u  # (1 - u^2)^2 where |u| < 1 (exactly where u * u < 1), else 0
+        np.fmax(w, 0.0, out=w)  # (NaN -> 0 as well)
+        w *= w
         if np.count_nonzero(w) <= deg + 2:
             raise InputError("image: no straight edge found (edge positions do not line up)")
-        coef = _polyfit(t, y, deg, np.sqrt(w))
-        new = np.polyval(coef, t)
-        moved = float(np.max(np.abs(new - fit)))
+        q = poly.fit(y, deg, w)
+        new = poly.value(q)
+        moved = float(np.abs(new - fit).max())
         fit = new
         if moved < 1e-12:
             break
-    return coef, w
+    return poly.coef(q), w
 
 
 def pick_degree(t, y, w):
     """Degree 1-3 for the edge positions: a higher one must beat F > 30 and move the edge by > 0.1 px."""
     use = w > 0
     t, y = t[use], y[use]
-    tc = (t - t.mean()) / max(np.ptp(t), 1.0)
+    poly = _Poly(t)
     best = 1
-    fits = {k: _polyfit(tc, y, k) for k in (1, 2, 3)}
-    rss = {k: float(np.sum((y - np.polyval(fits[k], tc)) ** 2)) for k in (1, 2, 3)}
+    fits = {k: poly.value(poly.fit(y, k)) for k in (1, 2, 3)}
+    rss = {k: float(np.sum((y - fits[k]) ** 2)) for k in (1, 2, 3)}
     for k in (2, 3):
         dof = t.size - k - 1
         if dof < 4:
             break
         f_stat = (rss[best] - rss[k]) / max(rss[k] / dof, 1e-30)
-        move = float(np.max(np.abs(np.polyval(fits[k], tc) - np.polyval(fits[best], tc))))
+        move = float(np.max(np.abs(fits[k] - fits[best])))
         if f_stat > F_DEGREE and move > SAGITTA_PX:
             best = k
     return best
@@ -180,7 +246,7 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
         if cur == last and prev.shape == coef.shape and np.array_equal(prev, coef):
             break  # the same fit again: further passes repeat it exactly
     inl = w > 0
-    med = float(np.median(step[inl]))
+    med = median(step[inl])
     odd = inl & (np.abs(step - med) > 0.3 * abs(med))
     bad = (n_keep - np.count_nonzero(inl)) + np.count_nonzero(odd)
     if bad > 0.2 * n_keep:

@@ -21,12 +21,15 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import convolve1d, gaussian_filter1d
 
+from satchain.measure._common import median
 from satchain.measure._edge_locate import MIN_ROWS
 
 __all__ = ["adaptive_mtf", "bin_esf", "choose_bins", "flatten_rows", "rise_width", "trim_ends", "window_mtf"]
 
 _W_MIN_PX = 5.0  # smallest half-width of the raw-LSF window (px)
 _W_MIN_RISE = 2.5  # ... and in units of the 10-90 % rise distance
+_ENDS: dict = {}  # kernel -> the smoothing's end matrices (:meth:`_Lsf._s_ends`), a few kernels per run
+_CHUNK_F = 48  # frequencies per chunk of the noise propagation (arrays of 48 x bins stay in cache)
 _TAIL_SMOOTH_PX = 1.25  # Gaussian smoothing of the ESF outside the window (px); 0.75 doubled the noise at 0.25 cy/px
 
 
@@ -150,13 +153,36 @@ class _Lsf:
             return (hi[:, None, :] * lo[None, :, :]).reshape(-1, self.xm.size)[:n]
         return np.exp(-2j * np.pi * np.outer(f, self.xm))
 
+    def fourier_chunks(self, f: np.ndarray, rows: int = _CHUNK_F):
+        """(slice of ``f``, :meth:`fourier` of those frequencies) in chunks of ``rows`` frequencies (the same
+        values as one :meth:`fourier`): the arrays of the noise propagation then stay small (in cache, and
+        reused by the allocator instead of fresh pages)."""
+        f = np.asarray(f, dtype=float)
+        n, b = f.size, 16
+        if n > 2 * b and f[0] == 0.0 and np.allclose(np.diff(f), f[1], rtol=0.0, atol=1e-12):
+            lo = np.exp(-2j * np.pi * np.outer(np.arange(b) * f[1], self.xm))
+            hi = np.exp(-2j * np.pi * np.outer(np.arange(-(-n // b)) * (b * f[1]), self.xm))
+            step = max(1, rows // b)
+            for k in range(0, hi.shape[0], step):
+                sl = slice(k * b, min(n, (k + step) * b))
+                yield sl, (hi[k : k + step, None, :] * lo[None, :, :]).reshape(-1, self.xm.size)[: sl.stop - sl.start]
+        else:
+            yield slice(0, n), np.exp(-2j * np.pi * np.outer(f, self.xm))
+
     def spectrum(self, lsf: np.ndarray, f: np.ndarray, e: np.ndarray | None = None) -> np.ndarray:
         e = self.fourier(f) if e is None else e
         if lsf.ndim > 1:
             return (lsf @ e.real.T + 1j * (lsf @ e.imag.T)) * self.w
         return (e.real @ lsf + 1j * (e.imag @ lsf)) * self.w  # real products: complex BLAS is far slower here
 
-    def _s_fourier(self, p: np.ndarray, f: np.ndarray) -> np.ndarray:
+    def _y0(self, win: np.ndarray) -> np.ndarray:
+        """The LSF map's response to a constant difference ``w`` (the sensitivity of the spectrum at f = 0)."""
+        y0 = getattr(self, "_y0_cache", None)
+        if y0 is None or y0.shape != win.shape:
+            y0 = self._y0_cache = win * self.w + (1 - win) * self._s(np.full(self.xm.size, self.w))
+        return y0
+
+    def _s_fourier(self, p: np.ndarray, f: np.ndarray, out=None) -> np.ndarray:
         """``S`` of rows ``p_f = Re(c_f exp(-2 pi i f xm))``: inside the kernel's reach of the ends a complex
         exponential goes through the convolution multiplied by the kernel's (real) transfer ``H(f)``; the
         ``r`` samples at each end, where the mirror enters, are convolved directly."""
@@ -164,38 +190,64 @@ class _Lsf:
         r = k.size // 2
         m = p.shape[-1]
         if m <= 4 * r + 2:
-            return self._s(p)
+            if out is None:
+                return self._s(p)
+            out[...] = self._s(p)
+            return out
         t = np.arange(1, r + 1) * self.w
         h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, t)) @ k[r + 1 :]
-        out = h[:, None] * p
-        out[:, :r] = self._s(p[:, : 2 * r + 1])[:, :r]
-        out[:, -r:] = self._s(p[:, -(2 * r + 1) :])[:, -r:]
+        out = np.multiply(h[:, None], p, out=out)
+        left, right = self._s_ends()
+        out[:, :r] = p[:, : 2 * r + 1] @ left
+        out[:, -r:] = p[:, -(2 * r + 1) :] @ right
         return out
 
-    def mtf_sigma(self, spec: np.ndarray, f: np.ndarray, e: np.ndarray, var_bins, corr) -> np.ndarray:
+    def _s_ends(self):
+        """The matrices of :meth:`_s` from the ``2 r + 1`` samples at each end to the ``r`` outputs there (the
+        mirror's reach; linear, so read off the response to the unit vectors)."""
+        key = self.kernel.tobytes()
+        ends = _ENDS.get(key)
+        if ends is None:
+            r = self.kernel.size // 2
+            s_eye = self._s(np.eye(2 * r + 1))
+            ends = _ENDS[key] = (s_eye[:, :r].copy(), s_eye[:, -r:].copy())
+            if len(_ENDS) > 64:
+                _ENDS.pop(next(iter(_ENDS)))
+        return ends
+
+    def mtf_sigma(self, spec: np.ndarray, f: np.ndarray, e: np.ndarray, var_bins, corr, m0=None) -> np.ndarray:
         """First-order standard deviation of the normalised MTF ``|spec(f)| / spec(0) / corr`` (magnitude and
         normalisation noise) from independent bin noise ``var_bins``; ``e`` = :meth:`fourier` of ``f``.
 
         ``d |spec(f)| / d esf = Re(u d spec / d esf)`` with ``u = conj(spec) / |spec|``; the derivative of the
         spectrum is the adjoint of the (real) LSF map applied to the Fourier kernel, so the real part can be
         taken first: one real pass ``win q + (1 - win) S(q)`` then the adjoint of the difference.
+        ``m0`` is the spectrum at f = 0 (default: the first column of ``spec``, whose ``f`` then start at 0).
         """
         spec2 = np.atleast_2d(spec)  # (windows, f)
         win = self.win if self.win.ndim == 2 else self.win[None]
-        m0 = spec2[:, :1].real
+        m0 = spec2[:, :1].real if m0 is None else np.reshape(np.asarray(m0, dtype=float), (-1, 1))
         mag = np.abs(spec2)
         u = np.where(mag > 0, np.conj(spec2) / np.maximum(mag, 1e-300), 1.0) * (self.w / m0)
-        p = u.real[..., None] * e.real - u.imag[..., None] * e.imag  # Re(u e) w / m0
-        sp = self._s_fourier(p.reshape(-1, p.shape[-1]), np.tile(f, spec2.shape[0])).reshape(p.shape)
-        y = win[:, None, :] * p + (1 - win[:, None, :]) * sp
-        y0 = win * self.w + (1 - win) * self._s(np.full(self.xm.size, self.w))  # sensitivity at f = 0
-        y -= (mag / m0**2)[..., None] * y0[:, None, :]
+        # few large temporaries, updated in place (each fresh (windows, f, bins) array costs page faults)
+        y = np.multiply(u.real[..., None], e.real)  # p = Re(u e) w / m0
+        tmp = np.multiply(u.imag[..., None], e.imag)
+        y -= tmp
+        p2, t2 = y.reshape(-1, y.shape[-1]), tmp.reshape(-1, y.shape[-1])
+        self._s_fourier(p2, np.tile(f, spec2.shape[0]), out=t2)  # S(p)
+        y -= tmp  # y = S(p) + win (p - S(p)) = win p + (1 - win) S(p)
+        y *= win[:, None, :]
+        y += tmp
+        y0 = self._y0(win)  # sensitivity at f = 0
+        np.multiply((mag / m0**2)[..., None], y0[:, None, :], out=tmp)
+        y -= tmp
         # c = adjoint of diff(.) / w applied to y: c_k = (y_{k-1} - y_k) / w with zero ends
         d = np.empty(y.shape[:-1] + (y.shape[-1] + 1,))
         d[..., 0] = -y[..., 0]
         d[..., -1] = y[..., -1]
         np.subtract(y[..., :-1], y[..., 1:], out=d[..., 1:-1])
-        out = np.sqrt(np.einsum("bij,bij,j->bi", d, d, var_bins)) / abs(self.w) / corr
+        d *= d
+        out = np.sqrt(d @ var_bins) / abs(self.w) / corr
         return out if spec.ndim == 2 else out[0]
 
 
@@ -241,11 +293,13 @@ def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
             lo, hi = (lo, mid) if meets(mid) else (mid, hi)
     op, lsf = _row(ops, hi), lsfs[hi]
     half_w = ws[hi]
-    e = op.fourier(f)
-    spec = op.spectrum(lsf, f, e)
-    m0 = spec[0].real
+    spec, sig = np.empty(f.size, dtype=complex), np.empty(f.size)
+    m0 = None
+    for sl, e in op.fourier_chunks(f):  # f[0] = 0 is in the first chunk
+        spec[sl] = op.spectrum(lsf, f[sl], e)
+        m0 = spec[0].real if m0 is None else m0
+        sig[sl] = op.mtf_sigma(spec[sl] * np.sign(m0), f[sl], e, var_bins, corr[sl], m0=abs(m0))
     mtf = np.abs(spec) / abs(m0) / corr
-    sig = op.mtf_sigma(spec * np.sign(m0), f, e, var_bins, corr)
     return mtf, sig, half_w, lsf / abs(m0), op.xm
 
 
@@ -253,6 +307,7 @@ def _row(ops: _Lsf, k: int) -> _Lsf:
     """The single-window map of row ``k`` of a batched :class:`_Lsf`."""
     op = object.__new__(_Lsf)
     op.w, op.xm, op.kernel = ops.w, ops.xm, ops.kernel
+    op._y0_cache = None
     op.win = ops.win[k] if ops.win.ndim == 2 else ops.win
     return op
 
@@ -268,7 +323,7 @@ def window_mtf(x, esf, half_w: float, f) -> np.ndarray:
 def rise_width(x: np.ndarray, esf: np.ndarray) -> float:
     """10-90 % rise distance (px) of the ESF, levels from its two outer quarters."""
     q = max(2, x.size // 4)
-    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    lo, hi = median(esf[:q]), median(esf[-q:])
     e = (esf - lo) / (hi - lo) if hi != lo else esf * 0
     inside = np.abs(x) < 10
     xs, es = x[inside], e[inside]
@@ -285,11 +340,11 @@ def trim_ends(x, esf, counts, frac: float = 0.3):
     compared as means over 2 px: near a critical tilt the rows' phases bunch, so neighbouring bins alternate
     between many samples and few, which is not a corner (at 44.5 deg in a 60 px region it cut one side to
     nothing)."""
-    step = float(np.median(np.diff(x))) if x.size > 1 else 1.0
+    step = median(np.diff(x)) if x.size > 1 else 1.0
     k = max(1, int(round(2.0 / step)))
     smooth = np.convolve(counts.astype(float), np.ones(k) / k, mode="same") if x.size > k else counts.astype(float)
     near = np.abs(x) < 5
-    typical = float(np.median(smooth[near])) if np.any(near) else float(np.median(smooth))
+    typical = median(smooth[near]) if np.any(near) else median(smooth)
     low = smooth < frac * typical
     i0 = int(np.argmin(np.abs(x)))
     left = np.nonzero(low[:i0])[0]
@@ -308,7 +363,7 @@ def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
     Returns (values, flags).
     """
     q = max(2, esf.size // 8)
-    lo, hi = float(np.median(esf[:q])), float(np.median(esf[-q:]))
+    lo, hi = median(esf[:q]), median(esf[-q:])
     if not hi > lo:
         return v, []
     e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)

@@ -29,6 +29,7 @@ Every rejected segment is kept with its reason, so a refusal can say why.  Angle
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy import ndimage as ndi
@@ -147,32 +148,61 @@ def _robust_range(a: np.ndarray, valid=None) -> float:
     return float(hi - lo)
 
 
+@lru_cache(maxsize=8)
+def _gauss_weights(sigma: float, order: int) -> np.ndarray:
+    """The correlation weights ``ndi.gaussian_filter1d(x, sigma, order=order)`` applies (truncated at 4
+    sigma): its response to a unit impulse, read back (exact: one product by 1 per output)."""
+    lw = int(4.0 * sigma + 0.5)
+    delta = np.zeros(2 * lw + 1)
+    delta[lw] = 1.0
+    w = ndi.gaussian_filter1d(delta, sigma, order=order, mode="constant")[::-1].copy()
+    w.flags.writeable = False
+    return w
+
+
+def _gaussian(a: np.ndarray, sigma: float, orders=(0, 0)) -> np.ndarray:
+    """``ndi.gaussian_filter(a, sigma, order=orders, mode="nearest")`` (the same passes, axis 0 then 1, into
+    one output of ``a``'s dtype) with the kernels made once, not per call."""
+    out = np.empty_like(a)
+    ndi.correlate1d(a, _gauss_weights(sigma, orders[0]), 0, out, mode="nearest")
+    ndi.correlate1d(out, _gauss_weights(sigma, orders[1]), 1, out, mode="nearest")
+    return out
+
+
 def _gradient(band: np.ndarray):
     """Gaussian-derivative gradient (gx, gy) of a float32 band."""
-    gx = ndi.gaussian_filter(band, _GRAD_SIGMA, order=(0, 1), mode="nearest")
-    gy = ndi.gaussian_filter(band, _GRAD_SIGMA, order=(1, 0), mode="nearest")
+    gx = _gaussian(band, _GRAD_SIGMA, (0, 1))
+    gy = _gaussian(band, _GRAD_SIGMA, (1, 0))
     return gx, gy
 
 
-def _edge_mask(a: np.ndarray, threshold: float, band_rows: int, inner=None) -> np.ndarray:
+def _edge_mask(a: np.ndarray, threshold: float, band_rows: int, inner=None):
     """Boolean mask of coherent strong-gradient pixels, computed band by band in float32 (only ``inner``
-    pixels, when given: those whose filters see no excluded pixel)."""
-    ny = a.shape[0]
+    pixels, when given: those whose filters see no excluded pixel), and the gradient at its pixels: (flat
+    indices, gx, gy), sorted (each band's gradient is the whole image's there: the bands overlap by the
+    filters' reach)."""
+    ny, nx = a.shape
     mask = np.zeros(a.shape, dtype=bool)
+    flat, gxs, gys = [], [], []
     for y0 in range(0, ny, band_rows):
         lo, hi = max(0, y0 - _PAD), min(ny, y0 + band_rows + _PAD)
         band = np.asarray(a[lo:hi], dtype=np.float32)
         gx, gy = _gradient(band)
-        jxx = ndi.gaussian_filter(gx * gx, _TENSOR_SIGMA, mode="nearest")
-        jyy = ndi.gaussian_filter(gy * gy, _TENSOR_SIGMA, mode="nearest")
-        jxy = ndi.gaussian_filter(gx * gy, _TENSOR_SIGMA, mode="nearest")
+        jxx = _gaussian(gx * gx, _TENSOR_SIGMA)
+        jyy = _gaussian(gy * gy, _TENSOR_SIGMA)
+        jxy = _gaussian(gx * gy, _TENSOR_SIGMA)
         tr = jxx + jyy
         coh = np.sqrt((jxx - jyy) ** 2 + 4 * jxy**2) / np.maximum(tr, np.float32(1e-30))
         strong = (gx * gx + gy * gy > np.float32(threshold**2)) & (coh > _COHERENCE_MIN)
-        mask[y0 : min(ny, y0 + band_rows)] = strong[y0 - lo : y0 - lo + min(band_rows, ny - y0)]
+        rows = slice(y0 - lo, y0 - lo + min(band_rows, ny - y0))
+        mask[y0 : min(ny, y0 + band_rows)] = strong[rows]
+        k = np.flatnonzero(strong[rows])
+        flat.append(k + y0 * nx)
+        gxs.append(gx[rows].ravel()[k])
+        gys.append(gy[rows].ravel()[k])
     if inner is not None:
         mask &= inner
-    return mask
+    return mask, (np.concatenate(flat), np.concatenate(gxs), np.concatenate(gys))
 
 
 @dataclass
@@ -204,9 +234,11 @@ class _Segment:
         return float(cx), float(cy), float(ux), float(uy), float(t.max() - t.min() + 1.0)
 
 
-def _segments(a: np.ndarray, mask: np.ndarray, min_length_px: float) -> list[_Segment]:
-    """Connected components of the edge mask that are long enough, with their gradient weights."""
+def _segments(a: np.ndarray, mask: np.ndarray, min_length_px: float, grads) -> list[_Segment]:
+    """Connected components of the edge mask that are long enough, with their gradient weights (``grads``:
+    the gradient at the mask's pixels, from :func:`_edge_mask`)."""
     labels, n = ndi.label(mask, structure=np.ones((3, 3), dtype=int))
+    flat, gx_all, gy_all = grads
     out = []
     for i, sl in enumerate(ndi.find_objects(labels), start=1):
         if sl is None:
@@ -214,12 +246,12 @@ def _segments(a: np.ndarray, mask: np.ndarray, min_length_px: float) -> list[_Se
         h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
         if np.hypot(h, w) < 0.7 * min_length_px:
             continue
-        y0, y1 = max(0, sl[0].start - _PAD), min(a.shape[0], sl[0].stop + _PAD)
-        x0, x1 = max(0, sl[1].start - _PAD), min(a.shape[1], sl[1].stop + _PAD)
-        gx, gy = _gradient(np.asarray(a[y0:y1, x0:x1], dtype=np.float32))
-        yy, xx = np.nonzero(labels[y0:y1, x0:x1] == i)
-        gxs, gys = gx[yy, xx].astype(float), gy[yy, xx].astype(float)
-        out.append(_Segment(xx + float(x0), yy + float(y0), gxs**2 + gys**2, np.arctan2(gys, gxs)))
+        yy, xx = np.nonzero(labels[sl] == i)
+        yy += sl[0].start
+        xx += sl[1].start
+        k = np.searchsorted(flat, yy * a.shape[1] + xx)
+        gxs, gys = gx_all[k].astype(float), gy_all[k].astype(float)
+        out.append(_Segment(xx.astype(float), yy.astype(float), gxs**2 + gys**2, np.arctan2(gys, gxs)))
     del labels
     return out
 
@@ -498,8 +530,8 @@ def find_edges(
     _check_finite(a, band_rows)
     noise = estimate_noise(a, band_rows=band_rows, valid=ok)
     threshold = max(_K_NOISE * _GRAD_NOISE_GAIN * noise, _REL_RANGE * _robust_range(a, ok), 1e-12)
-    mask = _edge_mask(a, threshold, band_rows, inner)
-    segs = _merge_collinear(_segments(a, mask, p["min_length_px"]))
+    mask, grads = _edge_mask(a, threshold, band_rows, inner)
+    segs = _merge_collinear(_segments(a, mask, p["min_length_px"], grads))
     del mask
     found, rejected = [], []
     for s in segs:

@@ -1,0 +1,203 @@
+"""The vectorised / closed-form helpers of the fast slanted-edge and edge-search paths (issue 21, point 2)
+against their plain references: ``np.polyfit`` / ``np.polyval``, a sorted phase gap, ``np.median``,
+``np.linalg.lstsq`` / ``pinv``, one-shot Fourier kernels and direct mirrored convolutions,
+``scipy.ndimage.gaussian_filter`` and the gradient recomputed on each segment's padded crop.
+
+Not timed: the speed is printed by ``benchmarks/bench_edge_speed.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from _render_chart import render_chart
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage as ndi
+
+from satchain.measure import _edge_checks as checks
+from satchain.measure import _edge_lines as lines
+from satchain.measure import _edge_locate as locate
+from satchain.measure import find
+from satchain.measure._common import median, robust_sigma
+from satchain.measure._edge_mtf import _Lsf
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    deg=st.integers(1, 3),
+    n=st.integers(6, 200),
+    t0=st.sampled_from([0.0, 37.0, 3900.0]),
+    zeros=st.floats(0.0, 0.5),
+    seed=st.integers(0, 10**6),
+)
+def test_moment_polyfit_equals_np_polyfit(deg, n, t0, zeros, seed):
+    """Weighted polynomial fits by moments in the centred variable = np.polyfit's QR solution (values and
+    np.polyval coefficients), on rows far from the origin and with zero weights."""
+    rng = np.random.default_rng(seed)
+    t = t0 + np.sort(rng.choice(np.arange(4 * n), n, replace=False)).astype(float)
+    y = 20.0 + 0.07 * (t - t0) + 2e-4 * (t - t0 - n) ** 2 + rng.normal(0.0, 0.3, n)
+    w = rng.uniform(0.0, 1.0, n)
+    w[rng.uniform(size=n) < zeros] = 0.0
+    if np.count_nonzero(w) < deg + 2:
+        w[: deg + 2] = 1.0
+    poly = locate._Poly(t, deg)
+    scale = np.max(np.abs(y))
+    for weights in (None, w):
+        sw = None if weights is None else np.sqrt(weights)
+        q = poly.fit(y, deg, weights)
+        # the reference: np.polyfit's QR least squares, in t - mean(t) (in raw t it is itself ill-conditioned
+        # far from the origin; the edge fits use a region's rows, 0 to a few hundred)
+        tm = t - t.mean()
+        ref = np.polyval(np.polyfit(tm, y, deg, w=sw), tm)
+        assert np.max(np.abs(poly.value(q) - ref)) < 1e-10 * scale
+        coef = poly.coef(q)  # np.polyval coefficients in t: exact to the evaluation's own rounding
+        powers = np.abs(t[:, None]) ** np.arange(deg, -1, -1)[None, :]
+        assert np.all(np.abs(np.polyval(coef, t) - ref) <= 1e-10 * scale + 1e-14 * (powers @ np.abs(coef)))
+        if t0 < 1000:
+            assert np.max(np.abs(poly.value(q) - np.polyval(np.polyfit(t, y, deg, w=sw), t))) < 1e-9 * scale
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 4000), spread=st.floats(0.02, 1.0), clusters=st.integers(1, 6), seed=st.integers(0, 10**6))
+def test_phase_gap_bound_decides_as_the_exact_gap(n, spread, clusters, seed):
+    """The largest sub-pixel phase gap: exact where it can matter (> 25/64 px), else a bound between the exact
+    gap and 25/64 (< 0.4 px: no refusal, knots unchanged) -- the template's decisions are the exact ones."""
+    rng = np.random.default_rng(seed)
+    u = rng.integers(-15, 15, n) + (rng.integers(0, clusters, n) / clusters + rng.uniform(0, spread / 10, n))
+    frac = np.sort(np.mod(u, 1.0))
+    exact = float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0]))))
+    fast = lines._phase_gap(u)
+    if fast > 25 / 64:
+        assert fast == exact
+    else:
+        assert exact <= fast + 1e-15 <= 25 / 64 + 1e-15
+
+
+@settings(max_examples=40, deadline=None)
+@given(shape=st.sampled_from([(1,), (2,), (7,), (10, 3), (101,)]), nan=st.booleans(), seed=st.integers(0, 10**6))
+def test_median_equals_np_median(shape, nan, seed):
+    v = np.random.default_rng(seed).normal(size=shape)
+    if nan:
+        v.flat[0] = np.nan
+    m = median(v)
+    assert (np.isnan(m) and np.isnan(np.median(v))) or m == np.median(v)
+    if not nan:
+        w = v.ravel()
+        assert robust_sigma(v) == 1.482602218505602 * np.median(np.abs(w - np.median(w)))
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(4, 60), k=st.floats(0.0, 0.3), b=st.floats(-0.01, 0.01), seed=st.integers(0, 10**6))
+def test_plateau_line_equals_lstsq_with_pinv_errors(n, k, b, seed):
+    """Level and slope of a plateau by scaled normal equations = the QR least squares with pinv standard errors
+    (the same terms dropped, the same coefficients)."""
+    rng = np.random.default_rng(seed)
+    xs = np.sort(rng.uniform(4.0, 40.0, n)) * rng.choice([-1, 1])
+    es = 0.8 + b * xs + k / np.abs(xs) + rng.normal(0.0, 0.002, n)
+
+    def reference(xs, es):
+        ax_s = np.abs(xs)
+        cols = [np.ones_like(xs)]
+        if xs.size >= 8 and np.ptp(xs) > 2.0:
+            cols.append(xs)
+            if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
+                cols.append(1.0 / ax_s)
+        while True:
+            m = np.stack(cols, axis=1)
+            coef = np.linalg.lstsq(m, es, rcond=None)[0]
+            if len(cols) == 1:
+                return float(coef[0]), 0.0
+            s2 = float(np.sum((es - m @ coef) ** 2)) / max(xs.size - len(cols), 1)
+            t = np.abs(coef[1:]) / np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))[1:]
+            if np.all(t >= 3.0):
+                return float(coef[0]), float(coef[1]) if cols[1] is xs else 0.0
+            cols.pop(1 + int(np.argmin(t)))
+
+    fast, ref = checks._plateau_line(xs, es), reference(xs, es)
+    assert abs(fast[0] - ref[0]) < 1e-10 and abs(fast[1] - ref[1]) < 1e-11
+
+
+def test_chunked_spectrum_and_noise_equal_one_pass():
+    """The output band in chunks (Fourier kernel, spectrum, propagated noise with the normalisation given) =
+    the one-pass forms; the smoothing's end matrices = the mirrored convolution itself."""
+    rng = np.random.default_rng(4)
+    for w in (0.25, 0.2887):
+        x = np.arange(-25.0, 25.0, w) + 0.1 * w
+        op = _Lsf(x, 12.0, w)
+        lsf = np.exp(-0.5 * (op.xm / 0.8) ** 2) + rng.normal(0.0, 1e-3, op.xm.size)
+        f = np.arange(0.0, 0.5 / w + 1e-9, 0.005)[:201]
+        e_all = op.fourier(f)
+        var = rng.uniform(0.5, 2.0, x.size) * 1e-6
+        spec_all = op.spectrum(lsf, f, e_all)
+        sig_all = op.mtf_sigma(spec_all, f, e_all, var, np.sinc(f * w))
+        for sl, e in op.fourier_chunks(f):
+            assert np.max(np.abs(e - np.exp(-2j * np.pi * np.outer(f[sl], op.xm)))) < 1e-12
+            spec = op.spectrum(lsf, f[sl], e)
+            assert np.allclose(spec, spec_all[sl], rtol=0, atol=1e-14)
+            sig = op.mtf_sigma(spec, f[sl], e, var, np.sinc(f[sl] * w), m0=spec_all[0].real)
+            assert np.allclose(sig, sig_all[sl], rtol=1e-12, atol=1e-16)
+        p = rng.normal(size=(5, op.xm.size))
+        assert np.allclose(op._s_fourier(p, f[:5]), _s_fourier_direct(op, p, f[:5]), rtol=0, atol=1e-14)
+
+
+def _s_fourier_direct(op, p, f):
+    """The previous form: the kernel's transfer inside, the mirrored convolution itself at the ends."""
+    k = op.kernel
+    r = k.size // 2
+    h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, np.arange(1, r + 1) * op.w)) @ k[r + 1 :]
+    out = h[:, None] * p
+    out[:, :r] = op._s(p[:, : 2 * r + 1])[:, :r]
+    out[:, -r:] = op._s(p[:, -(2 * r + 1) :])[:, -r:]
+    return out
+
+
+def test_uniform_knot_index_equals_search():
+    """The spline's knot interval by arithmetic = np.searchsorted (off the knots), the same values at them."""
+    rng = np.random.default_rng(2)
+    u = np.sort(rng.uniform(-12.0, 12.0, 3000))
+    v = np.tanh(u / 1.1) + rng.normal(0.0, 0.01, u.size)
+    inner = np.arange(-11.5, 11.6, 0.5)
+    spline = lines._lsq_spline(u, v, np.concatenate([[u[0]] * 4, inner, [u[-1]] * 4]))
+    cubic = lines._Cubic(spline)
+    assert cubic.uniform
+    uu = np.concatenate([rng.uniform(u[0] - 1, u[-1] + 1, 2000), inner])
+    ref = np.clip(np.searchsorted(cubic.bx, uu, side="right") - 1, 0, cubic.bx.size - 2)
+    off_knot = ~np.isin(uu, inner)
+    assert np.array_equal(cubic.index(uu)[off_knot], ref[off_knot])
+    t, dt = cubic(np.clip(uu, u[0], u[-1]))
+    assert np.allclose(t, spline(np.clip(uu, u[0], u[-1])), rtol=0, atol=1e-12)
+    assert np.allclose(dt, spline.derivative()(np.clip(uu, u[0], u[-1])), rtol=0, atol=1e-11)
+
+
+@settings(max_examples=20, deadline=None)
+@given(ny=st.integers(3, 80), nx=st.integers(3, 80), sigma=st.sampled_from([1.0, 1.5]), seed=st.integers(0, 10**6))
+def test_find_gaussian_equals_ndimage_bitwise(ny, nx, sigma, seed):
+    a = np.random.default_rng(seed).normal(size=(ny, nx)).astype(np.float32)
+    for orders in ((0, 0), (0, 1), (1, 0)):
+        ref = ndi.gaussian_filter(a, sigma, order=orders, mode="nearest")
+        assert np.array_equal(find._gaussian(a, sigma, orders), ref)
+
+
+def test_segment_gradients_equal_each_segments_own_crop():
+    """The gradient each segment takes from the search bands = the gradient of its own padded crop (the old
+    per-segment refiltering), bit for bit, with bands cut across the segments."""
+    rng = np.random.default_rng(9)
+    squares = [
+        (60 + 110 * j + rng.uniform(0, 1), 60 + 110 * i + rng.uniform(0, 1), 60, rng.uniform(3, 12))
+        for i in range(2)
+        for j in range(2)
+    ]
+    img = render_chart((240, 240), squares, sx=0.5, sy=0.6, noise=0.004, rng=rng).astype(np.float32)
+    mask, grads = find._edge_mask(img, 0.01, 64)
+    segs = find._segments(img, mask, 12.0, grads)
+    assert len(segs) >= 8
+    labels, _ = ndi.label(mask, structure=np.ones((3, 3), dtype=int))
+    for seg in segs:
+        yy, xx = seg.ys.astype(int), seg.xs.astype(int)
+        y0, y1 = max(0, yy.min() - find._PAD), min(img.shape[0], yy.max() + 1 + find._PAD)
+        x0, x1 = max(0, xx.min() - find._PAD), min(img.shape[1], xx.max() + 1 + find._PAD)
+        crop = img[y0:y1, x0:x1]
+        gx = ndi.gaussian_filter(crop, find._GRAD_SIGMA, order=(0, 1), mode="nearest")[yy - y0, xx - x0]
+        gy = ndi.gaussian_filter(crop, find._GRAD_SIGMA, order=(1, 0), mode="nearest")[yy - y0, xx - x0]
+        assert np.array_equal(seg.w, gx.astype(float) ** 2 + gy.astype(float) ** 2)
+        assert np.array_equal(seg.gang, np.arctan2(gy.astype(float), gx.astype(float)))
