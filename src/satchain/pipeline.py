@@ -252,6 +252,8 @@ class _EarlyFigures:
             gsd = float((sim.system or budget.system).gsd_act_m)
             extent = (sim.image.shape[1] * gsd, sim.image.shape[0] * gsd)
             p = float(self.config.scene.pixel_m)
+            args, kwargs = _images_call(self.config, sim.system or budget.system, sim, out)
+            jobs.submit(write_images, *args, **kwargs)
             for it, box in thumbnail_boxes(scene.truth_dict, extent):  # the exact star render first: the longest
                 job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
                 self.thumbnails.append((it, box, job))
@@ -261,28 +263,25 @@ class _EarlyFigures:
             self.measured = True
 
 
-def _write_images(result: RunResult, out: Path) -> None:
+def write_images(d: Path, image: np.ndarray, focal_plane: np.ndarray, *, units: str, bit_depth: int, pixel_m: float,
+                 focal_plane_pixel_m: float, metadata: dict) -> None:  # fmt: skip
+    """The simulated image (TIFF, PNG preview) and the focal-plane image (TIFF, PNG) into ``d``: plain data, so
+    that a figure helper writes them while the run measures."""
     from satchain import io
 
-    c, sim = result.config.simulation, result.simulation
-    s = sim.system or result.system  # the camera simulated (as built)
-    d = out / "images"
-    meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": s.name, "gsd_alt_m": s.gsd_alt_m}
-    io.write_simulated(
-        d / "simulated.tif",
-        sim.image,
-        units=c.units,
-        bit_depth=sim.sensor.bit_depth,
-        pixel_m=s.gsd_act_m,
-        metadata=meta,
-    )
-    io.write_tiff(
-        d / "focal_plane.tif",
-        sim.focal_plane.astype(np.float32),
-        pixel_m=sim.focal_plane_pixel_m,
-        metadata={"units": "scene reflectance filtered by the optics and motion", "system": s.name},
-    )
-    io.write_png(d / "focal_plane.png", io.preview_uint8(sim.focal_plane), pixel_m=sim.focal_plane_pixel_m)
+    io.write_simulated(d / "simulated.tif", image, units=units, bit_depth=bit_depth, pixel_m=pixel_m, metadata=metadata)
+    fp_meta = {"units": "scene reflectance filtered by the optics and motion", "system": metadata["system"]}
+    io.write_tiff(d / "focal_plane.tif", focal_plane.astype(np.float32), pixel_m=focal_plane_pixel_m, metadata=fp_meta)
+    io.write_png(d / "focal_plane.png", io.preview_uint8(focal_plane), pixel_m=focal_plane_pixel_m)
+
+
+def _images_call(config: RunConfig, system: ImagingSystem, sim: SimulationResult, out: Path) -> tuple:
+    """:func:`write_images`'s arguments for the run's simulation (``system``: the camera simulated, as built)."""
+    c = config.simulation
+    meta = {"units": c.units, "noise": c.noise, "seed": c.seed, "system": system.name, "gsd_alt_m": system.gsd_alt_m}
+    args = (out / "images", sim.image, sim.focal_plane)
+    return args, {"units": c.units, "bit_depth": sim.sensor.bit_depth, "pixel_m": system.gsd_act_m,
+                  "focal_plane_pixel_m": sim.focal_plane_pixel_m, "metadata": meta}  # fmt: skip
 
 
 #: modules the figure helpers import first (satchain.report._jobs)
@@ -315,7 +314,6 @@ def write_run_directory(
             early("scene", budget=result.budget, scene=result.scene)
             early("simulate", budget=result.budget, scene=result.scene, sim=result.simulation)
         shown = run_figures.write_run_figures(view, jobs=jobs, measured_figures=not early.measured)
-        _write_images(result, out)
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
