@@ -22,6 +22,8 @@ The difference is printed as max |streamed - full| / (max - min of the full-fram
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io as stdio
 import json
 import os
 import resource
@@ -68,11 +70,17 @@ class _Crop:
 
 
 def worker(args) -> None:
-    """One run in this process: prints a JSON line."""
+    """One run in this process: prints a JSON line. ``args.warmup``: first a streamed run of that side, untimed
+    (the process's one-time costs -- first touch of its working set, FFT plans -- are then paid)."""
     from satchain import load_preset
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.stream import choose_streamed, coarse_store, stream_bytes, write_streamed
 
+    if getattr(args, "warmup", 0):
+        warm = argparse.Namespace(**{**vars(args), "size": args.warmup, "warmup": 0, "tiff": None, "crop": 0})
+        with contextlib.redirect_stdout(stdio.StringIO()):
+            worker(warm)
+        os.remove(Path(args.dir) / f"{args.worker}-{args.warmup}.tif")
     src = _source(args)
     if args.crop:
         src = _Crop(src, args.crop)
@@ -114,6 +122,7 @@ def worker(args) -> None:
 def _run(kind: str, args, *, crop: int = 0) -> dict:
     tile = min(args.tile, 256) if crop else args.tile  # a crop's output is small: tiles well inside its frame
     cmd = [sys.executable, __file__, "--worker", kind, "--size", str(args.size), "--tile", str(tile)]
+    cmd += ["--warmup", str(getattr(args, "warmup", 0))]
     cmd += ["--margin", str(args.margin), "--dir", args.dir, "--crop", str(crop), "--stage1-mib", str(args.stage1_mib)]
     if args.tiff:
         cmd += ["--tiff", args.tiff]
@@ -211,6 +220,7 @@ def main() -> None:
     ap.add_argument("--dir", help="scratch directory (default: a temporary one)")
     ap.add_argument("--margin-sweep", action="store_true", help="error vs margin on 4096-px scenes, 64-px tiles")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
+    ap.add_argument("--warmup", type=int, default=0, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         worker(args)
