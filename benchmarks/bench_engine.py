@@ -21,7 +21,8 @@ by one float32 ``scipy.fft.rfft2`` + ``irfft2`` of the same array, both in this 
 
 (d) ``--stream``: the streamed path of ``bench_stream.py`` (procedural input, coarse grid on disk, stage 2 in
 tiles, image written to a tiled TIFF) at each of ``--stream-sizes``: throughput in input Mpx/s and peak RSS,
-and the spread of the throughput (slowest / fastest; target: within 15 %).
+and the spread of the throughput (fastest / slowest; target: within 15 %), cold (each size in a fresh process)
+and warm (after an untimed 4096^2 run in the same process).
 """
 
 from __future__ import annotations

@@ -76,9 +76,11 @@ def _keep_freed_memory() -> None:
         pass
 
 
-def _decimate_tile(sim: Simulator, source, tile: Tile) -> tuple[Tile, np.ndarray]:
-    """One stage-1 task (module-level, so process workers can import it)."""
-    _keep_freed_memory()
+def _decimate_tile(sim: Simulator, source, tile: Tile, keep_memory: bool = False) -> tuple[Tile, np.ndarray]:
+    """One stage-1 task (module-level, so process workers can import it); ``keep_memory``: first
+    :func:`_keep_freed_memory` in the worker process it runs in."""
+    if keep_memory:
+        _keep_freed_memory()
     return tile, sim.decimate_tile(source, tile)
 
 
@@ -124,14 +126,18 @@ def _decimate_threads(sim: Simulator, source, coarse: np.ndarray, progress: Prog
         coarse[tile.coarse.rows, tile.coarse.cols] = block
 
 
-def _decimate_client(sim: Simulator, source, coarse: np.ndarray, client, progress: Progress | None) -> None:
+def _decimate_client(
+    sim: Simulator, source, coarse: np.ndarray, client, progress: Progress | None, keep_memory: bool
+) -> None:
     """Stage 1 on a distributed cluster: the simulator and the source are sent once to every worker,
     the tiles are gathered as they complete."""
     distributed = _require("distributed")
     sim_f, src_f = client.scatter([sim, source], broadcast=True, hash=False)
     run_id = uuid.uuid4().hex[:12]
     futures = [
-        client.submit(_decimate_tile, sim_f, src_f, tile, key=f"satchain-decimate-{run_id}-{i}", pure=False)
+        client.submit(
+            _decimate_tile, sim_f, src_f, tile, keep_memory, key=f"satchain-decimate-{run_id}-{i}", pure=False
+        )
         for i, tile in enumerate(sim.tiles)
     ]
     try:
@@ -146,12 +152,22 @@ def _decimate_client(sim: Simulator, source, coarse: np.ndarray, client, progres
 
 
 def decimate_distributed(
-    sim: Simulator, source, *, scheduler=None, progress: Progress | None = None, out: np.ndarray | None = None
+    sim: Simulator,
+    source,
+    *,
+    scheduler=None,
+    progress: Progress | None = None,
+    out: np.ndarray | None = None,
+    keep_worker_memory: bool = True,
 ) -> np.ndarray:
     """Stage 1 of ``sim`` (:meth:`Simulator.decimate`) with its tiles spread over Dask: ``scheduler`` as for
     :func:`simulate_distributed`, or ``"local"`` for a ``distributed.LocalCluster`` on this machine (one
     worker process per core). Returns the coarse grid, identical to ``sim.decimate(source)``, written into
-    ``out`` when given (e.g. a disk-backed array, :func:`satchain.engine.stream.coarse_store`)."""
+    ``out`` when given (e.g. a disk-backed array, :func:`satchain.engine.stream.coarse_store`).
+    ``keep_worker_memory``: on a cluster, each worker process the tasks run in keeps freed memory for reuse
+    (glibc: trim threshold 256 MiB, mmap threshold 32 MiB, set once by the first task), undoing Dask's
+    ``MALLOC_TRIM_THRESHOLD_``, under which every tile buffer is faulted in afresh (tiles up to 2x slower);
+    False leaves the workers' allocator as the cluster set it."""
     _require("dask")
     cluster = None
     if scheduler == "local":
@@ -169,7 +185,7 @@ def decimate_distributed(
         if client is None:
             _decimate_threads(sim, source, coarse, progress)
         else:
-            _decimate_client(sim, source, coarse, client, progress)
+            _decimate_client(sim, source, coarse, client, progress, keep_worker_memory)
     finally:
         if owned:
             client.close()
@@ -192,6 +208,7 @@ def simulate_distributed(
     zarr_path: str | os.PathLike | None = None,
     zarr_chunk_px: int = 1024,
     progress: Progress | None = None,
+    keep_worker_memory: bool = True,
 ) -> np.ndarray:
     """Simulate the satellite image of ``source`` with stage 1 spread over Dask workers.
 
@@ -213,6 +230,8 @@ def simulate_distributed(
         chunks of ``zarr_chunk_px``, with the run's description in its attributes.
     progress : callable(done, total), optional
         Called as stage-1 tiles complete.
+    keep_worker_memory : bool
+        As for :func:`decimate_distributed`.
 
     Returns
     -------
@@ -235,7 +254,9 @@ def simulate_distributed(
     src = as_ground_truth(source, pixel_m=pixel_m)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, motion_seed=seed)
     sim.check_frame()  # before stage 1
-    coarse = decimate_distributed(sim, src, scheduler=scheduler, progress=progress)
+    coarse = decimate_distributed(
+        sim, src, scheduler=scheduler, progress=progress, keep_worker_memory=keep_worker_memory
+    )
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)
     if zarr_path is not None:
         attrs = {
