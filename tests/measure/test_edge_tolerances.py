@@ -40,10 +40,10 @@ def _edge(angle_deg: float, blur: float, noise: float, seed: int, n: int = 48) -
     seed=st.integers(0, 10**6),
 )
 def test_stopping_rules_equal_full_iteration(angle, blur, noise, seed):
-    """The MTF, its sigma, the ESF, angle, flags and per-line positions with the stopping rules equal those with the fits iterated to the end (Gauss-Newton
-    to 1e-12 px, all 10 reweightings) within 1e-5 (MTF, sigma, per-line positions; the angle within 1e-6 deg):
-    a tenth of the 1e-4 the speed-up may move them (the last Gauss-Newton step, < 1e-5 px, is shrinking by 0.03-0.3
-    per step)."""
+    """The MTF, its sigma, the ESF, angle, flags and per-line positions with the stopping rules equal those with
+    the fits iterated to the end (Gauss-Newton to 1e-12 px, all 10 reweightings) within 1e-5 (the angle within
+    1e-6 deg): a tenth of the 1e-4 the speed-up may move them (the last Gauss-Newton step, < 1e-5 px, shrinks by
+    0.03-0.3 per step)."""
     img = _edge(angle, blur, noise, seed)
     fast = measure_edge(img)
     with pytest.MonkeyPatch.context() as m:

@@ -324,7 +324,7 @@ def _fit_lines(work, start, ok_px, spline, half: int):
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + _clip(step[:, 2], -0.5, 0.5)
         # converged (every measurable line's step below _TOL_STEP px): Gauss-Newton converges linearly here
-        # (each step ~0.03 x the last at SNR 100), so the steps left move it by ~3e-7 px (a few 1e-6 px on noisier lines)
+        # (each step ~0.03 x the last at SNR 100): the steps left move it by ~3e-7 px (a few 1e-6 on noisier lines)
         s_ok = np.abs(step[ok])
         if (s_ok[:, 2] < _TOL_STEP).all() and (s_ok[:, :2] < tol_ac).all():
             q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))

@@ -239,11 +239,12 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     coef, _ = robust_polyfit(rows[seen], np.argmax(gs, axis=1)[seen].astype(float), 1, scale_floor=1.0)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
+    last = r_prev = cen_prev = None
     for it in range(4):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
         r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half, valid)
-        if it and cur == last and np.array_equal(r_used, r_prev) and np.array_equal(cen, cen_prev):
+        if cur == last and np.array_equal(r_used, r_prev) and np.array_equal(cen, cen_prev):
             break  # the same centroids again: the fit (deterministic) would repeat exactly
         r_prev, cen_prev = r_used, cen
         prev, coef, w = coef, *robust_polyfit(r_used, cen, cur)
