@@ -126,7 +126,8 @@ def test_median_and_robust_sigma_equal_numpy(n, seed):
 @settings(max_examples=30, deadline=None)
 @given(deg=st.integers(1, 3), n=st.integers(12, 120), seed=st.integers(0, 10**6))
 def test_robust_polyfit_equals_ten_plain_reweightings(deg, n, seed):
-    """The lean fit (stopping once it no longer moves) = ten Tukey reweightings with np.polyfit / np.median."""
+    """The lean fit (stopping once it moves by < 1e-8 px) = ten Tukey reweightings with np.polyfit / np.median,
+    to the few 1e-9 px the reweightings left would still move it (each move ~0.1-0.15 x the last)."""
     rng = np.random.default_rng(seed)
     t = np.arange(n, dtype=float)
     y = 30.0 + 0.1 * t + 1e-4 * (t - n / 2) ** 2 + rng.normal(0.0, 0.1, n)
@@ -143,5 +144,5 @@ def test_robust_polyfit_equals_ten_plain_reweightings(deg, n, seed):
             return
         coef = np.polyfit(t, y, deg, w=np.sqrt(w))
     fast, w_fast = locate.robust_polyfit(t, y, deg)
-    assert np.max(np.abs(np.polyval(fast, t) - np.polyval(coef, t))) < 1e-9
-    assert np.max(np.abs(w_fast - w)) < 1e-8
+    assert np.max(np.abs(np.polyval(fast, t) - np.polyval(coef, t))) < 1e-7
+    assert np.max(np.abs(w_fast - w)) < 1e-6

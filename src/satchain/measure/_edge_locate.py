@@ -140,10 +140,14 @@ def _cholesky_solve(mom: list, rhs: list):
     return q
 
 
+_IRLS_TOL_PX = 1e-8  # robust_polyfit stops when the fit moves by less (px)
+
+
 def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
     """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights).
 
-    Up to 10 reweightings; it stops once the fit no longer moves (by < 1e-12 px), where more change nothing."""
+    Up to 10 reweightings; it stops once the fit moves by < 1e-8 px: the reweighting converges linearly (each
+    move ~0.1-0.15 x the last), so the moves left add up to ~1e-9 px."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     w = np.ones_like(y)
@@ -163,7 +167,7 @@ def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
         new = poly.value(q)
         moved = float(np.abs(new - fit).max())
         fit = new
-        if moved < 1e-12:
+        if moved < _IRLS_TOL_PX:
             break
     return poly.coef(q), w
 
@@ -235,10 +239,14 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     coef, _ = robust_polyfit(rows[seen], np.argmax(gs, axis=1)[seen].astype(float), 1, scale_floor=1.0)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
+    last = r_prev = cen_prev = None
     for it in range(4):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
         r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half, valid)
+        if cur == last and np.array_equal(r_used, r_prev) and np.array_equal(cen, cen_prev):
+            break  # the same centroids again: the fit (deterministic) would repeat exactly
+        r_prev, cen_prev = r_used, cen
         prev, coef, w = coef, *robust_polyfit(r_used, cen, cur)
         last = cur
         if deg is None and it < 3:
