@@ -235,6 +235,8 @@ def _main() -> int:
     """The helper: for each call on standard input (a line ``N``, then the N bytes of the pickled
     ``(i, fn, args, kwargs)``), run it and answer ``ok M`` and the M bytes of its pickled return value; a
     failure's traceback goes to standard error (exit status 1). The end of the input ends it."""
+    with contextlib.suppress(AttributeError, OSError):  # the run's own threads first: a helper's work can wait
+        os.nice(10)
     import matplotlib
 
     matplotlib.use("Agg")
