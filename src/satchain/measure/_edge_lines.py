@@ -264,8 +264,8 @@ class _Cubic:
 
     def __call__(self, u):
         i = self.index(u)
-        dx = u - np.take(self.bx, i)
-        c0, c1, c2, c3 = (np.take(c, i) for c in self.c)
+        dx = u - self.bx.take(i)
+        c0, c1, c2, c3 = (c.take(i) for c in self.c)
         return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
 
 
@@ -309,13 +309,15 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
     cubic = _Cubic.of(spline)
-    a, c = _levels(v, cubic(_clip(k - x[:, None], lo_u, hi_u))[0])
-    scale = np.abs(c) + np.abs(a) + 1e-300
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
     q[..., 0] = 1.0
+    q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))  # at the start: the levels' and step 0's
+    a, c = _levels(v, q[..., 1])
+    scale = np.abs(c) + np.abs(a) + 1e-300
     tol_ac = _TOL_STEP * scale[ok, None]
     for it in range(9):
-        q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+        if it > 0:
+            q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
         np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
         gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
         if it == 8:
