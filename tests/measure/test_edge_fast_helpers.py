@@ -228,3 +228,15 @@ def test_segment_gradients_equal_each_segments_own_crop():
         gy = ndi.gaussian_filter(crop, find._GRAD_SIGMA, order=(1, 0), mode="nearest")[yy - y0, xx - x0]
         assert np.array_equal(seg.w, gx.astype(float) ** 2 + gy.astype(float) ** 2)
         assert np.array_equal(seg.gang, np.arctan2(gy.astype(float), gx.astype(float)))
+
+
+@settings(max_examples=30, deadline=None, derandomize=True)
+@given(n=st.integers(8, 420), m=st.integers(1, 210), step=st.floats(0.001, 0.05), seed=st.integers(0, 999))
+def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
+    """The spectrum rows at ``j step`` cy/bin: a real FFT where it fits, else the factorised matrix DFT, both equal
+    to the plain sum of ``rows[k] exp(-2 pi i j step k)``."""
+    from satchain.measure._edge_mtf import _dft_rows
+
+    rows = np.random.default_rng(seed).normal(size=(2, n))
+    direct = rows @ np.exp(-2j * np.pi * np.outer(np.arange(m) * step, np.arange(n))).T
+    np.testing.assert_allclose(_dft_rows(rows, step, m), direct, rtol=0, atol=1e-10 * np.abs(rows).sum())

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.ndimage import convolve1d, gaussian_filter1d
-from scipy.signal import czt
 
 from satchain.measure._common import median
 from satchain.measure._edge_locate import MIN_ROWS
@@ -262,12 +261,14 @@ def _fourier_at(f: np.ndarray, xm: np.ndarray) -> np.ndarray:
 
 def _dft_rows(rows: np.ndarray, step: float, n_out: int) -> np.ndarray:
     """``sum_k rows[:, k] exp(-2 pi i j step k)`` for ``j < n_out``: a real FFT where ``1 / step`` is a whole
-    number at least the rows' length (the ISO bins on the 0.005 cy/px grid), else a chirp-z transform."""
+    number at least the rows' length (the ISO bins on the 0.005 cy/px grid), else the direct sum (a matrix DFT
+    through :func:`_fourier_at`'s factorised exponentials; scipy.signal's chirp-z would import scipy.stats, about
+    a second of start-up)."""
     n = 1.0 / step
     big = int(round(n))
     if abs(n - big) <= 1e-9 * n and big >= rows.shape[-1] and big // 2 + 1 >= n_out:
         return np.fft.rfft(rows, n=big, axis=-1)[:, :n_out]
-    return czt(rows, m=n_out, w=np.exp(-2j * np.pi * step), axis=-1)
+    return rows @ _fourier_at(np.arange(n_out) * step, np.arange(rows.shape[-1], dtype=float)).T
 
 
 def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarray, corr: np.ndarray):
