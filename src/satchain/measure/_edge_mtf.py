@@ -268,7 +268,8 @@ def _dft_rows(rows: np.ndarray, step: float, n_out: int) -> np.ndarray:
     big = int(round(n))
     if abs(n - big) <= 1e-9 * n and big >= rows.shape[-1] and big // 2 + 1 >= n_out:
         return np.fft.rfft(rows, n=big, axis=-1)[:, :n_out]
-    return rows @ _fourier_at(np.arange(n_out) * step, np.arange(rows.shape[-1], dtype=float)).T
+    e = _fourier_at(np.arange(max(n_out, 2)) * step, np.arange(rows.shape[-1], dtype=float))[:n_out]
+    return rows @ e.T
 
 
 def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarray, corr: np.ndarray):
