@@ -19,7 +19,7 @@ from satchain.measure import _edge_lines as lines
 from satchain.measure import _edge_locate as locate
 from satchain.measure import find
 from satchain.measure._common import median, robust_sigma
-from satchain.measure._edge_mtf import _Lsf
+from satchain.measure._edge_mtf import _Lsf, _spectrum_sigma_direct, spectrum_sigma
 
 
 @settings(max_examples=40, deadline=None)
@@ -140,6 +140,33 @@ def test_chunked_spectrum_and_noise_equal_one_pass():
         assert np.allclose(op._s_fourier(p, f[:5]), _s_fourier_direct(op, p, f[:5]), rtol=0, atol=1e-14)
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    w=st.sampled_from([0.25, 0.125, 0.2887, 0.3, 0.0625, 0.71 / 3]),
+    half_w=st.floats(3.0, 30.0),
+    span=st.floats(12.0, 40.0),
+    blur=st.floats(0.3, 3.0),
+    sign=st.sampled_from([1.0, -1.0]),
+    f_top=st.sampled_from([0.5, 1.0, 2.0]),
+    seed=st.integers(0, 10**6),
+)
+def test_closed_form_spectrum_sigma_equals_direct_pass(w, half_w, span, blur, sign, f_top, seed):
+    """The spectrum and MTF noise from one Fourier transform of the LSF and six weighted window moments (the
+    ends propagated directly) = the direct pass over every frequency and bin, on real (FFT) and chirp-z
+    step ratios, short windows, ESFs too short for the interior form (direct fallback) and falling edges."""
+    rng = np.random.default_rng(seed)
+    x = np.arange(-span, span, w) + rng.uniform(-0.5, 0.5) * w
+    op = _Lsf(x, min(half_w, span - w), w)
+    lsf = sign * np.exp(-0.5 * (op.xm / blur) ** 2) + rng.normal(0.0, 1e-3, op.xm.size)
+    f = np.arange(0.0, min(f_top, 0.5 / w) + 1e-9, 0.005)
+    var = rng.uniform(0.2, 3.0, x.size) * 1e-6
+    corr = np.sinc(f * w)
+    spec, sig = spectrum_sigma(op, lsf, f, var, corr)
+    spec_ref, sig_ref = _spectrum_sigma_direct(op, lsf, f, var, corr)
+    assert np.max(np.abs(spec - spec_ref)) < 1e-11 * np.max(np.abs(spec_ref))
+    assert np.all(np.abs(sig - sig_ref) <= 1e-9 * sig_ref + 1e-15)
+
+
 def _s_fourier_direct(op, p, f):
     """The previous form: the kernel's transfer inside, the mirrored convolution itself at the ends."""
     k = op.kernel
@@ -201,3 +228,15 @@ def test_segment_gradients_equal_each_segments_own_crop():
         gy = ndi.gaussian_filter(crop, find._GRAD_SIGMA, order=(1, 0), mode="nearest")[yy - y0, xx - x0]
         assert np.array_equal(seg.w, gx.astype(float) ** 2 + gy.astype(float) ** 2)
         assert np.array_equal(seg.gang, np.arctan2(gy.astype(float), gx.astype(float)))
+
+
+@settings(max_examples=30, deadline=None, derandomize=True)
+@given(n=st.integers(8, 420), m=st.integers(1, 210), step=st.floats(0.001, 0.05), seed=st.integers(0, 999))
+def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
+    """The spectrum rows at ``j step`` cy/bin: a real FFT where it fits, else the factorised matrix DFT, both equal
+    to the plain sum of ``rows[k] exp(-2 pi i j step k)``."""
+    from satchain.measure._edge_mtf import _dft_rows
+
+    rows = np.random.default_rng(seed).normal(size=(2, n))
+    direct = rows @ np.exp(-2j * np.pi * np.outer(np.arange(m) * step, np.arange(n))).T
+    np.testing.assert_allclose(_dft_rows(rows, step, m), direct, rtol=0, atol=1e-10 * np.abs(rows).sum())

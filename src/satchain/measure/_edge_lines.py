@@ -109,7 +109,7 @@ def line_positions(work: np.ndarray, coef, usable=None):
     pos = start
     for wide in (True, True, False):
         h = min(half + 2, half_t) if wide else half
-        pos, sig, cols = _fit_lines(work, pos, ok_px, spline, h)
+        pos, sig, cols = _fit_lines(work, pos, ok_px, spline, h, final=not wide)
         if np.count_nonzero(np.isfinite(pos)) < 4:
             return nan, nan
         if wide:
@@ -264,8 +264,8 @@ class _Cubic:
 
     def __call__(self, u):
         i = self.index(u)
-        dx = u - np.take(self.bx, i)
-        c0, c1, c2, c3 = (np.take(c, i) for c in self.c)
+        dx = u - self.bx.take(i)
+        c0, c1, c2, c3 = (c.take(i) for c in self.c)
         return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
 
 
@@ -296,8 +296,9 @@ def _centre(spline, half: int) -> float:
     return float(uu[i - 1] + (0.5 - rel[i - 1]) * (uu[i] - uu[i - 1]) / (rel[i] - rel[i - 1]))
 
 
-def _fit_lines(work, start, ok_px, spline, half: int):
-    """Gauss-Newton fit of ``a + c T(k - x)`` to each line over 2 W + 1 pixels around ``start``.
+def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
+    """Gauss-Newton fit of ``a + c T(k - x)`` to each line over 2 W + 1 pixels around ``start``; ``final``
+    False (a pass whose positions only place the next template): the residuals of the last step's start.
 
     Returns (x, sigma_x, the pixels' columns)."""
     ny, nx = work.shape
@@ -309,13 +310,15 @@ def _fit_lines(work, start, ok_px, spline, half: int):
     ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
     v = np.take_along_axis(work, kc, axis=1)
     cubic = _Cubic.of(spline)
-    a, c = _levels(v, cubic(_clip(k - x[:, None], lo_u, hi_u))[0])
-    scale = np.abs(c) + np.abs(a) + 1e-300
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
     q[..., 0] = 1.0
+    q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))  # at the start: the levels' and step 0's
+    a, c = _levels(v, q[..., 1])
+    scale = np.abs(c) + np.abs(a) + 1e-300
     tol_ac = _TOL_STEP * scale[ok, None]
     for it in range(9):
-        q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+        if it > 0:
+            q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
         np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
         gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
         if it == 8:
@@ -327,6 +330,8 @@ def _fit_lines(work, start, ok_px, spline, half: int):
         # (each step ~0.03 x the last at SNR 100): the steps left move it by ~3e-7 px (a few 1e-6 on noisier lines)
         s_ok = np.abs(step[ok])
         if (s_ok[:, 2] < _TOL_STEP).all() and (s_ok[:, :2] < tol_ac).all():
+            if not final:  # a wide pass: only the positions go on (residuals moved by < 1e-5 px steps)
+                break
             q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
             np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
             gram = np.matmul(q.transpose(0, 2, 1), q)

@@ -251,6 +251,115 @@ class _Lsf:
         return out if spec.ndim == 2 else out[0]
 
 
+def _fourier_at(f: np.ndarray, xm: np.ndarray) -> np.ndarray:
+    """``exp(-2 pi i f xm)``, shape (f, xm), for ``f`` uniform from 0 (:meth:`_Lsf.fourier`'s factorisation)."""
+    n, b = f.size, 16
+    lo = np.exp(-2j * np.pi * np.outer(np.arange(b) * f[1], xm))
+    hi = np.exp(-2j * np.pi * np.outer(np.arange(-(-n // b)) * (b * f[1]), xm))
+    return (hi[:, None, :] * lo[None, :, :]).reshape(-1, xm.size)[:n]
+
+
+def _dft_rows(rows: np.ndarray, step: float, n_out: int) -> np.ndarray:
+    """``sum_k rows[:, k] exp(-2 pi i j step k)`` for ``j < n_out``: a real FFT where ``1 / step`` is a whole
+    number at least the rows' length (the ISO bins on the 0.005 cy/px grid), else the direct sum (a matrix DFT
+    through :func:`_fourier_at`'s factorised exponentials; scipy.signal's chirp-z would import scipy.stats, about
+    a second of start-up)."""
+    n = 1.0 / step
+    big = int(round(n))
+    if abs(n - big) <= 1e-9 * n and big >= rows.shape[-1] and big // 2 + 1 >= n_out:
+        return np.fft.rfft(rows, n=big, axis=-1)[:, :n_out]
+    e = _fourier_at(np.arange(max(n_out, 2)) * step, np.arange(rows.shape[-1], dtype=float))[:n_out]
+    return rows @ e.T
+
+
+def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarray, corr: np.ndarray):
+    """The spectrum of ``lsf`` at ``f`` and the MTF's 1-sigma, as :meth:`_Lsf.spectrum` and
+    :meth:`_Lsf.mtf_sigma` (normalised by ``|spec(0)|``) give them, in closed form; ``op`` has one window.
+
+    Inside the smoothing's reach of the ends the adjoint at frequency ``f`` of bin ``j`` is
+    ``A_j cos th_j + B_j sin th_j`` (``th_j = 2 pi f xm_j``) with ``A_j, B_j`` linear in ``(1, win_{j-1},
+    win_j - win_{j-1})``: its noise ``sum_j var_j (.)^2`` is a quadratic form in weighted sums of the products
+    of those three times ``1, cos 2 th_j, sin 2 th_j``, i.e. six Fourier sums at ``2 f`` (one transform for all
+    frequencies, with the spectrum's own).  The ``r + 1`` bins at each end, where the mirror enters, are
+    propagated directly.  Falls back to the direct pass off a uniform grid from 0 or on short ESFs.
+    """
+    k = op.kernel
+    r, m, nf = k.size // 2, op.xm.size, f.size
+    win = op.win
+    uniform = nf > 2 and f[0] == 0.0 and np.allclose(np.diff(f), f[1], rtol=0.0, atol=1e-12)
+    if not uniform or m <= 4 * r + 2 or win.ndim != 1:
+        return _spectrum_sigma_direct(op, lsf, f, var_bins, corr)
+    w, df = op.w, float(f[1])
+    j = np.arange(r + 1, m - r)  # the bins whose adjoint is the interior form
+    wp, dw = win[j - 1], win[j] - win[j - 1]
+    rows = np.zeros((7, m))
+    rows[0] = lsf
+    rows[1:, j] = var_bins[j] * np.stack([np.ones_like(wp), wp, dw, wp * wp, wp * dw, dw * dw])
+    z = _dft_rows(rows, df * w, 2 * nf - 1)
+    spec = w * np.exp(-2j * np.pi * f * op.xm[0]) * z[0, :nf]
+    z2 = np.exp(-4j * np.pi * f * op.xm[0]) * z[1:, ::2]  # (6, f): sums against exp(-2 i th_j)
+    m0 = float(spec[0].real)
+    sgn, m0a = np.sign(m0), abs(m0)
+    mag = np.abs(spec)
+    u = np.where(mag > 0, np.conj(spec * sgn) / np.maximum(mag, 1e-300), 1.0) * (w / m0a)
+    ur, ui, g = u.real, u.imag, mag / m0a**2
+    h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, np.arange(1, r + 1) * w)) @ k[r + 1 :]
+    q = 1.0 - h
+    ph = 2 * np.pi * f * w
+    cp, sp = np.cos(ph), np.sin(ph)
+    al, be = ur * cp - ui * sp - ur, ur * sp + ui * cp - ui  # u exp(i ph) - u
+    a_c = np.stack([al * h, al * q, -q * ur])  # A_j = a_c . (1, win_{j-1}, dwin_j)
+    b_c = np.stack([be * h, be * q, -q * ui])
+    total = 0.5 * (_quad(a_c, a_c, rows[1:].sum(axis=1)[:, None]) + _quad(b_c, b_c, rows[1:].sum(axis=1)[:, None]))
+    total += 0.5 * (_quad(a_c, a_c, z2.real) - _quad(b_c, b_c, z2.real)) - _quad(a_c, b_c, z2.imag)
+    total += _ends_noise(op, f, (ur, ui, g, h), var_bins)
+    return spec, np.sqrt(np.maximum(total, 0.0)) / abs(w) / corr
+
+
+def _quad(x, y, mom):
+    """``sum_lm x_l y_m M_lm`` per frequency, ``M`` symmetric 3 x 3 given as its six moments (00, 01, 02, 11,
+    12, 22)."""
+    return (
+        x[0] * y[0] * mom[0]
+        + (x[0] * y[1] + x[1] * y[0]) * mom[1]
+        + (x[0] * y[2] + x[2] * y[0]) * mom[2]
+        + x[1] * y[1] * mom[3]
+        + (x[1] * y[2] + x[2] * y[1]) * mom[4]
+        + x[2] * y[2] * mom[5]
+    )
+
+
+def _ends_noise(op: _Lsf, f, coefs, var_bins) -> np.ndarray:
+    """``sum_j var_j d_j^2`` over the ``r + 1`` bins at each end (:meth:`_Lsf.mtf_sigma`'s pass on them)."""
+    ur, ui, g, h = coefs
+    r, m = op.kernel.size // 2, op.xm.size
+    left, right = op._s_ends()
+    y0 = op._y0(op.win)
+    cols = np.r_[0 : 2 * r + 1, m - 2 * r - 1 : m]
+    e = _fourier_at(f, op.xm[cols])
+    p = ur[:, None] * e.real - ui[:, None] * e.imag  # Re(u e)
+    s = h[:, None] * p
+    s[:, :r] = p[:, : 2 * r + 1] @ left
+    s[:, -r:] = p[:, 2 * r + 1 :] @ right
+    win = op.win[cols]
+    y = win * p + (1 - win) * s - g[:, None] * y0[cols]
+    yl, yr = y[:, : r + 1], y[:, -(r + 1) :]  # y_0..y_r and y_{m-r-1}..y_{m-1}
+    dl = np.concatenate([-yl[:, :1], yl[:, :-1] - yl[:, 1:]], axis=1)  # d_0..d_r
+    dr = np.concatenate([yr[:, :-1] - yr[:, 1:], yr[:, -1:]], axis=1)  # d_{m-r}..d_m
+    return (dl * dl) @ var_bins[: r + 1] + (dr * dr) @ var_bins[m - r :]
+
+
+def _spectrum_sigma_direct(op: _Lsf, lsf, f, var_bins, corr):
+    """:func:`spectrum_sigma` by the direct pass (the Fourier kernel in chunks)."""
+    spec, sig = np.empty(f.size, dtype=complex), np.empty(f.size)
+    m0 = None
+    for sl, e in op.fourier_chunks(f):  # f[0] = 0 is in the first chunk
+        spec[sl] = op.spectrum(lsf, f[sl], e)
+        m0 = spec[0].real if m0 is None else m0
+        sig[sl] = op.mtf_sigma(spec[sl] * np.sign(m0), f[sl], e, var_bins, corr[sl], m0=abs(m0))
+    return spec, sig
+
+
 def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
     """MTF from the binned ESF with the noise-adaptive window.
 
@@ -293,12 +402,8 @@ def adaptive_mtf(x, esf, counts, sigma, f, noise_target):
             lo, hi = (lo, mid) if meets(mid) else (mid, hi)
     op, lsf = _row(ops, hi), lsfs[hi]
     half_w = ws[hi]
-    spec, sig = np.empty(f.size, dtype=complex), np.empty(f.size)
-    m0 = None
-    for sl, e in op.fourier_chunks(f):  # f[0] = 0 is in the first chunk
-        spec[sl] = op.spectrum(lsf, f[sl], e)
-        m0 = spec[0].real if m0 is None else m0
-        sig[sl] = op.mtf_sigma(spec[sl] * np.sign(m0), f[sl], e, var_bins, corr[sl], m0=abs(m0))
+    spec, sig = spectrum_sigma(op, lsf, f, var_bins, corr)
+    m0 = spec[0].real
     mtf = np.abs(spec) / abs(m0) / corr
     return mtf, sig, half_w, lsf / abs(m0), op.xm
 
