@@ -37,3 +37,23 @@ def test_the_lazy_names_resolve_to_the_real_objects():
     assert satchain.ImagingSystem is ImagingSystem and satchain.load_preset is load_preset
     assert set(satchain.__all__) <= set(dir(satchain))
     assert len(satchain.__all__) == len(set(satchain.__all__))
+
+
+def test_the_run_path_never_imports_scipy_stats_or_signal():
+    """scipy.signal and scipy.stats cost about a second to import, so the run's hot paths (the low-mean
+    Poisson quantile, the calibration's tail sum, the slanted edge's spectrum on and off the FFT grid)
+    use scipy.special and scipy.fft instead."""
+    code = (
+        "import numpy as np\n"
+        "from satchain.engine.sensor import _poisson_ppf\n"
+        "from satchain.measure._auto_calibrate import _convolve_valid\n"
+        "from satchain.measure._edge_mtf import _dft_rows\n"
+        "from satchain.measure.edge import measure_edge\n"
+        "u = np.random.default_rng(0).random((8, 8))\n"
+        "_poisson_ppf(u, np.full(u.shape, 5.0))\n"
+        "_convolve_valid(np.ones((20, 20)), np.ones((3, 3)))\n"
+        "_dft_rows(np.ones((2, 50)), 0.0123, 30)\n"
+        "x = np.arange(60)[None, :] - 30 - 0.1 * np.arange(60)[:, None]\n"
+        "measure_edge(0.2 + 0.6 / (1 + np.exp(-x / 0.6)))\n"
+    )
+    assert _loaded(code, ("scipy.stats", "scipy.signal")) == []
