@@ -74,6 +74,35 @@ def test_phase_gap_bound_decides_as_the_exact_gap(n, spread, clusters, seed):
 
 
 @settings(max_examples=40, deadline=None)
+@given(
+    n_lines=st.integers(1, 150),
+    spread=st.floats(0.02, 1.0),
+    clusters=st.integers(1, 6),
+    keep=st.floats(0.0, 1.0),
+    seed=st.integers(0, 10**6),
+)
+def test_template_phase_gap_from_lines_equals_the_samples_gap(n_lines, spread, clusters, keep, seed):
+    """The template's phase gap from one phase per line (its samples sit at whole columns): the same
+    decision as the gap of every sample ``cols - place`` (those taken): equal to rounding where exact."""
+    rng = np.random.default_rng(seed)
+    place = 40.0 + rng.integers(-10, 10, n_lines) + rng.integers(0, clusters, n_lines) / clusters
+    place = place + rng.uniform(0, spread / 10, n_lines)
+    cols = np.rint(place)[:, None] + np.arange(-8, 9)[None, :]
+    take = rng.uniform(size=cols.shape) < keep
+    u = (cols - place[:, None])[take]
+    per_line = lines._phase_gap(-place[take.any(axis=1)])
+    if u.size == 0:
+        assert per_line == lines._phase_gap(u) == 1.0
+        return
+    frac = np.sort(np.mod(u, 1.0))
+    exact = float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0]))))
+    if per_line > 25 / 64:
+        assert abs(per_line - exact) < 1e-12
+    else:
+        assert exact <= per_line + 1e-12 <= 25 / 64 + 1e-12
+
+
+@settings(max_examples=40, deadline=None)
 @given(shape=st.sampled_from([(1,), (2,), (7,), (10, 3), (101,)]), nan=st.booleans(), seed=st.integers(0, 10**6))
 def test_median_equals_np_median(shape, nan, seed):
     v = np.random.default_rng(seed).normal(size=shape)

@@ -153,7 +153,8 @@ def _template(work, ok_px, cols, place):
     take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & np.take_along_axis(ok_px, kc, axis=1)
     u = (cols - place)[take]
     v = np.take_along_axis(work, kc, axis=1)[take]
-    gap = _phase_gap(u)
+    # the columns are whole pixels, so a line's samples share its phase frac(-place): the gap from the lines
+    gap = _phase_gap(-place[:, 0][take.any(axis=1)])
     if gap > _MAX_GAP_PX:
         raise InputError(
             f"image: the lines' sub-pixel edge phases leave a {gap:.2f} px gap (> {_MAX_GAP_PX}); the edge is "
