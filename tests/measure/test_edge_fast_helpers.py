@@ -269,3 +269,17 @@ def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
     rows = np.random.default_rng(seed).normal(size=(2, n))
     direct = rows @ np.exp(-2j * np.pi * np.outer(np.arange(m) * step, np.arange(n))).T
     np.testing.assert_allclose(_dft_rows(rows, step, m), direct, rtol=0, atol=1e-10 * np.abs(rows).sum())
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 400), t0=st.sampled_from([0.0, 50.0, 3000.0]), seed=st.integers(0, 10**6))
+def test_flatten_line_fit_equals_polyfit(n, t0, seed):
+    """The row flattening's straight line (centred closed form) = ``np.polyval(np.polyfit(t, y, 1), at)``."""
+    from satchain.measure._edge_mtf import _line_fit
+
+    rng = np.random.default_rng(seed)
+    t = t0 + np.sort(rng.choice(np.arange(4 * n), n, replace=False)).astype(float)
+    y = rng.normal(1.0, 0.3, n) + 1e-3 * t
+    at = t0 + np.arange(4 * n, dtype=float)
+    ref = np.polyval(np.polyfit(t, y, 1), at)
+    assert np.max(np.abs(_line_fit(t, y, at) - ref)) < 1e-10 * (1.0 + np.max(np.abs(ref)))

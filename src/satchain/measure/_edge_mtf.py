@@ -459,36 +459,50 @@ def trim_ends(x, esf, counts, frac: float = 0.3):
     return x[a:b], esf[a:b], counts[a:b]
 
 
+def _line_fit(t: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The least-squares straight line through ``(t, y)`` at ``at`` (``np.polyval(np.polyfit(t, y, 1), at)``
+    to rounding: centred closed form, without the SVD)."""
+    tm, ym = float(t.mean()), float(y.mean())
+    dt = t - tm
+    var = float(dt @ dt)
+    slope = float(dt @ (y - ym)) / var if var > 0 else 0.0
+    return ym + slope * (at - tm)
+
+
 def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
     """Remove illumination changes along the edge, line by line.
 
     Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
     ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
     on a uniformly lit edge, whatever its tails or the region's shape).  Only ``ok`` samples enter the fits.
-    Returns (values, flags).
+    Returns (values, flags, the first-pass ESF at ``d``).
     """
+    at = np.interp(d, x, esf)
     q = max(2, esf.size // 8)
     lo, hi = median(esf[:q]), median(esf[-q:])
     if not hi > lo:
-        return v, []
-    e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
+        return v, [], at
+    e = ((at - lo) / (hi - lo)).reshape(n_rows, -1)
     vv = v.reshape(n_rows, -1)
-    m = np.ones(e.shape) if ok is None else ok.reshape(n_rows, -1).astype(float)
-    n = m.sum(axis=1)
-    se, sv = (m * e).sum(axis=1), (m * vv).sum(axis=1)
-    see, sev = (m * e * e).sum(axis=1), (m * e * vv).sum(axis=1)
+    if ok is None or ok.all():  # every sample in: the sums without the mask (x 1.0: the same values)
+        n = np.full(n_rows, float(e.shape[1]))
+        me, mv = e, vv
+    else:
+        m = ok.reshape(n_rows, -1).astype(float)
+        n, me, mv = m.sum(axis=1), m * e, m * vv
+    se, sv = me.sum(axis=1), mv.sum(axis=1)
+    see, sev = (me * e).sum(axis=1), (me * vv).sum(axis=1)
     det = n * see - se * se
     ok = det > 1e-6 * np.maximum(n, 1) ** 2
     if np.count_nonzero(ok) < MIN_ROWS:
-        return v, []
+        return v, [], at
     beta = (n * sev - se * sv)[ok] / det[ok]
     alpha = (sv[ok] - beta * se[ok]) / n[ok]
     r = np.arange(n_rows, dtype=float)
-    alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
-    beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
+    alpha_r, beta_r = _line_fit(r[ok], alpha, r), _line_fit(r[ok], beta, r)
     mid = n_rows // 2
     if np.any(beta_r <= 0.1 * beta_r[mid]):
-        return v, []
+        return v, [], at
     out = alpha_r[mid] + (vv - alpha_r[:, None]) * (beta_r[mid] / beta_r)[:, None]
     change = float(max(np.ptp(alpha_r), np.ptp(beta_r)) / beta_r[mid])
     flags = []
@@ -500,4 +514,4 @@ def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
                 "over the lines (removed line by line)",
             )
         )
-    return out.ravel(), flags
+    return out.ravel(), flags, at
