@@ -310,8 +310,8 @@ def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarra
     al, be = ur * cp - ui * sp - ur, ur * sp + ui * cp - ui  # u exp(i ph) - u
     a_c = np.stack([al * h, al * q, -q * ur])  # A_j = a_c . (1, win_{j-1}, dwin_j)
     b_c = np.stack([be * h, be * q, -q * ui])
-    total = 0.5 * (_quad(a_c, a_c, rows[1:].sum(axis=1)[:, None]) + _quad(b_c, b_c, rows[1:].sum(axis=1)[:, None]))
-    total += 0.5 * (_quad(a_c, a_c, z2.real) - _quad(b_c, b_c, z2.real)) - _quad(a_c, b_c, z2.imag)
+    s0 = rows[1:].sum(axis=1)[:, None]  # sums against 1: cos^2 = (1 + cos 2th) / 2, sin^2 = (1 - cos 2th) / 2
+    total = _quad(a_c, a_c, 0.5 * (s0 + z2.real)) + _quad(b_c, b_c, 0.5 * (s0 - z2.real)) - _quad(a_c, b_c, z2.imag)
     total += _ends_noise(op, f, (ur, ui, g, h), var_bins)
     return spec, np.sqrt(np.maximum(total, 0.0)) / abs(w) / corr
 
@@ -338,11 +338,15 @@ def _ends_noise(op: _Lsf, f, coefs, var_bins) -> np.ndarray:
     cols = np.r_[0 : 2 * r + 1, m - 2 * r - 1 : m]
     e = _fourier_at(f, op.xm[cols])
     p = ur[:, None] * e.real - ui[:, None] * e.imag  # Re(u e)
-    s = h[:, None] * p
+    # y only at the r + 1 bins of each end (the smoothing's mirror inside r of them, the plain form at bin r)
+    need = np.r_[0 : r + 1, cols.size - r - 1 : cols.size]
+    s = np.empty((f.size, 2 * r + 2))
     s[:, :r] = p[:, : 2 * r + 1] @ left
+    s[:, r] = h * p[:, r]
+    s[:, r + 1] = h * p[:, -(r + 1)]
     s[:, -r:] = p[:, 2 * r + 1 :] @ right
-    win = op.win[cols]
-    y = win * p + (1 - win) * s - g[:, None] * y0[cols]
+    win = op.win[cols[need]]
+    y = win * p[:, need] + (1 - win) * s - g[:, None] * y0[cols[need]]
     yl, yr = y[:, : r + 1], y[:, -(r + 1) :]  # y_0..y_r and y_{m-r-1}..y_{m-1}
     dl = np.concatenate([-yl[:, :1], yl[:, :-1] - yl[:, 1:]], axis=1)  # d_0..d_r
     dr = np.concatenate([yr[:, :-1] - yr[:, 1:], yr[:, -1:]], axis=1)  # d_{m-r}..d_m
