@@ -283,3 +283,21 @@ def test_flatten_line_fit_equals_polyfit(n, t0, seed):
     at = t0 + np.arange(4 * n, dtype=float)
     ref = np.polyval(np.polyfit(t, y, 1), at)
     assert np.max(np.abs(_line_fit(t, y, at) - ref)) < 1e-10 * (1.0 + np.max(np.abs(ref)))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    ny=st.integers(1, 40),
+    nx=st.integers(1, 40),
+    k=st.integers(1, 9),
+    transposed=st.booleans(),
+    seed=st.integers(0, 10**6),
+)
+def test_row_take_equals_take_along_axis(ny, nx, k, transposed, seed):
+    """The line fits' flat gather = ``np.take_along_axis(a, kc, axis=1)``, on a transposed (ALT) view too."""
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(nx, ny)).T if transposed else rng.normal(size=(ny, nx))
+    kc = rng.integers(0, nx, (ny, k))
+    np.testing.assert_array_equal(a.take(lines._row_take(kc, nx)), np.take_along_axis(a, kc, axis=1))
+    ok = a > 0
+    np.testing.assert_array_equal(ok.take(lines._row_take(kc, nx)), np.take_along_axis(ok, kc, axis=1))

@@ -150,9 +150,10 @@ def _template(work, ok_px, cols, place):
     samples) at ``u = column - place`` (NaN places and unusable pixels left out)."""
     nx = work.shape[1]
     kc = _clip(cols, 0, nx - 1).astype(int)  # cols are finite (placed from finite or zeroed starts)
-    take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & np.take_along_axis(ok_px, kc, axis=1)
+    flat = _row_take(kc, nx)
+    take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & ok_px.take(flat)
     u = (cols - place)[take]
-    v = np.take_along_axis(work, kc, axis=1)[take]
+    v = work.take(flat)[take]
     # the columns are whole pixels, so a line's samples share its phase frac(-place): the gap from the lines
     gap = _phase_gap(-place[:, 0][take.any(axis=1)])
     if gap > _MAX_GAP_PX:
@@ -318,8 +319,9 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
     k = np.rint(x)[:, None] + np.arange(-half, half + 1)[None, :]
     kc = np.clip(k, 0, nx - 1).astype(int)
     ok = np.isfinite(start) & (k[:, 0] >= 0) & (k[:, -1] <= nx - 1)
-    ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
-    v = np.take_along_axis(work, kc, axis=1)
+    flat = _row_take(kc, nx)
+    ok &= ok_px.take(flat).all(axis=1)
+    v = work.take(flat)
     cubic = _Cubic.of(spline)
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
     q[..., 0] = 1.0
@@ -348,6 +350,12 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
     return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
+
+
+def _row_take(kc: np.ndarray, nx: int) -> np.ndarray:
+    """Flat indices of the columns ``kc`` (lines x samples, in range) of a C-ordered (lines, nx) array:
+    ``a.take(_row_take(kc, nx))`` is ``np.take_along_axis(a, kc, axis=1)`` without its overhead."""
+    return kc + (np.arange(kc.shape[0]) * nx)[:, None]
 
 
 def _nan0(a: np.ndarray) -> np.ndarray:
