@@ -74,6 +74,35 @@ def test_phase_gap_bound_decides_as_the_exact_gap(n, spread, clusters, seed):
 
 
 @settings(max_examples=40, deadline=None)
+@given(
+    n_lines=st.integers(1, 150),
+    spread=st.floats(0.02, 1.0),
+    clusters=st.integers(1, 6),
+    keep=st.floats(0.0, 1.0),
+    seed=st.integers(0, 10**6),
+)
+def test_template_phase_gap_from_lines_equals_the_samples_gap(n_lines, spread, clusters, keep, seed):
+    """The template's phase gap from one phase per line (its samples sit at whole columns): the same
+    decision as the gap of every sample ``cols - place`` (those taken): equal to rounding where exact."""
+    rng = np.random.default_rng(seed)
+    place = 40.0 + rng.integers(-10, 10, n_lines) + rng.integers(0, clusters, n_lines) / clusters
+    place = place + rng.uniform(0, spread / 10, n_lines)
+    cols = np.rint(place)[:, None] + np.arange(-8, 9)[None, :]
+    take = rng.uniform(size=cols.shape) < keep
+    u = (cols - place[:, None])[take]
+    per_line = lines._phase_gap(-place[take.any(axis=1)])
+    if u.size == 0:
+        assert per_line == lines._phase_gap(u) == 1.0
+        return
+    frac = np.sort(np.mod(u, 1.0))
+    exact = float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0]))))
+    if per_line > 25 / 64:
+        assert abs(per_line - exact) < 1e-12
+    else:
+        assert exact <= per_line + 1e-12 <= 25 / 64 + 1e-12
+
+
+@settings(max_examples=40, deadline=None)
 @given(shape=st.sampled_from([(1,), (2,), (7,), (10, 3), (101,)]), nan=st.booleans(), seed=st.integers(0, 10**6))
 def test_median_equals_np_median(shape, nan, seed):
     v = np.random.default_rng(seed).normal(size=shape)
@@ -240,3 +269,35 @@ def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
     rows = np.random.default_rng(seed).normal(size=(2, n))
     direct = rows @ np.exp(-2j * np.pi * np.outer(np.arange(m) * step, np.arange(n))).T
     np.testing.assert_allclose(_dft_rows(rows, step, m), direct, rtol=0, atol=1e-10 * np.abs(rows).sum())
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 400), t0=st.sampled_from([0.0, 50.0, 3000.0]), seed=st.integers(0, 10**6))
+def test_flatten_line_fit_equals_polyfit(n, t0, seed):
+    """The row flattening's straight line (centred closed form) = ``np.polyval(np.polyfit(t, y, 1), at)``."""
+    from satchain.measure._edge_mtf import _line_fit
+
+    rng = np.random.default_rng(seed)
+    t = t0 + np.sort(rng.choice(np.arange(4 * n), n, replace=False)).astype(float)
+    y = rng.normal(1.0, 0.3, n) + 1e-3 * t
+    at = t0 + np.arange(4 * n, dtype=float)
+    ref = np.polyval(np.polyfit(t, y, 1), at)
+    assert np.max(np.abs(_line_fit(t, y, at) - ref)) < 1e-10 * (1.0 + np.max(np.abs(ref)))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    ny=st.integers(1, 40),
+    nx=st.integers(1, 40),
+    k=st.integers(1, 9),
+    transposed=st.booleans(),
+    seed=st.integers(0, 10**6),
+)
+def test_row_take_equals_take_along_axis(ny, nx, k, transposed, seed):
+    """The line fits' flat gather = ``np.take_along_axis(a, kc, axis=1)``, on a transposed (ALT) view too."""
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(nx, ny)).T if transposed else rng.normal(size=(ny, nx))
+    kc = rng.integers(0, nx, (ny, k))
+    np.testing.assert_array_equal(a.take(lines._row_take(kc, nx)), np.take_along_axis(a, kc, axis=1))
+    ok = a > 0
+    np.testing.assert_array_equal(ok.take(lines._row_take(kc, nx)), np.take_along_axis(ok, kc, axis=1))

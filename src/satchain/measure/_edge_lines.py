@@ -150,10 +150,12 @@ def _template(work, ok_px, cols, place):
     samples) at ``u = column - place`` (NaN places and unusable pixels left out)."""
     nx = work.shape[1]
     kc = _clip(cols, 0, nx - 1).astype(int)  # cols are finite (placed from finite or zeroed starts)
-    take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & np.take_along_axis(ok_px, kc, axis=1)
+    flat = _row_take(kc, nx)
+    take = np.isfinite(place) & (cols >= 0) & (cols <= nx - 1) & ok_px.take(flat)
     u = (cols - place)[take]
-    v = np.take_along_axis(work, kc, axis=1)[take]
-    gap = _phase_gap(u)
+    v = work.take(flat)[take]
+    # the columns are whole pixels, so a line's samples share its phase frac(-place): the gap from the lines
+    gap = _phase_gap(-place[:, 0][take.any(axis=1)])
     if gap > _MAX_GAP_PX:
         raise InputError(
             f"image: the lines' sub-pixel edge phases leave a {gap:.2f} px gap (> {_MAX_GAP_PX}); the edge is "
@@ -198,13 +200,17 @@ def _lsq_spline(u, v, knots) -> BSpline:
     touches 4 basis functions) solved by Cholesky; the B-spline basis is well conditioned, so this agrees with
     a QR solution (scipy's ``make_lsq_spline``) to rounding.  Refuses (LinAlgError) a singular system."""
     nc = len(knots) - 4
-    first, vals = _basis(u, knots, nc)
+    first, cols = _basis_cols(u, knots, nc)
+    # per knot interval the sums of the products of its 4 basis functions (one bincount each), then added
+    # into the band: A[p, p + d] = sum_a G_(a, a + d)[p - a]
+    n_int = nc - 3
     ab = np.zeros((4, nc))  # upper band storage: ab[3 + i - j, j] = A[i, j]
-    idx = first[:, None] + np.arange(4)[None, :]
-    for d in range(4):
-        w = (vals[:, : 4 - d] * vals[:, d:]).ravel()
-        ab[3 - d, d:] = np.bincount(idx[:, : 4 - d].ravel(), weights=w, minlength=nc)[: nc - d]
-    rhs = np.bincount(idx.ravel(), weights=(vals * v[:, None]).ravel(), minlength=nc)
+    rhs = np.zeros(nc)
+    for a in range(4):
+        rhs[a : a + n_int] += np.bincount(first, weights=cols[a] * v, minlength=n_int)
+        for d in range(4 - a):
+            g = np.bincount(first, weights=cols[a] * cols[a + d], minlength=n_int)
+            ab[3 - d, a + d : a + d + n_int] += g
     if np.any(ab[3] <= 0.0) or not np.all(np.isfinite(ab)) or not np.all(np.isfinite(rhs)):
         raise np.linalg.LinAlgError("a basis function holds no sample")
     _, coef, info = dpbsv(ab, rhs, lower=0)  # scipy.linalg.solveh_banded's own LAPACK call
@@ -216,6 +222,12 @@ def _lsq_spline(u, v, knots) -> BSpline:
 def _basis(u, t, nc: int):
     """The 4 cubic B-splines nonzero at each ``u`` (Cox-de Boor, de Boor's triangle; the NURBS Book A2.2):
     (index of the first, values (n, 4))."""
+    first, cols = _basis_cols(u, t, nc)
+    return first, np.stack(cols, axis=1)
+
+
+def _basis_cols(u, t, nc: int):
+    """:func:`_basis` as (index of the first, the 4 values as separate contiguous arrays)."""
     i = np.clip(np.searchsorted(t, u, side="right") - 1, 3, nc - 1)
     left = [None] + [u - t[i + 1 - j] for j in (1, 2, 3)]
     right = [None] + [t[i + j] - u for j in (1, 2, 3)]
@@ -227,7 +239,7 @@ def _basis(u, t, nc: int):
             n[r] = saved + right[r + 1] * temp
             saved = left[j - r] * temp
         n.append(saved)
-    return i - 3, np.stack(n, axis=1)
+    return i - 3, n
 
 
 class _Cubic:
@@ -307,8 +319,9 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
     k = np.rint(x)[:, None] + np.arange(-half, half + 1)[None, :]
     kc = np.clip(k, 0, nx - 1).astype(int)
     ok = np.isfinite(start) & (k[:, 0] >= 0) & (k[:, -1] <= nx - 1)
-    ok &= np.take_along_axis(ok_px, kc, axis=1).all(axis=1)
-    v = np.take_along_axis(work, kc, axis=1)
+    flat = _row_take(kc, nx)
+    ok &= ok_px.take(flat).all(axis=1)
+    v = work.take(flat)
     cubic = _Cubic.of(spline)
     q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
     q[..., 0] = 1.0
@@ -337,6 +350,12 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
     return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
+
+
+def _row_take(kc: np.ndarray, nx: int) -> np.ndarray:
+    """Flat indices of the columns ``kc`` (lines x samples, in range) of a C-ordered (lines, nx) array:
+    ``a.take(_row_take(kc, nx))`` is ``np.take_along_axis(a, kc, axis=1)`` without its overhead."""
+    return kc + (np.arange(kc.shape[0]) * nx)[:, None]
 
 
 def _nan0(a: np.ndarray) -> np.ndarray:

@@ -75,7 +75,13 @@ class _Poly:
     def __init__(self, t: np.ndarray, max_deg: int = 3):
         lo, hi = float(t.min()), float(t.max())
         self.m, self.h = 0.5 * (lo + hi), max(0.5 * (hi - lo), 0.5)
-        self.pt = ((t - self.m) / self.h)[None, :] ** np.arange(2 * max_deg + 1)[:, None]  # (2 deg + 1, n)
+        s = (t - self.m) / self.h
+        self.pt = np.empty((2 * max_deg + 1, s.size))  # the powers s^0 .. s^(2 deg), by repeated products
+        self.pt[0] = 1.0
+        if max_deg > 0:
+            self.pt[1] = s
+        for k in range(2, 2 * max_deg + 1):
+            np.multiply(self.pt[k - 1], s, out=self.pt[k])
 
     def fit(self, y: np.ndarray, deg: int, w=None) -> np.ndarray:
         """Ascending coefficients in ``s`` minimising ``sum w (y - poly)^2`` (``w`` None: all 1)."""

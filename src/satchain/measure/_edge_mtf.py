@@ -310,8 +310,8 @@ def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarra
     al, be = ur * cp - ui * sp - ur, ur * sp + ui * cp - ui  # u exp(i ph) - u
     a_c = np.stack([al * h, al * q, -q * ur])  # A_j = a_c . (1, win_{j-1}, dwin_j)
     b_c = np.stack([be * h, be * q, -q * ui])
-    total = 0.5 * (_quad(a_c, a_c, rows[1:].sum(axis=1)[:, None]) + _quad(b_c, b_c, rows[1:].sum(axis=1)[:, None]))
-    total += 0.5 * (_quad(a_c, a_c, z2.real) - _quad(b_c, b_c, z2.real)) - _quad(a_c, b_c, z2.imag)
+    s0 = rows[1:].sum(axis=1)[:, None]  # sums against 1: cos^2 = (1 + cos 2th) / 2, sin^2 = (1 - cos 2th) / 2
+    total = _quad(a_c, a_c, 0.5 * (s0 + z2.real)) + _quad(b_c, b_c, 0.5 * (s0 - z2.real)) - _quad(a_c, b_c, z2.imag)
     total += _ends_noise(op, f, (ur, ui, g, h), var_bins)
     return spec, np.sqrt(np.maximum(total, 0.0)) / abs(w) / corr
 
@@ -338,11 +338,15 @@ def _ends_noise(op: _Lsf, f, coefs, var_bins) -> np.ndarray:
     cols = np.r_[0 : 2 * r + 1, m - 2 * r - 1 : m]
     e = _fourier_at(f, op.xm[cols])
     p = ur[:, None] * e.real - ui[:, None] * e.imag  # Re(u e)
-    s = h[:, None] * p
+    # y only at the r + 1 bins of each end (the smoothing's mirror inside r of them, the plain form at bin r)
+    need = np.r_[0 : r + 1, cols.size - r - 1 : cols.size]
+    s = np.empty((f.size, 2 * r + 2))
     s[:, :r] = p[:, : 2 * r + 1] @ left
+    s[:, r] = h * p[:, r]
+    s[:, r + 1] = h * p[:, -(r + 1)]
     s[:, -r:] = p[:, 2 * r + 1 :] @ right
-    win = op.win[cols]
-    y = win * p + (1 - win) * s - g[:, None] * y0[cols]
+    win = op.win[cols[need]]
+    y = win * p[:, need] + (1 - win) * s - g[:, None] * y0[cols[need]]
     yl, yr = y[:, : r + 1], y[:, -(r + 1) :]  # y_0..y_r and y_{m-r-1}..y_{m-1}
     dl = np.concatenate([-yl[:, :1], yl[:, :-1] - yl[:, 1:]], axis=1)  # d_0..d_r
     dr = np.concatenate([yr[:, :-1] - yr[:, 1:], yr[:, -1:]], axis=1)  # d_{m-r}..d_m
@@ -459,36 +463,50 @@ def trim_ends(x, esf, counts, frac: float = 0.3):
     return x[a:b], esf[a:b], counts[a:b]
 
 
+def _line_fit(t: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The least-squares straight line through ``(t, y)`` at ``at`` (``np.polyval(np.polyfit(t, y, 1), at)``
+    to rounding: centred closed form, without the SVD)."""
+    tm, ym = float(t.mean()), float(y.mean())
+    dt = t - tm
+    var = float(dt @ dt)
+    slope = float(dt @ (y - ym)) / var if var > 0 else 0.0
+    return ym + slope * (at - tm)
+
+
 def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
     """Remove illumination changes along the edge, line by line.
 
     Each line is regressed on the first-pass ESF, ``v = alpha_r + beta_r E(d)``; straight-line fits of
     ``alpha_r`` and ``beta_r`` over the lines map every line affinely onto the middle line's levels (a no-op
     on a uniformly lit edge, whatever its tails or the region's shape).  Only ``ok`` samples enter the fits.
-    Returns (values, flags).
+    Returns (values, flags, the first-pass ESF at ``d``).
     """
+    at = np.interp(d, x, esf)
     q = max(2, esf.size // 8)
     lo, hi = median(esf[:q]), median(esf[-q:])
     if not hi > lo:
-        return v, []
-    e = ((np.interp(d, x, esf) - lo) / (hi - lo)).reshape(n_rows, -1)
+        return v, [], at
+    e = ((at - lo) / (hi - lo)).reshape(n_rows, -1)
     vv = v.reshape(n_rows, -1)
-    m = np.ones(e.shape) if ok is None else ok.reshape(n_rows, -1).astype(float)
-    n = m.sum(axis=1)
-    se, sv = (m * e).sum(axis=1), (m * vv).sum(axis=1)
-    see, sev = (m * e * e).sum(axis=1), (m * e * vv).sum(axis=1)
+    if ok is None or ok.all():  # every sample in: the sums without the mask (x 1.0: the same values)
+        n = np.full(n_rows, float(e.shape[1]))
+        me, mv = e, vv
+    else:
+        m = ok.reshape(n_rows, -1).astype(float)
+        n, me, mv = m.sum(axis=1), m * e, m * vv
+    se, sv = me.sum(axis=1), mv.sum(axis=1)
+    see, sev = (me * e).sum(axis=1), (me * vv).sum(axis=1)
     det = n * see - se * se
     ok = det > 1e-6 * np.maximum(n, 1) ** 2
     if np.count_nonzero(ok) < MIN_ROWS:
-        return v, []
+        return v, [], at
     beta = (n * sev - se * sv)[ok] / det[ok]
     alpha = (sv[ok] - beta * se[ok]) / n[ok]
     r = np.arange(n_rows, dtype=float)
-    alpha_r = np.polyval(np.polyfit(r[ok], alpha, 1), r)
-    beta_r = np.polyval(np.polyfit(r[ok], beta, 1), r)
+    alpha_r, beta_r = _line_fit(r[ok], alpha, r), _line_fit(r[ok], beta, r)
     mid = n_rows // 2
     if np.any(beta_r <= 0.1 * beta_r[mid]):
-        return v, []
+        return v, [], at
     out = alpha_r[mid] + (vv - alpha_r[:, None]) * (beta_r[mid] / beta_r)[:, None]
     change = float(max(np.ptp(alpha_r), np.ptp(beta_r)) / beta_r[mid])
     flags = []
@@ -500,4 +518,4 @@ def flatten_rows(d, v, n_rows: int, x, esf, ok=None):
                 "over the lines (removed line by line)",
             )
         )
-    return out.ravel(), flags
+    return out.ravel(), flags, at

@@ -408,11 +408,12 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | Non
     if ok is None:
         ok = np.ones(d.size, dtype=bool)
     x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
-    v, r_flags = _flatten_rows(d, v, len(rows), x, esf_raw, ok)
+    v, r_flags, at = _flatten_rows(d, v, len(rows), x, esf_raw, ok)
     if r_flags:
         flags += r_flags
         x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
-    resid = (v - np.interp(d, x, esf_raw))[ok]
+        at = np.interp(d, x, esf_raw)
+    resid = (v - at)[ok]
     sigma = robust_sigma(resid)
     if q_step is not None:
         flags += quantisation_flags(q_step, x, esf_raw, resid)
