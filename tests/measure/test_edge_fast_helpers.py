@@ -301,3 +301,29 @@ def test_row_take_equals_take_along_axis(ny, nx, k, transposed, seed):
     np.testing.assert_array_equal(a.take(lines._row_take(kc, nx)), np.take_along_axis(a, kc, axis=1))
     ok = a > 0
     np.testing.assert_array_equal(ok.take(lines._row_take(kc, nx)), np.take_along_axis(ok, kc, axis=1))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.integers(1, 12000),
+    levels=st.sampled_from([None, 2, 30, 255, 4096]),
+    scale=st.sampled_from([1.0, 1 / 255, 1e-9, 1e6]),
+    signed_zero=st.booleans(),
+    seed=st.integers(0, 10**6),
+)
+def test_distinct_lower_bound_bounds_np_unique(n, levels, scale, signed_zero, seed):
+    """The hashed count of distinct values never exceeds np.unique's (so it only ever proves data continuous),
+    at least one, near n for continuous data; and the quantisation step is unchanged by it."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(0.5, 0.2, n) if levels is None else rng.integers(0, levels, n).astype(float)
+    x *= scale
+    if signed_zero:
+        x[: n // 3] = 0.0
+        x[n // 3 : n // 2] = -0.0
+    exact = np.unique(x).size
+    bound = checks.distinct_lower_bound(x)
+    assert bound <= exact
+    assert bound >= 1
+    if levels is None and not signed_zero and n >= 100:
+        assert bound >= 0.9 * exact
+    assert checks.quantisation_step(x) == checks.quantisation_step(x, unique=np.unique(x))

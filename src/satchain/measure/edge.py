@@ -261,11 +261,10 @@ def measure_edge(
     )
     axis = check_axis(frequency_axis)
     data, ok, flags = edge_region(image, roi, valid, nodata)
-    values = np.unique(data if ok is None else data[ok])  # sorted once: clipping and quantisation
-    flags += check_saturation(data, full_scale, ok, unique=values)
+    flags += check_saturation(data, full_scale, ok)
     work, okw, direction, transposed, sign = orient_edge(data, ok)
     line = None if edge_line is None else line_coef(edge_line, roi, transposed)
-    q_step = quantisation_step(data if ok is None else data[ok], unique=values)
+    q_step = quantisation_step(data if ok is None else data[ok])
     (coef, own), rows, slope, w, mode, (x, esf_raw, counts, sigma), esf_flags, ridge = _binned_esf(
         work, deg, os_, q_step, okw, line
     )
