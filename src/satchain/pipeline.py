@@ -249,11 +249,11 @@ class _EarlyFigures:
             p = self.config.scene.overview_pixel_m
             jobs.submit(run_figures.render_scene_overview, scene.scene, truth, p, out / "figures" / "fig1_scene.png")
         elif stage == "simulate":
-            gsd = float((sim.system or budget.system).gsd_act_m)
-            extent = (sim.image.shape[1] * gsd, sim.image.shape[0] * gsd)
-            p = float(self.config.scene.pixel_m)
-            args, kwargs = _images_call(self.config, sim.system or budget.system, sim, out)
+            system = sim.system or budget.system  # the camera simulated (as built)
+            args, kwargs = _images_call(self.config, system, sim, out)
             jobs.submit(write_images, *args, **kwargs)
+            gsd, p = float(system.gsd_act_m), float(self.config.scene.pixel_m)
+            extent = (sim.image.shape[1] * gsd, sim.image.shape[0] * gsd)
             for it, box in thumbnail_boxes(scene.truth_dict, extent):  # the exact star render first: the longest
                 job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
                 self.thumbnails.append((it, box, job))
