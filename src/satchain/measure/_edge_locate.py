@@ -55,18 +55,6 @@ _median = median
 _robust_sigma = robust_sigma
 
 
-def _polyfit(t: np.ndarray, y: np.ndarray, deg: int, w=None) -> np.ndarray:
-    """``np.polyfit(t, y, deg, w=w)``: the same scaled least squares, without its argument checks."""
-    lhs = np.vander(t, deg + 1)
-    rhs = y
-    if w is not None:
-        lhs = lhs * w[:, None]
-        rhs = rhs * w
-    scale = np.sqrt((lhs * lhs).sum(axis=0))
-    c = np.linalg.lstsq(lhs / scale, rhs, rcond=len(t) * np.finfo(float).eps)[0]
-    return c / scale
-
-
 class _Poly:
     """Weighted least-squares polynomials of degree <= 3 on fixed abscissae ``t``, by the normal equations in
     the centred, scaled variable ``s = (t - m) / h`` (in [-1, 1]: the moment matrix is well conditioned, so
