@@ -58,15 +58,18 @@ def test_moment_polyfit_equals_np_polyfit(deg, n, t0, zeros, seed):
 
 
 @settings(max_examples=40, deadline=None)
-@given(n=st.integers(1, 4000), spread=st.floats(0.02, 1.0), clusters=st.integers(1, 6), seed=st.integers(0, 10**6))
+@given(n=st.integers(1, 9000), spread=st.floats(0.02, 1.0), clusters=st.integers(1, 6), seed=st.integers(0, 10**6))
 def test_phase_gap_bound_decides_as_the_exact_gap(n, spread, clusters, seed):
-    """The largest sub-pixel phase gap: exact where it can matter (> 25/64 px), else a bound between the exact
-    gap and 25/64 (< 0.4 px: no refusal, knots unchanged) -- the template's decisions are the exact ones."""
+    """The largest sub-pixel phase gap: exact up to 4096 lines (sorted), above exact where it can matter
+    (> 25/64 px), else a bound between the exact gap and 25/64 (< 0.4 px: no refusal, knots unchanged) -- the
+    template's decisions are the exact ones."""
     rng = np.random.default_rng(seed)
     u = rng.integers(-15, 15, n) + (rng.integers(0, clusters, n) / clusters + rng.uniform(0, spread / 10, n))
     frac = np.sort(np.mod(u, 1.0))
     exact = float(np.max(np.diff(np.concatenate([frac, frac[:1] + 1.0]))))
     fast = lines._phase_gap(u)
+    if n <= lines._SORT_PHASES:
+        assert fast == exact
     if fast > 25 / 64:
         assert fast == exact
     else:
@@ -327,3 +330,48 @@ def test_distinct_lower_bound_bounds_np_unique(n, levels, scale, signed_zero, se
     if levels is None and not signed_zero and n >= 100:
         assert bound >= 0.9 * exact
     assert checks.quantisation_step(x) == checks.quantisation_step(x, unique=np.unique(x))
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(3, 400), sigma=st.floats(0.5, 6.0), step=st.floats(0.05, 2.0), seed=st.integers(0, 10**6))
+def test_bin_esf_smoothing_and_gradient_equal_scipy_and_numpy_bitwise(n, sigma, step, seed):
+    """The ESF's bin-position correction smooths with gaussian_filter1d's own kernel and differentiates as
+    np.gradient does: the same floats."""
+    from scipy.ndimage import correlate1d
+
+    from satchain.measure._edge_mtf import _gauss_kernel_nd, _gradient
+
+    a = np.cumsum(np.random.default_rng(seed).normal(size=n))
+    ref = ndi.gaussian_filter1d(a, sigma, mode="nearest")
+    assert np.array_equal(correlate1d(a, _gauss_kernel_nd(sigma), mode="nearest"), ref)
+    assert np.array_equal(_gradient(a, step), np.gradient(a, step))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    ny=st.integers(8, 60),
+    nx=st.integers(20, 90),
+    slope=st.floats(-0.6, 0.6),
+    x0=st.floats(-10.0, 100.0),
+    half=st.integers(3, 12),
+    seed=st.integers(0, 10**6),
+)
+def test_ridge_centroids_equal_full_row_windows(ny, nx, slope, x0, half, seed):
+    """The derivative centroids from each line's band of 2 half + 1 columns = those of the whole row masked
+    to |column - centre| <= half (the earlier form), for the lines whose window lies inside the region."""
+    rng = np.random.default_rng(seed)
+    g = rng.uniform(0.0, 1.0, (ny, nx))
+    coef = np.array([slope, x0])
+    rows = np.arange(ny, dtype=float)
+    centre = np.polyval(coef, rows)
+    keep = (centre - half >= 1) & (centre + half <= nx - 2)
+    if np.count_nonzero(keep) < locate.MIN_ROWS:
+        return
+    cols = np.arange(nx, dtype=float)
+    gw = np.where(np.abs(cols[None, :] - centre[:, None]) <= half, g, 0.0)[keep]
+    ref = (gw * cols).sum(axis=1) / gw.sum(axis=1)
+    r_used, cen, tot, n_keep = locate.ridge_centroids(g, g, coef, half)
+    assert n_keep == np.count_nonzero(keep)
+    assert np.array_equal(r_used, rows[keep])
+    assert np.allclose(cen, ref, rtol=0, atol=1e-12 * nx)
+    assert np.allclose(tot, gw.sum(axis=1), rtol=1e-13)

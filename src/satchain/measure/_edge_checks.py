@@ -110,13 +110,13 @@ def _plateau_line(xs: np.ndarray, es: np.ndarray):
     gram, rhs = ms.T @ ms, ms.T @ es
     keep = list(range(len(cols)))  # the terms in the model (0: the level, 1: the slope, 2: k / |x|)
     while True:
-        g = gram[np.ix_(keep, keep)]
-        coef = np.linalg.solve(g, rhs[keep])
         if len(keep) == 1:
-            return float(coef[0] / norm[0]), 0.0
+            return float(rhs[0] / gram[0, 0] / norm[0]), 0.0
+        g_inv = np.linalg.inv(gram[np.ix_(keep, keep)])  # (well conditioned: unit-norm columns)
+        coef = g_inv @ rhs[keep]
         dof = max(xs.size - len(keep), 1)
         s2 = float(np.sum((es - ms[:, keep] @ coef) ** 2)) / dof
-        se = np.sqrt(np.maximum(np.diag(np.linalg.inv(g)) * s2, 1e-300))
+        se = np.sqrt(np.maximum(np.diag(g_inv) * s2, 1e-300))
         t = np.abs(coef[1:]) / se[1:]
         if np.all(t >= 3.0):
             return float(coef[0] / norm[0]), float(coef[1] / norm[1]) if keep[1] == 1 else 0.0
@@ -294,8 +294,9 @@ def distinct_lower_bound(data) -> int:
     ``0.0`` first).  Continuous data of n << 2**17 values come close to n; ``np.unique(data).size`` is the
     exact count."""
     bits = (np.asarray(data, dtype=np.float64).ravel() + 0.0).view(np.uint64)
-    h = (bits * _HASH_MUL) >> _HASH_SHIFT
-    return int(np.count_nonzero(np.bincount(h.astype(np.intp), minlength=1 << 17)))
+    seen = np.zeros(1 << 17, dtype=bool)
+    seen[((bits * _HASH_MUL) >> _HASH_SHIFT).astype(np.intp)] = True
+    return int(np.count_nonzero(seen))
 
 
 def quantisation_flags(q: float, x: np.ndarray, esf: np.ndarray, resid: np.ndarray) -> list[tuple[str, str]]:

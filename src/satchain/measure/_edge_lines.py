@@ -40,6 +40,9 @@ _KNOT_PX = 0.5  # template knot spacing (finer knots let noise trade the profile
 _MAX_GAP_PX = 0.75  # largest gap in the lines' sub-pixel phases the template can bridge
 _CONTRAST_TOL = 0.3  # a line whose step differs more from the median step is not measured
 _TOL_STEP = 1e-5  # Gauss-Newton stops when every line's step is below this (px; relative for the levels)
+_PIECE_AT = np.array([0.125, 0.375, 0.625, 0.875])  # where a spline piece is sampled to recover its cubic
+_PIECE_INV = np.linalg.inv(_PIECE_AT[:, None] ** np.arange(4)[None, :])
+_SORT_PHASES = 4096  # up to this many lines the phase gap comes from sorting them, above from 64 bins
 _RMS_TOL = 3.0  # ... nor one whose residual rms exceeds this x the median line's (plus 0.5 % of the step)
 
 
@@ -99,7 +102,7 @@ def line_positions(work: np.ndarray, coef, usable=None):
     """
     ok_px = np.ones(work.shape, dtype=bool) if usable is None else np.asarray(usable, dtype=bool)
     half_t = max(4, min(16, work.shape[1] // 3))
-    start = _first_positions(work, coef, ok_px, half_t)
+    start = _first_positions(work, coef, ok_px, half_t, all_ok=usable is None or bool(ok_px.all()))
     nan = np.full(start.shape, np.nan)
     if np.count_nonzero(np.isfinite(start)) < 4:
         return nan, nan
@@ -117,13 +120,15 @@ def line_positions(work: np.ndarray, coef, usable=None):
     return pos + _centre(spline, half), sig
 
 
-def _first_positions(work, coef, ok_px, half_t: int) -> np.ndarray:
+def _first_positions(work, coef, ok_px, half_t: int, all_ok: bool = False) -> np.ndarray:
     """Derivative centroid per line near the derivative's peak (searched around the fitted edge); NaN where the
-    window leaves the region or touches an unusable pixel."""
+    window leaves the region or touches an unusable pixel (``all_ok``: every pixel is usable)."""
     ny, nx = work.shape
     cols = np.arange(nx, dtype=float)
     g = np.zeros_like(work)
-    g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2]) * (ok_px[:, 2:] & ok_px[:, :-2])
+    g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])
+    if not all_ok:
+        g[:, 1:-1] *= ok_px[:, 2:] & ok_px[:, :-2]
     gs = g.copy()
     gs[:, 1:-1] = 0.25 * g[:, :-2] + 0.5 * g[:, 1:-1] + 0.25 * g[:, 2:]
     fitted = np.polyval(coef, np.arange(ny, dtype=float))
@@ -133,15 +138,18 @@ def _first_positions(work, coef, ok_px, half_t: int) -> np.ndarray:
     h = max(3, half_t // 2)
     lo, hi = peak - h, peak + h
     inside = (lo >= 1) & (hi <= nx - 2)
-    win = np.abs(cols[None, :] - peak[:, None]) <= h
-    gw = np.where(win, g, 0.0)
+    kb = peak[:, None] + np.arange(-h, h + 1)[None, :]  # the window's columns (in range where ``inside``)
+    gw = g.take(_row_take(np.minimum(np.maximum(kb, 0), nx - 1), nx))
     tot = gw.sum(axis=1)
-    bad_px = np.cumsum(np.concatenate([np.zeros((ny, 1), int), ~ok_px], axis=1), axis=1)
-    lo_c, hi_c = np.clip(lo - 1, 0, nx - 1), np.clip(hi + 1, 0, nx - 1)
-    clean = (bad_px[np.arange(ny), hi_c + 1] - bad_px[np.arange(ny), lo_c]) == 0
+    if all_ok:
+        clean = True
+    else:
+        bad_px = np.cumsum(np.concatenate([np.zeros((ny, 1), int), ~ok_px], axis=1), axis=1)
+        lo_c, hi_c = np.clip(lo - 1, 0, nx - 1), np.clip(hi + 1, 0, nx - 1)
+        clean = (bad_px[np.arange(ny), hi_c + 1] - bad_px[np.arange(ny), lo_c]) == 0
     good = inside & clean & (tot > 0)
     cen = np.full(ny, np.nan)
-    cen[good] = (gw * cols).sum(axis=1)[good] / tot[good]
+    cen[good] = (gw * kb).sum(axis=1)[good] / tot[good]
     return cen
 
 
@@ -173,13 +181,16 @@ def _template(work, ok_px, cols, place):
 
 
 def _phase_gap(u: np.ndarray) -> float:
-    """The largest gap in the sub-pixel phases ``frac(u)`` (cyclic), exact where it matters: when 64 bins of
-    the phases leave no empty run longer than 23 bins the gap is below 25 / 64 < 0.4 px, where the template
-    neither refuses (> 0.75) nor widens its knots (1.25 x gap > 0.5), and the bound is returned; else the exact
-    gap from the sorted phases."""
+    """The largest gap in the sub-pixel phases ``frac(u)`` (cyclic): exact for up to :data:`_SORT_PHASES`
+    phases (sorted); for more, exact where it matters: when 64 bins of the phases leave no empty run longer
+    than 23 bins the gap is below 25 / 64 < 0.4 px, where the template neither refuses (> 0.75) nor widens its
+    knots (1.25 x gap > 0.5), and the bound is returned; else the exact gap from the sorted phases."""
     if u.size == 0:
         return 1.0
     frac = np.mod(u, 1.0)
+    if frac.size <= _SORT_PHASES:  # few lines: sorting them is cheaper than the bins
+        frac.sort()
+        return float(max(np.max(np.diff(frac), initial=0.0), frac[0] + 1.0 - frac[-1]))
     nb = 64
     empty = np.bincount(np.minimum((frac * nb).astype(np.intp), nb - 1), minlength=nb) == 0
     if not empty.any():
@@ -211,7 +222,7 @@ def _lsq_spline(u, v, knots) -> BSpline:
         for d in range(4 - a):
             g = np.bincount(first, weights=cols[a] * cols[a + d], minlength=n_int)
             ab[3 - d, a + d : a + d + n_int] += g
-    if np.any(ab[3] <= 0.0) or not np.all(np.isfinite(ab)) or not np.all(np.isfinite(rhs)):
+    if not (ab[3].min() > 0.0 and np.isfinite(ab.sum() + rhs.sum())):
         raise np.linalg.LinAlgError("a basis function holds no sample")
     _, coef, info = dpbsv(ab, rhs, lower=0)  # scipy.linalg.solveh_banded's own LAPACK call
     if info != 0:
@@ -247,9 +258,17 @@ class _Cubic:
 
     def __init__(self, spline):
         t = spline.t
-        self.bx = np.unique(t[3:-3])
-        left = self.bx[:-1]
-        self.c = [spline(left, nu=k) / f for k, f in ((3, 6.0), (2, 2.0), (1, 1.0), (0, 1.0))]
+        self.bx = t[3:-3] if np.all(np.diff(t[3:-3]) > 0) else np.unique(t[3:-3])
+        # each piece from the spline's values at 4 points inside its interval (the cubic through them)
+        h = np.diff(self.bx)
+        at = self.bx[:-1, None] + h[:, None] * _PIECE_AT[None, :]
+        first, cols = _basis_cols(at.ravel(), t, t.size - 4)
+        coef = spline.c
+        val = sum(b * coef.take(first + j) for j, b in enumerate(cols)).reshape(-1, 4)
+        power = val @ _PIECE_INV.T  # coefficients of (dx / h)^p, p = 0..3
+        c = [power[:, p] / h**p for p in (3, 2, 1, 0)]
+        # per piece (c0, c1, c2, c3, 3 c0, 2 c1): value ((c0 dx + c1) dx + c2) dx + c3, slope (3 c0 dx + 2 c1) dx + c2
+        self.table = np.stack(c + [3.0 * c[0], 2.0 * c[1]], axis=1)
         inner = np.diff(self.bx[1:-1])
         # the template's knots are uniform inside (np.arange): the interval by arithmetic, not a search (at a
         # knot it may pick the neighbouring piece, whose value and slope agree there to rounding: C2 spline)
@@ -277,8 +296,9 @@ class _Cubic:
     def __call__(self, u):
         i = self.index(u)
         dx = u - self.bx.take(i)
-        c0, c1, c2, c3 = (c.take(i) for c in self.c)
-        return ((c0 * dx + c1) * dx + c2) * dx + c3, (3.0 * c0 * dx + 2.0 * c1) * dx + c2
+        p = self.table.take(i, axis=0)  # (..., 6): the pieces' coefficients at once
+        c0, c1, c2, c3, d0, d1 = np.moveaxis(p, -1, 0)
+        return ((c0 * dx + c1) * dx + c2) * dx + c3, (d0 * dx + d1) * dx + c2
 
 
 def _rise(spline):
@@ -323,20 +343,24 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
     ok &= ok_px.take(flat).all(axis=1)
     v = work.take(flat)
     cubic = _Cubic.of(spline)
-    q = np.empty(v.shape + (4,))  # per pixel (1, T, T', residual): the normal equations in one product
+    # per pixel (1, T, T', v): their Gram matrix holds the normal equations, and the residual's sums follow
+    # from it (linear in r = v - a - c T)
+    q = np.empty(v.shape + (4,))
     q[..., 0] = 1.0
-    q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))  # at the start: the levels' and step 0's
-    a, c = _levels(v, q[..., 1])
+    q[..., 3] = v
+    q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+    gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
+    a, c = _levels(gram)
     scale = np.abs(c) + np.abs(a) + 1e-300
     tol_ac = _TOL_STEP * scale[ok, None]
     for it in range(9):
         if it > 0:
             q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
-        np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
-        gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
+            gram = np.matmul(q.transpose(0, 2, 1), q)
         if it == 8:
             break
-        step = _solve(gram, c)
+        step = _solve(gram, a, c)
+        a_r, c_r = a, c  # the levels of the residual at this step's start
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + _clip(step[:, 2], -0.5, 0.5)
         # converged (every measurable line's step below _TOL_STEP px): Gauss-Newton converges linearly here
@@ -344,12 +368,14 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
         s_ok = np.abs(step[ok])
         if (s_ok[:, 2] < _TOL_STEP).all() and (s_ok[:, :2] < tol_ac).all():
             if not final:  # a wide pass: only the positions go on (residuals moved by < 1e-5 px steps)
-                break
+                return (*_accept(ok, x, start, (a, c, _rss(gram, a_r, c_r), None), half), k)
             q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
-            np.subtract(v, a[:, None] + c[:, None] * q[..., 1], out=q[..., 3])
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
-    return (*_accept(ok, x, start, (a, c, q[..., 3], _normal(gram, c)[0]), half), k)
+    if not final:
+        return (*_accept(ok, x, start, (a, c, _rss(gram, a, c), None), half), k)
+    r = v - (a[:, None] + c[:, None] * q[..., 1])  # the final residuals, summed directly (no cancellation)
+    return (*_accept(ok, x, start, (a, c, np.einsum("ij,ij->i", r, r), _normal(gram, c)), half), k)
 
 
 def _row_take(kc: np.ndarray, nx: int) -> np.ndarray:
@@ -368,55 +394,72 @@ def _clip(a, lo, hi):
     return np.minimum(np.maximum(a, lo), hi)
 
 
-def _levels(v, t):
-    """Per line least-squares (a, c) of ``v = a + c t``."""
-    tm, vm = t.mean(axis=1), v.mean(axis=1)
-    var = ((t - tm[:, None]) ** 2).sum(axis=1)
-    c = ((t - tm[:, None]) * (v - vm[:, None])).sum(axis=1) / np.where(var > 0, var, 1.0)
-    return vm - c * tm, c
+def _levels(gram):
+    """Per line least-squares (a, c) of ``v = a + c T`` from the Gram matrix of ``(1, T, T', v)``."""
+    n, st, stt, sv, stv = gram[:, 0, 0], gram[:, 0, 1], gram[:, 1, 1], gram[:, 0, 3], gram[:, 1, 3]
+    var = n * stt - st * st
+    c = (n * stv - st * sv) / np.where(var > 0, var, 1.0)
+    return (sv - c * st) / n, c
+
+
+def _rss(gram, a, c):
+    """Per line ``sum (v - a - c T)^2`` from the Gram matrix of ``(1, T, T', v)`` (by expansion: to a few
+    1e-16 of ``sum v^2``, enough for the acceptance tests of a pass that only places the next template)."""
+    n, st, stt, sv, stv, svv = (gram[:, i, j] for i, j in ((0, 0), (0, 1), (1, 1), (0, 3), (1, 3), (3, 3)))
+    rss = svv - 2.0 * (a * sv + c * stv) + a * a * n + 2.0 * a * c * st + c * c * stt
+    return np.maximum(rss, 0.0)
 
 
 def _normal(gram, c):
-    """The normal matrix and right-hand side of the Jacobian ``(1, T, -c T')`` from the Gram matrix of
-    ``(1, T, T', r)``: ((lines, 3, 3), (lines, 3))."""
+    """The normal matrices ``J^T J`` (lines, 3, 3) of the Jacobian ``(1, T, -c T')`` from the Gram matrix of
+    ``(1, T, T', v)``."""
     s = np.array([1.0, 1.0, -1.0])[None, :] * np.stack([np.ones_like(c), np.ones_like(c), c], axis=1)
-    a = gram[:, :3, :3] * s[:, :, None] * s[:, None, :]
-    return a, gram[:, :3, 3] * s
+    return gram[:, :3, :3] * s[:, :, None] * s[:, None, :]
 
 
-def _solve(gram, c):
-    """Per line least-squares Gauss-Newton step (lines with a singular system: no step), by the adjugate of
-    the 3 x 3 normal matrix (:func:`_normal`'s entries, written out: the lines as the vector axis)."""
+def _solve(gram, a, c):
+    """Per line least-squares Gauss-Newton step for the residual ``r = v - a - c T`` (lines whose normal matrix
+    is singular: no step): the 3 x 3 normal equations (:func:`_normal`'s entries) by Gaussian elimination
+    written out, the lines as the vector axis; ``J^T r`` from the Gram matrix of ``(1, T, T', v)``, linear in
+    ``r``."""
     m = -c
     a00, a01, a11 = gram[:, 0, 0], gram[:, 0, 1], gram[:, 1, 1]
-    a02, a12, a22 = gram[:, 0, 2] * m, gram[:, 1, 2] * m, gram[:, 2, 2] * m * m
-    b0, b1, b2 = gram[:, 0, 3], gram[:, 1, 3], gram[:, 2, 3] * m
-    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
-    c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    good = np.abs(det) > 1e-300
-    inv_det = np.where(good, 1.0 / np.where(good, det, 1.0), 0.0)
-    out = np.empty((c.size, 3))
-    out[:, 0] = (c00 * b0 + c01 * b1 + c02 * b2) * inv_det
-    out[:, 1] = (c01 * b0 + c11 * b1 + c12 * b2) * inv_det
-    out[:, 2] = (c02 * b0 + c12 * b1 + c22 * b2) * inv_det
-    return out
+    a02, a12, a22 = gram[:, 0, 2] * m, gram[:, 1, 2] * m, gram[:, 2, 2] * (m * m)
+    jr = gram[:, :3, 3] - a[:, None] * gram[:, :3, 0] - c[:, None] * gram[:, :3, 1]
+    b0, b1, b2 = jr[:, 0], jr[:, 1], jr[:, 2] * m
+    with np.errstate(divide="ignore", invalid="ignore"):
+        l10, l20 = a01 / a00, a02 / a00
+        p11, p12, p22 = a11 - l10 * a01, a12 - l10 * a02, a22 - l20 * a02
+        e1, e2 = b1 - l10 * b0, b2 - l20 * b0
+        l21 = p12 / p11
+        q22 = p22 - l21 * p12
+        out = np.empty((c.size, 3))
+        out[:, 2] = (e2 - l21 * e1) / q22
+        out[:, 1] = (e1 - p12 * out[:, 2]) / p11
+        out[:, 0] = (b0 - a01 * out[:, 1] - a02 * out[:, 2]) / a00
+    # a positive pivot each (the matrix is positive semi-definite): else singular, no step
+    good = (a00 > 0) & (p11 > 1e-14 * a11) & (q22 > 1e-14 * a22)
+    return np.where(good[:, None], out, 0.0)
 
 
 def _accept(ok, x, start, fit, half: int):
-    """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, residuals,
-    normal matrices J^T J)``."""
-    a, c, r, jtj = fit
+    """(x, sigma_x), NaN for the lines whose fit failed or departs from the others; ``fit = (a, c, each line's
+    residual sum of squares over its 2 half + 1 pixels, normal matrices J^T J)`` (None: sigma_x not computed,
+    None)."""
+    a, c, rss, jtj = fit
+    n_px = 2 * half + 1
     ok = ok & np.isfinite(x) & (np.abs(x - _nan0(start)) <= 0.5 * half)
     if np.count_nonzero(ok) < 3:
         return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
     c_med = _median(c[ok])
-    rms = np.sqrt(np.mean(r * r, axis=1))
+    rms = np.sqrt(rss / n_px)
     ok &= np.abs(c - c_med) <= _CONTRAST_TOL * abs(c_med)
     ok &= rms <= _RMS_TOL * _median(rms[ok]) + 0.005 * abs(c_med)
-    n_ok = np.count_nonzero(ok)
-    noise2 = float(np.sum(r[ok] ** 2)) / max(n_ok * (r.shape[1] - 3), 1)
     pos = np.where(ok, x, np.nan)
+    if jtj is None:
+        return pos, None
+    n_ok = np.count_nonzero(ok)
+    noise2 = float(np.sum(rss[ok])) / max(n_ok * (n_px - 3), 1)
     return pos, np.where(ok, np.sqrt(noise2 * _inv22(jtj, ok)), np.nan)
 
 

@@ -134,14 +134,15 @@ def _cholesky_solve(mom: list, rhs: list):
     return q
 
 
-_IRLS_TOL_PX = 1e-8  # robust_polyfit stops when the fit moves by less (px)
+_IRLS_TOL_PX = 1e-6  # robust_polyfit stops when the fit moves by less (px)
+_FIRST_TOL_PX = 1e-3  # ... for the first line through the whole-pixel peaks (only where to search)
 
 
-def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
+def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05, tol: float = _IRLS_TOL_PX):
     """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights).
 
-    Up to 10 reweightings; it stops once the fit moves by < 1e-8 px: the reweighting converges linearly (each
-    move ~0.1-0.15 x the last), so the moves left add up to ~1e-9 px."""
+    Up to 10 reweightings; it stops once the fit moves by < ``tol`` (1e-6 px): the reweighting converges
+    linearly (each move ~0.1-0.15 x the last), so the moves left add up to ~1e-7 px."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     w = np.ones_like(y)
@@ -161,7 +162,7 @@ def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05):
         new = poly.value(q)
         moved = float(np.abs(new - fit).max())
         fit = new
-        if moved < _IRLS_TOL_PX:
+        if moved < tol:
             break
     return poly.coef(q), w
 
@@ -189,7 +190,6 @@ def ridge_centroids(work, g, coef, half, valid=None):
     """Windowed derivative centroids along the fitted ridge; returns (rows used, centroids, per-row steps)."""
     ny, nx = work.shape
     rows = np.arange(ny, dtype=float)
-    cols = np.arange(nx, dtype=float)
     centre = np.polyval(coef, rows)
     keep = (centre - half >= 1) & (centre + half <= nx - 2)
     if valid is not None:  # lines whose window (and its derivative's reach) touches an excluded pixel: unused
@@ -202,14 +202,17 @@ def ridge_centroids(work, g, coef, half, valid=None):
             f"image: the edge crosses fewer than {MIN_ROWS} lines inside the region "
             f"(found {int(np.count_nonzero(keep))}); use a longer edge or a larger ROI"
         )
-    win = np.abs(cols[None, :] - centre[:, None]) <= half
-    gw = np.where(win, g, 0.0)[keep]
+    # the window |column - centre| <= half of each kept line: 2 half or 2 half + 1 columns from ceil(centre - half)
+    rk, ck = rows[keep], centre[keep]
+    kb = np.ceil(ck - half)[:, None] + np.arange(2 * half + 1)[None, :]
+    gb = g.take((rk * nx)[:, None].astype(np.intp) + kb.astype(np.intp))
+    gw = np.where(kb <= ck[:, None] + half, gb, 0.0)
     tot = gw.sum(axis=1)
     good = tot > 0
     if np.count_nonzero(good) < MIN_ROWS:
         raise InputError("image: no edge found (the derivative has no consistent ridge)")
-    cen = (gw * cols).sum(axis=1)[good] / tot[good]
-    return rows[keep][good], cen, tot[good], int(np.count_nonzero(keep))
+    cen = (gw * kb).sum(axis=1)[good] / tot[good]
+    return rk[good], cen, tot[good], int(np.count_nonzero(keep))
 
 
 def locate_edge(work: np.ndarray, deg: int | None, valid=None):
@@ -230,7 +233,9 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     seen = np.ones(ny, dtype=bool) if valid is None else np.any(gs != 0, axis=1)
     if np.count_nonzero(seen) < MIN_ROWS:
         raise InputError(f"image: fewer than {MIN_ROWS} lines hold valid pixels across the edge")
-    coef, _ = robust_polyfit(rows[seen], np.argmax(gs, axis=1)[seen].astype(float), 1, scale_floor=1.0)
+    # where to look first (the derivative's whole-pixel peaks): the windows it places are iterated below
+    peaks = np.argmax(gs, axis=1)[seen].astype(float)
+    coef, _ = robust_polyfit(rows[seen], peaks, 1, scale_floor=1.0, tol=_FIRST_TOL_PX)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
     last = r_prev = cen_prev = None
