@@ -27,7 +27,7 @@ the region or touches an excluded or clipped pixel, and where its fit fails or d
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import BSpline
+from scipy.interpolate import BSpline, PPoly
 from scipy.linalg.lapack import dpbsv
 
 from satchain.errors import InputError
@@ -40,8 +40,6 @@ _KNOT_PX = 0.5  # template knot spacing (finer knots let noise trade the profile
 _MAX_GAP_PX = 0.75  # largest gap in the lines' sub-pixel phases the template can bridge
 _CONTRAST_TOL = 0.3  # a line whose step differs more from the median step is not measured
 _TOL_STEP = 1e-5  # Gauss-Newton stops when every line's step is below this (px; relative for the levels)
-_PIECE_AT = np.array([0.125, 0.375, 0.625, 0.875])  # where a spline piece is sampled to recover its cubic
-_PIECE_INV = np.linalg.inv(_PIECE_AT[:, None] ** np.arange(4)[None, :])
 _SORT_PHASES = 4096  # up to this many lines the phase gap comes from sorting them, above from 64 bins
 _RMS_TOL = 3.0  # ... nor one whose residual rms exceeds this x the median line's (plus 0.5 % of the step)
 
@@ -240,17 +238,22 @@ def _basis(u, t, nc: int):
 def _basis_cols(u, t, nc: int):
     """:func:`_basis` as (index of the first, the 4 values as separate contiguous arrays)."""
     i = np.clip(np.searchsorted(t, u, side="right") - 1, 3, nc - 1)
-    left = [None] + [u - t[i + 1 - j] for j in (1, 2, 3)]
-    right = [None] + [t[i + j] - u for j in (1, 2, 3)]
-    n = [np.ones_like(u)]
-    for j in (1, 2, 3):
-        saved = 0.0
-        for r in range(j):
-            temp = n[r] / (right[r + 1] + left[j - r])
-            n[r] = saved + right[r + 1] * temp
-            saved = left[j - r] * temp
-        n.append(saved)
-    return i - 3, n
+    l1, l2, l3 = (u - t[i + 1 - j] for j in (1, 2, 3))
+    r1, r2, r3 = (t[i + j] - u for j in (1, 2, 3))
+    # de Boor's triangle unrolled (degree 1, 2, 3): the same operations without the zero start terms
+    temp = 1.0 / (r1 + l1)
+    n0, n1 = r1 * temp, l1 * temp
+    temp = n0 / (r1 + l2)
+    n0, saved = r1 * temp, l2 * temp
+    temp = n1 / (r2 + l1)
+    n1, n2 = saved + r2 * temp, l1 * temp
+    temp = n0 / (r1 + l3)
+    n0, saved = r1 * temp, l3 * temp
+    temp = n1 / (r2 + l2)
+    n1, saved = saved + r2 * temp, l2 * temp
+    temp = n2 / (r3 + l1)
+    n2, n3 = saved + r3 * temp, l1 * temp
+    return i - 3, [n0, n1, n2, n3]
 
 
 class _Cubic:
@@ -258,15 +261,9 @@ class _Cubic:
 
     def __init__(self, spline):
         t = spline.t
-        self.bx = t[3:-3] if np.all(np.diff(t[3:-3]) > 0) else np.unique(t[3:-3])
-        # each piece from the spline's values at 4 points inside its interval (the cubic through them)
-        h = np.diff(self.bx)
-        at = self.bx[:-1, None] + h[:, None] * _PIECE_AT[None, :]
-        first, cols = _basis_cols(at.ravel(), t, t.size - 4)
-        coef = spline.c
-        val = sum(b * coef.take(first + j) for j, b in enumerate(cols)).reshape(-1, 4)
-        power = val @ _PIECE_INV.T  # coefficients of (dx / h)^p, p = 0..3
-        c = [power[:, p] / h**p for p in (3, 2, 1, 0)]
+        self.bx = t[3:-3]  # (the template's knots: 4-fold ends, strictly increasing inside)
+        # the pieces' power coefficients (highest first) from the spline's derivatives at each piece's left end
+        c = list(PPoly.from_spline(spline).c[:, 3 : t.size - 4])
         # per piece (c0, c1, c2, c3, 3 c0, 2 c1): value ((c0 dx + c1) dx + c2) dx + c3, slope (3 c0 dx + 2 c1) dx + c2
         self.table = np.stack(c + [3.0 * c[0], 2.0 * c[1]], axis=1)
         inner = np.diff(self.bx[1:-1])
