@@ -106,7 +106,11 @@ def test_template_phase_gap_from_lines_equals_the_samples_gap(n_lines, spread, c
 
 
 @settings(max_examples=40, deadline=None)
-@given(shape=st.sampled_from([(1,), (2,), (7,), (10, 3), (101,)]), nan=st.booleans(), seed=st.integers(0, 10**6))
+@given(
+    shape=st.sampled_from([(1,), (2,), (7,), (10, 3), (101,), (256,), (257,), (17, 30)]),
+    nan=st.booleans(),
+    seed=st.integers(0, 10**6),
+)
 def test_median_equals_np_median(shape, nan, seed):
     v = np.random.default_rng(seed).normal(size=shape)
     if nan:

@@ -138,11 +138,21 @@ def median(values) -> float:
 def _median_inplace(v: np.ndarray) -> float:
     """:func:`median` of a 1-D float array that may be reordered."""
     n = v.size
-    if n == 0 or np.isnan(v).any():
+    if n == 0:
         return float("nan")
     lo, hi = (n - 1) // 2, n // 2
-    v.partition([lo, hi] if lo != hi else lo)
+    if n <= _SORT_MEDIAN:  # a short array: a sort costs less than a partition, and puts any NaN last
+        v.sort()
+        if np.isnan(v[-1]):
+            return float("nan")
+    elif np.isnan(v).any():
+        return float("nan")
+    else:
+        v.partition([lo, hi] if lo != hi else lo)
     return float((v[lo] + v[hi]) / 2)
+
+
+_SORT_MEDIAN = 256  # up to this many values the median sorts them (cheaper than np.partition's call)
 
 
 def clipping_flag(data, *, full_scale: float | None = None, noise_std: float | None = None) -> str | None:
