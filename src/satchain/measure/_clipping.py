@@ -143,7 +143,8 @@ def find_clipping(
     d, full_scale, noise_std, ok = _check_args(data, full_scale, noise_std, valid)
     if not np.any(ok):
         return None
-    lo, hi = float(d[ok].min()), float(d[ok].max())
+    d_ok = d if valid is None else d[ok]  # (every pixel considered: no masked copy)
+    lo, hi = float(d_ok.min()), float(d_ok.max())
     span = hi - lo
     n_ok = int(np.count_nonzero(ok))
     if full_scale is not None:
@@ -173,7 +174,7 @@ def _check_args(data, full_scale, noise_std, valid=None):
     if d.ndim != 2 or d.size == 0:
         raise InputError(f"data: need a 1-D or 2-D array of values, got shape {np.shape(data)}")
     ok = _check_valid(valid, d.shape)
-    if not np.all(np.isfinite(d[ok])):
+    if not np.all(np.isfinite(d if valid is None else d[ok])):
         raise InputError("data: contains NaN/inf; all values must be finite")
     if full_scale is None:
         full_scale = integer_full_scale(data)

@@ -264,8 +264,9 @@ class _Cubic:
         self.bx = t[3:-3]  # (the template's knots: 4-fold ends, strictly increasing inside)
         # the pieces' power coefficients (highest first) from the spline's derivatives at each piece's left end
         c = list(PPoly.from_spline(spline).c[:, 3 : t.size - 4])
-        # per piece (c0, c1, c2, c3, 3 c0, 2 c1): value ((c0 dx + c1) dx + c2) dx + c3, slope (3 c0 dx + 2 c1) dx + c2
-        self.table = np.stack(c + [3.0 * c[0], 2.0 * c[1]], axis=1)
+        # rows (c0, c1, c2, c3, 3 c0, 2 c1) per piece: value ((c0 dx + c1) dx + c2) dx + c3, slope
+        # (3 c0 dx + 2 c1) dx + c2
+        self.table = np.stack(c + [3.0 * c[0], 2.0 * c[1]])
         inner = np.diff(self.bx[1:-1])
         # the template's knots are uniform inside (np.arange): the interval by arithmetic, not a search (at a
         # knot it may pick the neighbouring piece, whose value and slope agree there to rounding: C2 spline)
@@ -290,20 +291,31 @@ class _Cubic:
         i += 1
         return np.minimum(np.maximum(i, 0, out=i), self.bx.size - 2, out=i)
 
-    def __call__(self, u):
+    def __call__(self, u, out=None):
+        """(value, slope) at ``u``; into ``out = (value array, slope array)`` when given."""
         i = self.index(u)
         dx = u - self.bx.take(i)
-        p = self.table.take(i, axis=0)  # (..., 6): the pieces' coefficients at once
-        c0, c1, c2, c3, d0, d1 = np.moveaxis(p, -1, 0)
-        return ((c0 * dx + c1) * dx + c2) * dx + c3, (d0 * dx + d1) * dx + c2
+        c0, c1, c2, c3, d0, d1 = self.table.take(i, axis=1)  # the pieces' coefficients at once
+        if out is None:
+            out = np.empty_like(dx), np.empty_like(dx)
+        np.add(((c0 * dx + c1) * dx + c2) * dx, c3, out=out[0])
+        np.add((d0 * dx + d1) * dx, c2, out=out[1])
+        return out
+
+    def value(self, u):
+        """The value at ``u`` (as :meth:`__call__`'s first array)."""
+        i = self.index(u)
+        dx = u - self.bx.take(i)
+        c0, c1, c2, c3 = self.table[:4].take(i, axis=1)
+        return ((c0 * dx + c1) * dx + c2) * dx + c3
 
 
 def _rise(spline):
     """(u grid, profile normalised to its plateaus 0 -> 1) over the spline's range."""
     lo_u, hi_u = spline.t[0], spline.t[-1]
     uu = np.arange(lo_u, hi_u, 0.01)
-    t = _Cubic.of(spline)(uu)[0]  # the spline's value (its pieces, as the fits use it)
-    a, b = float(np.mean(t[:150])), float(np.mean(t[-150:]))
+    t = _Cubic.of(spline).value(uu)  # the spline's value (its pieces, as the fits use it)
+    a, b = float(t[:150].sum()) / 150, float(t[-150:].sum()) / 150
     return uu, ((t - a) / (b - a) if b != a else np.zeros_like(t))
 
 
@@ -345,14 +357,14 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
     q = np.empty(v.shape + (4,))
     q[..., 0] = 1.0
     q[..., 3] = v
-    q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+    cubic(_clip(k - x[:, None], lo_u, hi_u), out=(q[..., 1], q[..., 2]))
     gram = np.matmul(q.transpose(0, 2, 1), q)  # (lines, 4, 4)
     a, c = _levels(gram)
     scale = np.abs(c) + np.abs(a) + 1e-300
     tol_ac = _TOL_STEP * scale[ok, None]
     for it in range(9):
         if it > 0:
-            q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+            cubic(_clip(k - x[:, None], lo_u, hi_u), out=(q[..., 1], q[..., 2]))
             gram = np.matmul(q.transpose(0, 2, 1), q)
         if it == 8:
             break
@@ -366,7 +378,7 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
         if (s_ok[:, 2] < _TOL_STEP).all() and (s_ok[:, :2] < tol_ac).all():
             if not final:  # a wide pass: only the positions go on (residuals moved by < 1e-5 px steps)
                 return (*_accept(ok, x, start, (a, c, _rss(gram, a_r, c_r), None), half), k)
-            q[..., 1], q[..., 2] = cubic(_clip(k - x[:, None], lo_u, hi_u))
+            cubic(_clip(k - x[:, None], lo_u, hi_u), out=(q[..., 1], q[..., 2]))
             gram = np.matmul(q.transpose(0, 2, 1), q)
             break
     if not final:

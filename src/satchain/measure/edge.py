@@ -404,15 +404,14 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | Non
             f"image: the edge is within {np.degrees(np.arctan(abs(slope))):.2f} deg of the pixel axes and "
             f"{len(rows)} lines leave a {w:.2f} px gap in the sub-pixel phases; tilt the edge by 2-10 deg"
         )
-    if ok is None:
-        ok = np.ones(d.size, dtype=bool)
-    x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
+    sel = slice(None) if ok is None else ok  # every sample (no valid mask): no masked copies
+    x, esf_raw, counts = bin_esf(d[sel], v[sel], w, origin)
     v, r_flags, at = _flatten_rows(d, v, len(rows), x, esf_raw, ok)
     if r_flags:
         flags += r_flags
-        x, esf_raw, counts = bin_esf(d[ok], v[ok], w, origin)
+        x, esf_raw, counts = bin_esf(d[sel], v[sel], w, origin)
         at = np.interp(d, x, esf_raw)
-    resid = (v - at)[ok]
+    resid = (v - at)[sel]
     sigma = robust_sigma(resid)
     if q_step is not None:
         flags += quantisation_flags(q_step, x, esf_raw, resid)
