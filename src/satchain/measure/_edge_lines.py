@@ -372,10 +372,8 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
         a_r, c_r = a, c  # the levels of the residual at this step's start
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + _clip(step[:, 2], -0.5, 0.5)
-        # converged (every measurable line's step below _TOL_STEP px): Gauss-Newton converges linearly here
-        # (each step ~0.03 x the last at SNR 100): the steps left move it by ~3e-7 px (a few 1e-6 on noisier lines)
-        s_ok = np.abs(step[ok])
-        if (s_ok[:, 2] < _TOL_STEP).all() and (s_ok[:, :2] < tol_ac).all():
+        s_ok, prev = np.abs(step[ok]), (None if it == 0 else s_ok)
+        if _converged(s_ok, prev, tol_ac):
             if not final:  # a wide pass: only the positions go on (residuals moved by < 1e-5 px steps)
                 return (*_accept(ok, x, start, (a, c, _rss(gram, a_r, c_r), None), half), k)
             cubic(_clip(k - x[:, None], lo_u, hi_u), out=(q[..., 1], q[..., 2]))
@@ -385,6 +383,21 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
         return (*_accept(ok, x, start, (a, c, _rss(gram, a, c), None), half), k)
     r = v - (a[:, None] + c[:, None] * q[..., 1])  # the final residuals, summed directly (no cancellation)
     return (*_accept(ok, x, start, (a, c, np.einsum("ij,ij->i", r, r), _normal(gram, c)), half), k)
+
+
+def _converged(s, prev, tol_ac) -> bool:
+    """Gauss-Newton has converged: for every measurable line, each of its steps ``s`` (|da|, |dc|, |dx|) is
+    below :data:`_TOL_STEP` px (``tol_ac`` for the levels), or the steps still to come are: the iteration
+    converges linearly here (each step ~0.03 x the last at SNR 100), so after a step ``s`` that follows
+    ``prev`` the rest add up to ``s r / (1 - r)`` with ``r = s / prev`` (a step that did not shrink: inf)."""
+    if (s[:, 2] < _TOL_STEP).all() and (s[:, :2] < tol_ac).all():
+        return True
+    if prev is None:
+        return False
+    left = np.full_like(s, np.inf)
+    np.divide(s * s, prev - s, out=left, where=s < prev)
+    np.minimum(left, s, out=left)  # (a step below the tolerance passes as it did)
+    return bool((left[:, 2] < _TOL_STEP).all() and (left[:, :2] < tol_ac).all())
 
 
 def _row_take(kc: np.ndarray, nx: int) -> np.ndarray:
