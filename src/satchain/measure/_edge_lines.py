@@ -362,6 +362,7 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
     a, c = _levels(gram)
     scale = np.abs(c) + np.abs(a) + 1e-300
     tol_ac = _TOL_STEP * scale[ok, None]
+    s_ok = None  # the last step (measurable lines)
     for it in range(9):
         if it > 0:
             cubic(_clip(k - x[:, None], lo_u, hi_u), out=(q[..., 1], q[..., 2]))
@@ -372,7 +373,7 @@ def _fit_lines(work, start, ok_px, spline, half: int, final: bool = True):
         a_r, c_r = a, c  # the levels of the residual at this step's start
         a, c = a + step[:, 0], c + step[:, 1]
         x = x + _clip(step[:, 2], -0.5, 0.5)
-        s_ok, prev = np.abs(step[ok]), (None if it == 0 else s_ok)
+        s_ok, prev = np.abs(step[ok]), s_ok
         if _converged(s_ok, prev, tol_ac):
             if not final:  # a wide pass: only the positions go on (residuals moved by < 1e-5 px steps)
                 return (*_accept(ok, x, start, (a, c, _rss(gram, a_r, c_r), None), half), k)
