@@ -379,3 +379,28 @@ def test_ridge_centroids_equal_full_row_windows(ny, nx, slope, x0, half, seed):
     assert np.array_equal(r_used, rows[keep])
     assert np.allclose(cen, ref, rtol=0, atol=1e-12 * nx)
     assert np.allclose(tot, gw.sum(axis=1), rtol=1e-13)
+
+
+@settings(max_examples=40, deadline=None)
+@given(s0=st.floats(1e-4, 0.3), rate=st.floats(0.001, 0.9), n=st.integers(1, 50), seed=st.integers(0, 10**6))
+def test_gauss_newton_stops_once_the_geometric_tail_is_below_the_tolerance(s0, rate, n, seed):
+    """Steps shrinking by ``rate`` each: converged exactly when the steps still to come, ``s r / (1 - r)``,
+    are below the tolerance (or the step itself is); the true remaining movement is then below it too.  A line
+    whose step grows is not converged while its step is above the tolerance."""
+    tol = lines._TOL_STEP
+    rng = np.random.default_rng(seed)
+    scale = rng.uniform(0.5, 2.0, (n, 1))  # the lines differ in their first step
+    prev = s0 * scale * np.ones((n, 3))
+    tol_ac = np.full((n, 1), tol)
+    for _ in range(40):
+        s = prev * rate
+        done = lines._converged(s, prev, tol_ac)
+        tail = s * rate / (1 - rate)
+        assert done == bool(np.all(np.minimum(tail, s) < tol))
+        if done:
+            assert np.all(np.minimum(tail, s) < tol)
+            break
+        prev = s
+    grow = prev.copy()
+    grow[0, 2] = 1.5 * prev[0, 2]  # one line's position step grows
+    assert lines._converged(grow, prev, tol_ac) == bool(grow[0, 2] < tol and np.all(grow < tol))
