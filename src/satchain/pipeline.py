@@ -147,19 +147,41 @@ def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):
 def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
                    measured: Measurements, progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
     from satchain.comparison import compare
+
+    predicted = _predict(config, budget, scene.truth, sim)
+    comparison = compare(measured, predicted, config.tolerances)
+    progress("compare", 1, 1)
+    return predicted, comparison
+
+
+def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
     from satchain.prediction import predict
 
-    predicted = predict(
+    return predict(
         budget.system,
-        scene.truth,
+        truth,
         otf=budget.otf,
         quality=budget.budget["quality"],
         sensor=sim.sensor,
         wedge_threshold=config.measurement.wedge_threshold,
     )
-    comparison = compare(measured, predicted, config.tolerances)
-    progress("compare", 1, 1)
-    return predicted, comparison
+
+
+def _edge_results(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
+                  measured: Measurements) -> list[dict]:  # fmt: skip
+    """results.json's slanted edges as :func:`_stage_compare` will give them, from the edges alone (their
+    prediction is the system MTF along each normal: a millisecond, where the stars' and wedges' take most of the
+    stage), so that a run folder's edge figures are drawn while the other targets are compared."""
+    from satchain.comparison import compare
+    from satchain.report.kinds import EDGES
+    from satchain.results import strict_json
+
+    truth = scene.truth_dict
+    edges_only = dict(truth, items=[it for it in truth["items"] if it.get("kind") == EDGES.kind])
+    auto = measured.auto
+    auto = dataclasses.replace(auto, items=tuple(it for it in auto.items if it.kind == EDGES.kind), skipped=())
+    c = compare(Measurements(auto, measured.snr), _predict(config, budget, edges_only, sim), config.tolerances)
+    return strict_json([d.to_dict() for d in c.details[EDGES.key]])
 
 
 def run_in_memory(
@@ -238,6 +260,8 @@ class _EarlyFigures:
         self.thumbnails: list[tuple[dict, tuple, int]] = []  # (item, box, job of its ground-truth panel)
         self.measured = False  # the measured figures handed over
         self.crops = None  # the thumbnails' ground truth, kept as the simulation renders it
+        self.edges: list[dict] | None = None  # results.json's edges, their figures handed over
+        self.edge_curves: list[dict] | None = None
 
     def scene_view(self, scene):
         """:func:`run_in_memory`'s ``scene_view``: the scene, keeping the thumbnails' ground truth."""
@@ -282,6 +306,19 @@ class _EarlyFigures:
             partial = RunResult(self.config, budget, scene, sim, measured, None, None, {})  # type: ignore[arg-type]
             run_figures.submit_measured_figures(ReportInputs(partial, out, {}), jobs)
             self.measured = True
+            self._edge_figures(partial, budget, scene, sim, measured)
+
+    def _edge_figures(self, partial: RunResult, budget, scene, sim, measured) -> None:
+        """Hand over the edges' figures, from the edges' results as the compare stage will give them."""
+        from satchain.report import run_figures
+        from satchain.report.curves import edge_curves
+        from satchain.report.kinds import EDGES
+
+        edges = _edge_results(self.config, budget, scene, sim, measured)
+        if edges:
+            view = ReportInputs(partial, self.out, {EDGES.key: edges})
+            self.edges, self.edge_curves = edges, edge_curves(view)
+            run_figures.submit_edge_figures(view, self.edge_curves, self.jobs)
 
 
 def write_images(d: Path, image: np.ndarray, focal_plane: np.ndarray, *, units: str, bit_depth: int, pixel_m: float,
@@ -320,6 +357,7 @@ def write_run_directory(
     from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
     from satchain.report.gallery import assemble_thumbnail, thumbnail_crops
+    from satchain.report.kinds import EDGES
     from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
@@ -334,11 +372,17 @@ def write_run_directory(
             early = _EarlyFigures(result.config, out, jobs)
             early("scene", budget=result.budget, scene=result.scene)
             early("simulate", budget=result.budget, scene=result.scene, sim=result.simulation)
-        shown = run_figures.write_run_figures(view, jobs=jobs, measured_figures=not early.measured)
+        early_edges = early.edges is not None and early.edges == results.get(EDGES.key)  # as compared: drawn
+        shown = curves.build_curves(view, edges=early.edge_curves if early_edges else None)
+        run_figures.write_run_figures(view, shown, jobs=jobs, measured_figures=not early.measured,
+                                      edge_figures=early.edges is None)  # fmt: skip
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
         crops = thumbnail_crops(view, [box for _, box, _ in early.thumbnails])
+    if early.edges is not None and not early_edges:  # never expected: the edges' figures drawn again, as compared
+        with FigureJobs(0) as here:
+            run_figures.submit_edge_figures(view, shown["edges"], here)
     thumbnails = [assemble_thumbnail(it, box, jobs.result(job), *c)
                   for (it, box, job), c in zip(early.thumbnails, crops, strict=True)]  # fmt: skip
     html.write_report(view, out / "report.html", thumbnails=thumbnails)
