@@ -122,8 +122,12 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
 
 
 def to_grey8(arr: np.ndarray) -> np.ndarray:
-    """Reflectance 0..1 -> 8-bit grey levels, pixel by pixel (NaN: 0)."""
-    return np.clip(np.round(np.nan_to_num(np.asarray(arr, float)) * 255.0), 0, 255).astype(np.uint8)
+    """Reflectance 0..1 -> 8-bit grey levels, pixel by pixel (NaN: 0), in float64 (in place on one copy)."""
+    v = np.multiply(arr, 255.0, dtype=np.float64)
+    np.nan_to_num(v, copy=False)
+    np.round(v, out=v)
+    np.clip(v, 0, 255, out=v)
+    return v.astype(np.uint8)
 
 
 def _png(arr: np.ndarray) -> tuple[bytes, int, int]:
