@@ -306,8 +306,16 @@ def test_edge_figures_drawn_from_other_results_are_drawn_again_as_compared(reduc
 
     monkeypatch.setattr(pipeline, "_edge_results", off)
     result = satchain.run(load_run_config(out.parent / "run.toml"), out_dir=tmp_path / "again")
-    assert result.to_json_dict()["slanted_edges"] == res["slanted_edges"]
+    results = result.to_json_dict()
+    assert results["slanted_edges"] == res["slanted_edges"]
+    from satchain.report import run_figures
+    from satchain.report._jobs import FigureJobs
+    from satchain.report.curves import build_curves
+
+    view = pipeline.ReportInputs(result, tmp_path / "compared", results)
+    with FigureJobs(0) as here:  # drawn here from the compared results
+        run_figures.submit_edge_figures(view, build_curves(view)["edges"], here)
     names = [f"edge_{e['id']}.png" for e in res["slanted_edges"]] + ["edges_mtf.png"]
     for name in names:  # the figures of the compared results, not of the early ones (digests: a short diff)
-        again, first = ((d / "figures" / name).read_bytes() for d in (tmp_path / "again", out))
+        again, first = ((d / "figures" / name).read_bytes() for d in (tmp_path / "again", tmp_path / "compared"))
         assert hashlib.sha256(again).hexdigest() == hashlib.sha256(first).hexdigest(), name
