@@ -1,5 +1,6 @@
 """End-to-end `satchain run` on a reduced configuration: results checked against the physics."""
 
+import hashlib
 import json
 import math
 
@@ -281,3 +282,40 @@ def test_cli_run_that_checks_nothing_does_not_pass(tmp_path):
     assert res["n_checked"] == 0 and all(row["pass"] is None for row in res["summary"]), res["summary"]
     assert r.exit_code == 1 and "no check could be made" in r.stderr
     assert CliRunner().invoke(app, [*args, "--exit-zero"]).exit_code == 0
+
+
+def test_the_edges_results_the_run_folder_draws_early_are_the_compared_ones(reduced_run):
+    """The run folder hands the edges' figures over when the measurement ends, from the edges' results computed
+    before the other targets are predicted (pipeline._edge_results): those are results.json's edges, to the bit."""
+    from satchain.pipeline import _edge_results
+
+    _, res, _, result = reduced_run
+    early = _edge_results(result.config, result.budget, result.scene, result.simulation, result.measurements)
+    assert early and early == res["slanted_edges"]
+
+
+def test_edge_figures_drawn_from_other_results_are_drawn_again_as_compared(reduced_run, tmp_path, monkeypatch):
+    import satchain.pipeline as pipeline
+
+    out, res, _, _ = reduced_run
+    true_results = pipeline._edge_results
+
+    def off(*args):
+        edges = true_results(*args)
+        return [dict(e, mtf_predicted=[0.5 * v for v in e["mtf_predicted"]]) for e in edges]
+
+    monkeypatch.setattr(pipeline, "_edge_results", off)
+    result = satchain.run(load_run_config(out.parent / "run.toml"), out_dir=tmp_path / "again")
+    results = result.to_json_dict()
+    assert results["slanted_edges"] == res["slanted_edges"]
+    from satchain.report import run_figures
+    from satchain.report._jobs import FigureJobs
+    from satchain.report.curves import build_curves
+
+    view = pipeline.ReportInputs(result, tmp_path / "compared", results)
+    with FigureJobs(0) as here:  # drawn here from the compared results
+        run_figures.submit_edge_figures(view, build_curves(view)["edges"], here)
+    names = [f"edge_{e['id']}.png" for e in res["slanted_edges"]] + ["edges_mtf.png"]
+    for name in names:  # the figures of the compared results, not of the early ones (digests: a short diff)
+        again, first = ((d / "figures" / name).read_bytes() for d in (tmp_path / "again", tmp_path / "compared"))
+        assert hashlib.sha256(again).hexdigest() == hashlib.sha256(first).hexdigest(), name

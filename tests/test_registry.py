@@ -81,9 +81,9 @@ def test_a_new_report_kind_is_one_entry(monkeypatch, tmp_path):
 
 def test_kind_names_live_in_the_registries_only():
     """The kind and result-key strings appear as literals only where they are defined: the item classes, the
-    registries."""
+    registries (the result keys: measure/_keys.py, which MEASURERS and the report's registry read)."""
     names = {m.kind for m in MEASURERS.values()} | {m.key for m in MEASURERS.values()}
-    allowed = {"scene/targets.py", "scene/layout.py", "measure/auto.py"}
+    allowed = {"scene/targets.py", "scene/layout.py", "measure/auto.py", "measure/_keys.py"}
     found = []
     for p in SRC.rglob("*.py"):
         rel = p.relative_to(SRC).as_posix()

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import json
 import os
 import platform
@@ -83,7 +84,7 @@ def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
 
 
 def _stage_simulate(
-    config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress
+    config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress, *, scene_view=None
 ) -> SimulationResult:
     from satchain.engine.memory import check_simulation_memory
     from satchain.engine.sensor import sensor_from_system
@@ -94,7 +95,7 @@ def _stage_simulate(
     c = config.simulation
     built = config.load_as_built_system(budget.system)  # the camera as built; None: as designed
     system, otf = (budget.system, budget.otf) if built is None else (built, SystemOTF(built))
-    src = SceneSource(scene.scene, pixel_m=scene.pixel_m)
+    src = SceneSource(scene.scene if scene_view is None else scene_view(scene.scene), pixel_m=scene.pixel_m)
     params = SimParams(far_margin_px=c.far_margin_px, border=c.border)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, otf=otf,
                     motion_seed=c.seed)  # fmt: skip
@@ -146,25 +147,51 @@ def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):
 def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
                    measured: Measurements, progress: Progress) -> tuple[Predictions, Comparison]:  # fmt: skip
     from satchain.comparison import compare
-    from satchain.prediction import predict
 
-    predicted = predict(
-        budget.system,
-        scene.truth,
-        otf=budget.otf,
-        quality=budget.budget["quality"],
-        sensor=sim.sensor,
-        wedge_threshold=config.measurement.wedge_threshold,
-    )
+    predicted = _predict(config, budget, scene.truth, sim)
     comparison = compare(measured, predicted, config.tolerances)
     progress("compare", 1, 1)
     return predicted, comparison
 
 
-def run_in_memory(config: RunConfig, *, progress: Progress | None = None, after_stage=None) -> RunResult:
+def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
+    from satchain.prediction import predict
+
+    return predict(
+        budget.system,
+        truth,
+        otf=budget.otf,
+        quality=budget.budget["quality"],
+        sensor=sim.sensor,
+        wedge_threshold=config.measurement.wedge_threshold,
+    )
+
+
+def _edge_results(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
+                  measured: Measurements) -> list[dict]:  # fmt: skip
+    """results.json's slanted edges as :func:`_stage_compare` will give them, from the edges alone (their
+    prediction is the system MTF along each normal: a millisecond, where the stars' and wedges' take most of the
+    stage), so that a run folder's edge figures are drawn while the other targets are compared."""
+    from satchain.comparison import compare
+    from satchain.report.kinds import EDGES
+    from satchain.results import strict_json
+
+    truth = scene.truth_dict
+    edges_only = dict(truth, items=[it for it in truth["items"] if it.get("kind") == EDGES.kind])
+    auto = measured.auto
+    auto = dataclasses.replace(auto, items=tuple(it for it in auto.items if it.kind == EDGES.kind), skipped=())
+    c = compare(Measurements(auto, measured.snr), _predict(config, budget, edges_only, sim), config.tolerances)
+    return strict_json([d.to_dict() for d in c.details[EDGES.key]])
+
+
+def run_in_memory(
+    config: RunConfig, *, progress: Progress | None = None, after_stage=None, scene_view=None
+) -> RunResult:
     """Every stage but the report, in memory (see :func:`satchain.run`). ``after_stage(name, **outputs)``, if
     given, is called once the scene, the simulation and the measurements are ready (the run folder's figure
-    helpers start on what those alone decide while the run goes on)."""
+    helpers start on what those alone decide while the run goes on). ``scene_view(scene)``, if given: what the
+    simulation renders the scene's windows from (the run folder keeps the thumbnails' ground truth as they are
+    rendered: :class:`satchain.report.truth_crops.TruthCrops`)."""
     report = progress or (lambda stage, done, total: None)
     timings: dict[str, float] = {}
 
@@ -178,7 +205,7 @@ def run_in_memory(config: RunConfig, *, progress: Progress | None = None, after_
     budget = timed("budget", _stage_budget, config)
     scene = timed("scene", _stage_scene, config)
     after("scene", budget=budget, scene=scene)
-    sim = timed("simulate", _stage_simulate, config, budget, scene)
+    sim = timed("simulate", functools.partial(_stage_simulate, scene_view=scene_view), config, budget, scene)
     after("simulate", budget=budget, scene=scene, sim=sim)
     measured = timed(  # the image's own GSD and the simulated detector's full scale
         "measure", _stage_measure, sim.system or budget.system, scene, sim, config.simulation.noise
@@ -232,12 +259,20 @@ class _EarlyFigures:
         self.config, self.out, self.jobs = config, out, jobs
         self.thumbnails: list[tuple[dict, tuple, int]] = []  # (item, box, job of its ground-truth panel)
         self.measured = False  # the measured figures handed over
+        self.crops = None  # the thumbnails' ground truth, kept as the simulation renders it
+        self.edges: list[dict] | None = None  # results.json's edges, their figures handed over
+        self.edge_curves: list[dict] | None = None
+
+    def scene_view(self, scene):
+        """:func:`run_in_memory`'s ``scene_view``: the scene, keeping the thumbnails' ground truth."""
+        return scene if self.crops is None else self.crops
 
     def __call__(self, stage: str, *, budget: BudgetResult, scene: SceneResult, sim=None, measured=None) -> None:
         from satchain.report import run_figures
         from satchain.report._save import write_text
         from satchain.report.budget import write_budget_outputs
-        from satchain.report.gallery import thumbnail_boxes, truth_panel
+        from satchain.report.gallery import grey8_truth_panel, thumbnail_boxes, truth_panel
+        from satchain.report.truth_crops import TruthCrops
         from satchain.scene import SiemensStar
 
         out, jobs = self.out, self.jobs
@@ -248,19 +283,42 @@ class _EarlyFigures:
             write_text(out / "images" / "scene.truth.json", json.dumps(truth, indent=1))
             p = self.config.scene.overview_pixel_m
             jobs.submit(run_figures.render_scene_overview, scene.scene, truth, p, out / "figures" / "fig1_scene.png")
+            rows, cols = scene.scene.shape_px(scene.pixel_m)  # the image's extent is not known yet: the scene's
+            boxes = [box for _, box in thumbnail_boxes(truth, (cols * scene.pixel_m, rows * scene.pixel_m))]
+            self.crops = TruthCrops(scene.scene, boxes, scene.pixel_m)
         elif stage == "simulate":
             system = sim.system or budget.system  # the camera simulated (as built)
             args, kwargs = _images_call(self.config, system, sim, out)
             jobs.submit(write_images, *args, **kwargs)
             gsd, p = float(system.gsd_act_m), float(self.config.scene.pixel_m)
             extent = (sim.image.shape[1] * gsd, sim.image.shape[0] * gsd)
-            for it, box in thumbnail_boxes(scene.truth_dict, extent):  # the exact star render first: the longest
-                job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
+            crops, self.crops = self.crops, None
+            for it, box in thumbnail_boxes(scene.truth_dict, extent):
+                grey = None if crops is None else crops.take(box)
+                if grey is not None:  # as the simulation rendered it: only the PNG is left to make
+                    job = jobs.submit(grey8_truth_panel, grey, p)
+                else:  # rendered again; the exact star first, the longest render
+                    job = jobs.submit(truth_panel, scene.scene, box, p, first=it["kind"] == SiemensStar.kind)
                 self.thumbnails.append((it, box, job))
+            if crops is not None:
+                crops.release()
         elif stage == "measure":  # a view of the run so far: what those figures read
             partial = RunResult(self.config, budget, scene, sim, measured, None, None, {})  # type: ignore[arg-type]
             run_figures.submit_measured_figures(ReportInputs(partial, out, {}), jobs)
             self.measured = True
+            self._edge_figures(partial, budget, scene, sim, measured)
+
+    def _edge_figures(self, partial: RunResult, budget, scene, sim, measured) -> None:
+        """Hand over the edges' figures, from the edges' results as the compare stage will give them."""
+        from satchain.report import run_figures
+        from satchain.report.curves import edge_curves
+        from satchain.report.kinds import EDGES
+
+        edges = _edge_results(self.config, budget, scene, sim, measured)
+        if edges:
+            view = ReportInputs(partial, self.out, {EDGES.key: edges})
+            self.edges, self.edge_curves = edges, edge_curves(view)
+            run_figures.submit_edge_figures(view, self.edge_curves, self.jobs)
 
 
 def write_images(d: Path, image: np.ndarray, focal_plane: np.ndarray, *, units: str, bit_depth: int, pixel_m: float,
@@ -299,6 +357,7 @@ def write_run_directory(
     from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
     from satchain.report.gallery import assemble_thumbnail, thumbnail_crops
+    from satchain.report.kinds import EDGES
     from satchain.report.summary_csv import write_summary_csv
     from satchain.runconfig import config_to_toml
 
@@ -313,11 +372,17 @@ def write_run_directory(
             early = _EarlyFigures(result.config, out, jobs)
             early("scene", budget=result.budget, scene=result.scene)
             early("simulate", budget=result.budget, scene=result.scene, sim=result.simulation)
-        shown = run_figures.write_run_figures(view, jobs=jobs, measured_figures=not early.measured)
+        early_edges = early.edges is not None and early.edges == results.get(EDGES.key)  # as compared: drawn
+        shown = curves.build_curves(view, edges=early.edge_curves if early_edges else None)
+        run_figures.write_run_figures(view, shown, jobs=jobs, measured_figures=not early.measured,
+                                      edge_figures=early.edges is None)  # fmt: skip
         curves.write_curves(shown, out / "curves")
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
         crops = thumbnail_crops(view, [box for _, box, _ in early.thumbnails])
+    if early.edges is not None and not early_edges:  # never expected: the edges' figures drawn again, as compared
+        with FigureJobs(0) as here:
+            run_figures.submit_edge_figures(view, shown["edges"], here)
     thumbnails = [assemble_thumbnail(it, box, jobs.result(job), *c)
                   for (it, box, job), c in zip(early.thumbnails, crops, strict=True)]  # fmt: skip
     html.write_report(view, out / "report.html", thumbnails=thumbnails)
@@ -416,7 +481,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
             jobs.start()
             early = _EarlyFigures(config, staging, jobs)
             try:
-                result = run_in_memory(config, progress=checked, after_stage=early)
+                result = run_in_memory(config, progress=checked, after_stage=early, scene_view=early.scene_view)
             except BaseException:
                 jobs.kill()
                 raise

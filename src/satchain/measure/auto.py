@@ -68,6 +68,7 @@ from satchain.measure._auto_items import bars_item, edge_item, star_item
 from satchain.measure._auto_wedge import wedge_item
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import to_jsonable
+from satchain.measure._keys import RESULT_KEY
 from satchain.scene.layout import OBJECT_KINDS
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
@@ -102,10 +103,10 @@ class Measurer:
 MEASURERS: dict[str, Measurer] = {
     m.kind: m
     for m in (
-        Measurer(SlantedEdge.kind, "slanted_edges", edge_item),
-        Measurer(SiemensStar.kind, "siemens_star", star_item),
-        Measurer(BarTarget.kind, "bar_targets", bars_item),
-        Measurer(HyperbolicWedge.kind, "hyperbolic_wedge", wedge_item),
+        Measurer(SlantedEdge.kind, RESULT_KEY[SlantedEdge.kind], edge_item),
+        Measurer(SiemensStar.kind, RESULT_KEY[SiemensStar.kind], star_item),
+        Measurer(BarTarget.kind, RESULT_KEY[BarTarget.kind], bars_item),
+        Measurer(HyperbolicWedge.kind, RESULT_KEY[HyperbolicWedge.kind], wedge_item),
     )
 }
 

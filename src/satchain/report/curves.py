@@ -25,7 +25,7 @@ from satchain.prediction import WIDE_COMPONENTS
 from satchain.report._save import write_text
 from satchain.report.kinds import BARS, EDGES, STARS, WEDGES
 
-__all__ = ["CSV_FAMILIES", "build_curves", "crossing", "predicted_lsf", "write_curves"]
+__all__ = ["CSV_FAMILIES", "build_curves", "crossing", "edge_curves", "predicted_lsf", "write_curves"]
 
 #: CSV file names (under ``curves/``), one per curve family.
 CSV_FAMILIES = (
@@ -85,6 +85,11 @@ def predicted_lsf(otf, direction: tuple[float, float], x_px) -> tuple[np.ndarray
     esf = np.concatenate([[0.0], np.cumsum(0.5 * (lsf[1:] + lsf[:-1]) * np.diff(x))])
     esf = (esf - esf[0]) / (esf[-1] - esf[0]) if esf[-1] != esf[0] else esf
     return lsf, esf
+
+
+def edge_curves(ctx) -> list[dict]:
+    """The slanted edges' part of :func:`build_curves`: ``ctx.comparison["results"]`` needs only its edges."""
+    return _edge_curves(ctx, ctx.comparison["results"])
 
 
 def _edge_curves(ctx, res: dict) -> list[dict]:
@@ -168,12 +173,13 @@ def _wedge_curves(ctx, res: dict) -> list[dict]:
     return out
 
 
-def build_curves(ctx) -> dict[str, Any]:
-    """Measured and predicted curves of every target of a run (arrays; see :func:`write_curves`)."""
+def build_curves(ctx, *, edges: list[dict] | None = None) -> dict[str, Any]:
+    """Measured and predicted curves of every target of a run (arrays; see :func:`write_curves`); ``edges``:
+    the edges' curves when already built (:func:`edge_curves`)."""
     res = ctx.comparison["results"]
     b = ctx.budget or {}
     return {
-        "edges": _edge_curves(ctx, res),
+        "edges": _edge_curves(ctx, res) if edges is None else edges,
         "stars": list(res.get(STARS.key, [])),
         "bars": list(res.get(BARS.key, [])),
         "wedges": _wedge_curves(ctx, res),

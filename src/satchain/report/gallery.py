@@ -27,14 +27,17 @@ __all__ = [
     "GALLERY_KINDS",
     "assemble_thumbnail",
     "draw_image_with_rois",
+    "grey8_truth_panel",
     "image_extent",
     "image_rois_args",
     "item_thumbnail",
+    "panel_window",
     "plot_image_with_rois",
     "target_thumbnails",
     "thumbnail_boxes",
     "thumbnail_calls",
     "thumbnail_crops",
+    "to_grey8",
     "truth_panel",
 ]
 
@@ -118,15 +121,28 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
         save_figure(fig, path, dpi=100)
 
 
+def to_grey8(arr: np.ndarray) -> np.ndarray:
+    """Reflectance 0..1 -> 8-bit grey levels, pixel by pixel (NaN: 0), in float64 (in place on one copy)."""
+    v = np.multiply(arr, 255.0, dtype=np.float64)
+    np.nan_to_num(v, copy=False)
+    np.round(v, out=v)
+    np.clip(v, 0, 255, out=v)
+    return v.astype(np.uint8)
+
+
 def _png(arr: np.ndarray) -> tuple[bytes, int, int]:
     """Reflectance 0..1 -> 8-bit grey PNG bytes (block-averaged down to ``MAX_SIDE_PX``)."""
-    from PIL import Image
-
     k = max(1, math.ceil(max(arr.shape) / MAX_SIDE_PX))
     if k > 1:
         h, w = (arr.shape[0] // k) * k, (arr.shape[1] // k) * k
         arr = arr[:h, :w].reshape(h // k, k, w // k, k).mean(axis=(1, 3))
-    u8 = np.clip(np.round(np.nan_to_num(arr) * 255.0), 0, 255).astype(np.uint8)
+    return _png_grey8(to_grey8(arr))
+
+
+def _png_grey8(u8: np.ndarray) -> tuple[bytes, int, int]:
+    """8-bit grey levels -> PNG bytes, width, height."""
+    from PIL import Image
+
     buf = io.BytesIO()
     Image.fromarray(u8, mode="L").save(buf, format="PNG", compress_level=6)
     return buf.getvalue(), u8.shape[1], u8.shape[0]
@@ -200,12 +216,24 @@ def thumbnail_calls(ctx) -> list[tuple]:
     return [(scene, it, box, p, *c) for (it, box), c in zip(shown, crops, strict=True)]
 
 
+def panel_window(box, p: float) -> tuple[int, int, int, int]:
+    """The pixels (row0, col0, height, width) at ``p`` of a thumbnail's ground-truth panel over ``box`` (m)."""
+    x0, y0, x1, y1 = box
+    return int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1)
+
+
 def truth_panel(scene, box, p: float) -> dict | None:
     """A thumbnail's ground-truth panel: ``scene`` rendered over ``box`` (m) at ``p`` (its long part, so a
     run has a helper process make it while it measures)."""
-    x0, y0, x1, y1 = box
-    win = (int(y0 / p), int(x0 / p), max(int(math.ceil((y1 - y0) / p)), 1), max(int(math.ceil((x1 - x0) / p)), 1))
-    return _panel("ground truth", np.asarray(scene.render(win, pixel_m=p), float), p)
+    return _panel("ground truth", np.asarray(scene.render(panel_window(box, p), pixel_m=p), float), p)
+
+
+def grey8_truth_panel(u8: np.ndarray, p: float) -> dict:
+    """:func:`truth_panel` from its pixels already as grey levels (:func:`to_grey8` of the render; at most
+    ``MAX_SIDE_PX`` on a side): a run keeps them as its simulation renders the scene
+    (:class:`satchain.report.truth_crops.TruthCrops`), so that only the PNG is made here."""
+    png, wpx, hpx = _png_grey8(u8)
+    return {"title": "ground truth", "png": png, "width": wpx, "height": hpx, "pixel_m": p}
 
 
 def _panel(title: str, arr: np.ndarray, pix: float) -> dict | None:

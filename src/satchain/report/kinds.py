@@ -1,10 +1,10 @@
 """The report layer's registry of target kinds: how each measurable scene kind is shown.
 
 Each entry names the scene ``kind`` (the item class's ``kind`` constant), the ``key`` its measurements are
-grouped under in ``measured``/``results.json`` (the measure layer's :data:`satchain.measure.auto.MEASURERS`
-owns it), the words and colour the figures use, the region overlay drawn on its thumbnails
-(:mod:`satchain.report.overlays`) and the figure ``satchain measure auto`` writes for it
-(:mod:`satchain.report.measure_plots`).  A new target kind is one entry here and one in the measure layer.
+grouped under in ``measured``/``results.json`` (the measure layer owns it: :data:`satchain.measure._keys.RESULT_KEY`,
+which :data:`satchain.measure.auto.MEASURERS` reads too), the words and colour the figures use, the region
+overlay drawn on its thumbnails (:mod:`satchain.report.overlays`) and the figure ``satchain measure auto``
+writes for it (:mod:`satchain.report.measure_plots`).  A new target kind is one entry here and one in the measure layer.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from satchain.measure.auto import MEASURERS
+from satchain.measure._keys import RESULT_KEY
 from satchain.report import overlays
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
@@ -39,7 +39,7 @@ class ReportKind:
 
 
 def _entry(cls, label: str, colour: str, overlay, plot_name: str) -> ReportKind:
-    return ReportKind(cls.kind, MEASURERS[cls.kind].key, label, colour, overlay, plot_name)
+    return ReportKind(cls.kind, RESULT_KEY[cls.kind], label, colour, overlay, plot_name)
 
 
 #: The registry, in the order the report lists the kinds.

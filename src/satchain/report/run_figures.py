@@ -24,6 +24,8 @@ __all__ = [
     "plot_target_chain",
     "target_chain_args",
     "render_scene_overview",
+    "submit_edge_figures",
+    "submit_measured_figures",
     "write_run_figures",
 ]
 
@@ -145,33 +147,45 @@ def submit_measured_figures(ctx, jobs) -> None:
             jobs.submit(draw_target_chain, *target_chain_args(ctx, item), d / f"fig4_wedge_{item['id']}.png")
 
 
-def write_run_figures(ctx, curves: dict | None = None, *, jobs=None, measured_figures: bool = True) -> dict:
+def submit_edge_figures(ctx, edges: list[dict], jobs) -> None:
+    """Hand ``jobs`` the slanted edges' figures: each edge's comparison (``edges``: its curves,
+    :func:`satchain.report.curves.edge_curves`) and every edge's MTF on one plot. They read the edges' results
+    alone, so a run hands them over before it compares the other targets."""
+    d, tol = ctx.out / "figures", ctx.config.tolerances
+    for c in edges:
+        jobs.submit(cp.plot_edge_comparison, c, d / f"edge_{c['id']}.png", tol=tol.edge_mtf_at_nyquist)
+    r = ctx.comparison["results"]
+    if r.get(EDGES.key):
+        jobs.submit(plot_edges_overview, r[EDGES.key], d / "edges_mtf.png")
+
+
+def write_run_figures(ctx, curves: dict | None = None, *, jobs=None, measured_figures: bool = True,
+                      edge_figures: bool = True) -> dict:  # fmt: skip
     """All run figures into ``ctx.out / "figures"``; returns the curves they show
     (:func:`satchain.report.curves.build_curves`, built here when not given). ``jobs``: a
     :class:`satchain.report._jobs.FigureJobs` that draws the figures made of plain data in helper processes (the
-    caller waits for it); without it every figure is drawn here. ``measured_figures``: False when
-    :func:`submit_measured_figures` already handed those to ``jobs``."""
+    caller waits for it); without it every figure is drawn here. ``measured_figures``, ``edge_figures``: False
+    when :func:`submit_measured_figures`, :func:`submit_edge_figures` already handed those to ``jobs``."""
     from satchain.report._jobs import FigureJobs
     from satchain.report.curves import build_curves
 
     if jobs is None:
         with FigureJobs(0) as inline:
-            return write_run_figures(ctx, curves, jobs=inline, measured_figures=measured_figures)
+            return write_run_figures(
+                ctx, curves, jobs=inline, measured_figures=measured_figures, edge_figures=edge_figures
+            )
     d = ctx.out / "figures"
-    r = ctx.comparison["results"]
     curves = build_curves(ctx) if curves is None else curves
     tol = ctx.config.tolerances
     # plain data first: the helper processes start on them while the figures of live objects are drawn here
-    for c in curves["edges"]:
-        jobs.submit(cp.plot_edge_comparison, c, d / f"edge_{c['id']}.png", tol=tol.edge_mtf_at_nyquist)
+    if edge_figures:
+        submit_edge_figures(ctx, curves["edges"], jobs)
     for st in curves["stars"]:
         jobs.submit(cp.plot_star_comparison, st, d / f"star_{st['id']}.png", tol=tol.star_mtf)
     for b in curves["bars"]:
         jobs.submit(cp.plot_bars_comparison, b, d / f"bars_{b['id']}.png", tol=tol.bar_ctf)
     for w in curves["wedges"]:
         jobs.submit(cp.plot_wedge_comparison, w, d / f"wedge_{w['id']}.png", tol_rel=tol.wedge_resolution_rel)
-    if r.get(EDGES.key):
-        jobs.submit(plot_edges_overview, r[EDGES.key], d / "edges_mtf.png")
     tp = getattr(ctx.simulator, "time_path", None)
     if tp is not None:  # formed in time: the line of sight and each row's displacement
         from satchain.report.motion_plot import plot_line_of_sight
