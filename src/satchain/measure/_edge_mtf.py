@@ -29,6 +29,7 @@ __all__ = ["adaptive_mtf", "bin_esf", "choose_bins", "flatten_rows", "rise_width
 _W_MIN_PX = 5.0  # smallest half-width of the raw-LSF window (px)
 _W_MIN_RISE = 2.5  # ... and in units of the 10-90 % rise distance
 _ENDS: dict = {}  # kernel -> the smoothing's end matrices (:meth:`_Lsf._s_ends`), a few kernels per run
+_TRANSFER: dict = {}  # (kernel, bin width, frequencies) -> the kernel's transfer (:func:`_transfer`)
 _CHUNK_F = 48  # frequencies per chunk of the noise propagation (arrays of 48 x bins stay in cache)
 _TAIL_SMOOTH_PX = 1.25  # Gaussian smoothing of the ESF outside the window (px); 0.75 doubled the noise at 0.25 cy/px
 
@@ -213,9 +214,7 @@ class _Lsf:
                 return self._s(p)
             out[...] = self._s(p)
             return out
-        t = np.arange(1, r + 1) * self.w
-        h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, t)) @ k[r + 1 :]
-        out = np.multiply(h[:, None], p, out=out)
+        out = np.multiply(_transfer(k, self.w, f)[:, None], p, out=out)
         left, right = self._s_ends()
         out[:, :r] = p[:, : 2 * r + 1] @ left
         out[:, -r:] = p[:, -(2 * r + 1) :] @ right
@@ -270,6 +269,21 @@ class _Lsf:
         return out if spec.ndim == 2 else out[0]
 
 
+def _transfer(kernel: np.ndarray, w: float, f: np.ndarray) -> np.ndarray:
+    """The symmetric ``kernel``'s transfer at ``f`` (cy/px) on bins of ``w`` px: ``k_0 + 2 sum_t k_t cos(2 pi f t
+    w)``, kept per (kernel, w, f): the edges of a chart share their bins and frequencies (read-only)."""
+    key = (kernel.tobytes(), float(w), f.tobytes())
+    h = _TRANSFER.get(key)
+    if h is None:
+        r = kernel.size // 2
+        h = kernel[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, np.arange(1, r + 1) * w)) @ kernel[r + 1 :]
+        h.flags.writeable = False
+        _TRANSFER[key] = h
+        if len(_TRANSFER) > 64:
+            _TRANSFER.pop(next(iter(_TRANSFER)))
+    return h
+
+
 def _fourier_at(f: np.ndarray, xm: np.ndarray) -> np.ndarray:
     """``exp(-2 pi i f xm)``, shape (f, xm), for ``f`` uniform from 0 (:meth:`_Lsf.fourier`'s factorisation)."""
     n, b = f.size, 16
@@ -322,7 +336,7 @@ def spectrum_sigma(op: _Lsf, lsf: np.ndarray, f: np.ndarray, var_bins: np.ndarra
     mag = np.abs(spec)
     u = np.where(mag > 0, np.conj(spec * sgn) / np.maximum(mag, 1e-300), 1.0) * (w / m0a)
     ur, ui, g = u.real, u.imag, mag / m0a**2
-    h = k[r] + 2.0 * np.cos(2 * np.pi * np.outer(f, np.arange(1, r + 1) * w)) @ k[r + 1 :]
+    h = _transfer(k, w, f)
     q = 1.0 - h
     ph = 2 * np.pi * f * w
     cp, sp = np.cos(ph), np.sin(ph)
@@ -354,11 +368,11 @@ def _ends_noise(op: _Lsf, f, coefs, var_bins) -> np.ndarray:
     r, m = op.kernel.size // 2, op.xm.size
     left, right = op._s_ends()
     y0 = op._y0(op.win)
-    cols = np.r_[0 : 2 * r + 1, m - 2 * r - 1 : m]
+    cols = np.concatenate([np.arange(2 * r + 1), np.arange(m - 2 * r - 1, m)])
     e = _fourier_at(f, op.xm[cols])
     p = ur[:, None] * e.real - ui[:, None] * e.imag  # Re(u e)
     # y only at the r + 1 bins of each end (the smoothing's mirror inside r of them, the plain form at bin r)
-    need = np.r_[0 : r + 1, cols.size - r - 1 : cols.size]
+    need = np.concatenate([np.arange(r + 1), np.arange(cols.size - r - 1, cols.size)])
     s = np.empty((f.size, 2 * r + 2))
     s[:, :r] = p[:, : 2 * r + 1] @ left
     s[:, r] = h * p[:, r]
@@ -435,7 +449,8 @@ def _row(ops: _Lsf, k: int) -> _Lsf:
     """The single-window map of row ``k`` of a batched :class:`_Lsf`."""
     op = object.__new__(_Lsf)
     op.w, op.xm, op.kernel = ops.w, ops.xm, ops.kernel
-    op._y0_cache = None
+    y0 = getattr(ops, "_y0_cache", None)  # the batch's sensitivity rows (each row's own, computed alike)
+    op._y0_cache = None if y0 is None or y0.ndim != 2 else y0[k]
     op.win = ops.win[k] if ops.win.ndim == 2 else ops.win
     return op
 
