@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage as ndi
 
+from satchain.errors import InputError
 from satchain.measure import _edge_checks as checks
 from satchain.measure import _edge_lines as lines
 from satchain.measure import _edge_locate as locate
@@ -404,3 +405,32 @@ def test_gauss_newton_stops_once_the_geometric_tail_is_below_the_tolerance(s0, r
     grow = prev.copy()
     grow[0, 2] = 1.5 * prev[0, 2]  # one line's position step grows
     assert lines._converged(grow, prev, tol_ac) == bool(grow[0, 2] < tol and np.all(grow < tol))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    slope=st.floats(-0.5, 0.5),
+    x0=st.floats(20.0, 40.0),
+    nudge=st.floats(-0.3, 0.3),
+    half=st.integers(4, 12),
+    seed=st.integers(0, 10**6),
+)
+def test_equal_window_bounds_give_equal_ridge_centroids(slope, x0, nudge, half, seed):
+    """The edge search stops when a new fit leaves every line's window bounds as they were: the centroids
+    (and every output of ridge_centroids) are then the same, bit for bit; different bounds are told apart."""
+    rng = np.random.default_rng(seed)
+    g = rng.uniform(0.0, 1.0, (40, 60))
+    valid = rng.uniform(size=g.shape) > 0.02
+    rows = np.arange(40, dtype=float)
+    a, b = np.array([slope, x0]), np.array([slope, x0 + nudge * 1e-3])
+    same = np.array_equal(locate._window_bounds(a, rows, half), locate._window_bounds(b, rows, half))
+    for v in (None, valid):
+        try:
+            ra = locate.ridge_centroids(g, g, a, half, v)
+            rb = locate.ridge_centroids(g, g, b, half, v)
+        except InputError:  # (too few lines kept: refused alike when the bounds are equal)
+            continue
+        if same:
+            assert all(np.array_equal(p, q) for p, q in zip(ra, rb, strict=True))
+    far = np.array([slope, x0 + 1.0])  # a whole pixel: every bound moves
+    assert not np.array_equal(locate._window_bounds(a, rows, half), locate._window_bounds(far, rows, half))

@@ -215,6 +215,14 @@ def ridge_centroids(work, g, coef, half, valid=None):
     return rk[good], cen, tot[good], int(np.count_nonzero(keep))
 
 
+def _window_bounds(coef, rows: np.ndarray, half: int) -> np.ndarray:
+    """What :func:`ridge_centroids`' windows (and the lines it keeps) depend on: ``floor`` and ``ceil`` of each
+    line's ``centre -+ half``; equal bounds give equal centroids."""
+    centre = np.polyval(coef, rows)
+    lo, hi = centre - half, centre + half
+    return np.stack([np.floor(lo), np.ceil(lo), np.floor(hi), np.ceil(hi)])
+
+
 def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     """Edge position per row: windowed centroid of the derivative + robust polynomial fit, iterated.
 
@@ -238,10 +246,14 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     coef, _ = robust_polyfit(rows[seen], peaks, 1, scale_floor=1.0, tol=_FIRST_TOL_PX)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
-    last = r_prev = cen_prev = None
+    last = r_prev = cen_prev = bounds = None
     for it in range(4):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
+        new_bounds = _window_bounds(coef, rows, half)
+        if cur == last and np.array_equal(new_bounds, bounds):
+            break  # the same windows: the same centroids again, and the fit (deterministic) would repeat exactly
+        bounds = new_bounds
         r_used, cen, step, n_keep = ridge_centroids(work, g, coef, half, valid)
         if cur == last and np.array_equal(r_used, r_prev) and np.array_equal(cen, cen_prev):
             break  # the same centroids again: the fit (deterministic) would repeat exactly
