@@ -434,3 +434,18 @@ def test_equal_window_bounds_give_equal_ridge_centroids(slope, x0, nudge, half, 
             assert all(np.array_equal(p, q) for p, q in zip(ra, rb, strict=True))
     far = np.array([slope, x0 + 1.0])  # a whole pixel: every bound moves
     assert not np.array_equal(locate._window_bounds(a, rows, half), locate._window_bounds(far, rows, half))
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(2, 120), t0=st.sampled_from([0.0, 37.0]), seed=st.integers(0, 10**6))
+def test_nested_degree_fits_equal_each_degree_fitted_alone(n, t0, seed):
+    """pick_degree's fits of degree 1, 2 and 3 from one Cholesky factor (a lower degree's matrix is the
+    leading block) = each fitted on its own, to rounding; degenerate abscissae (fewer points than terms) alike."""
+    rng = np.random.default_rng(seed)
+    t = t0 + np.sort(rng.choice(np.arange(3 * n), n, replace=False)).astype(float)
+    y = 5.0 + 0.1 * t + rng.normal(0.0, 0.3, n)
+    poly = locate._Poly(t)
+    nested = poly.nested_fits(y)
+    for k in (1, 2, 3):
+        alone = poly.value(poly.fit(y, k))
+        assert np.allclose(nested[k], alone, rtol=0, atol=1e-12 * (1 + np.abs(y).max()))

@@ -82,6 +82,20 @@ class _Poly:
             return np.linalg.lstsq(self.pt[:n1].T * sw[:, None], y * sw, rcond=None)[0]
         return np.array(q)
 
+    def nested_fits(self, y: np.ndarray) -> dict:
+        """``{k: value(fit(y, k))}`` for k = 1, 2, 3 (unweighted), from one factorisation of the cubic's moment
+        matrix: each lower degree's is its leading block, the same factor."""
+        mom = self.pt[:7].sum(axis=1).tolist()
+        lo, rows = _cholesky_rows(mom, 4)
+        out = {}
+        for k in (1, 2, 3):
+            if k + 1 <= rows:
+                q = np.array(_cholesky_back(lo, (self.pt[: k + 1] @ y).tolist(), k + 1))
+            else:
+                q = self.fit(y, k)
+            out[k] = self.value(q)
+        return out
+
     def value(self, q: np.ndarray) -> np.ndarray:
         """The polynomial of ascending coefficients ``q`` at the abscissae."""
         return q @ self.pt[: q.size]
@@ -115,16 +129,28 @@ def _cholesky_solve(mom: list, rhs: list):
         z1 = (rhs[1] - l10 * z0) / l11
         q1 = z1 / l11
         return [(z0 - l10 * q1) / l00, q1]
+    lo, rows = _cholesky_rows(mom, n)
+    return _cholesky_back(lo, rhs, n) if rows == n else None
+
+
+def _cholesky_rows(mom: list, n: int):
+    """The Cholesky factor (lists) of the Hankel matrix ``mom[i + j]``, row by row, and how many leading rows
+    are positive definite (the factor of a leading block is the leading block of the factor)."""
     lo = [[0.0] * n for _ in range(n)]
     for i in range(n):
         for j in range(i + 1):
             v = mom[i + j] - sum(lo[i][k] * lo[j][k] for k in range(j))
             if i == j:
                 if not v > 1e-13 * abs(mom[2 * i]):
-                    return None
+                    return lo, i
                 lo[i][i] = math.sqrt(v)
             else:
                 lo[i][j] = v / lo[j][j]
+    return lo, n
+
+
+def _cholesky_back(lo: list, rhs: list, n: int) -> list:
+    """Solve with the leading ``n`` rows of the factor ``lo`` (forward, then back substitution)."""
     z = [0.0] * n
     for i in range(n):
         z[i] = (rhs[i] - sum(lo[i][k] * z[k] for k in range(i))) / lo[i][i]
@@ -173,7 +199,7 @@ def pick_degree(t, y, w):
     t, y = t[use], y[use]
     poly = _Poly(t)
     best = 1
-    fits = {k: poly.value(poly.fit(y, k)) for k in (1, 2, 3)}
+    fits = poly.nested_fits(y)
     rss = {k: float(np.sum((y - fits[k]) ** 2)) for k in (1, 2, 3)}
     for k in (2, 3):
         dof = t.size - k - 1
