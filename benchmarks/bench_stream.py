@@ -73,9 +73,11 @@ def worker(args) -> None:
     """One run in this process: prints a JSON line. ``args.warmup``: first a streamed run of that side, untimed
     (the process's one-time costs -- first touch of its working set, FFT plans -- are then paid)."""
     from satchain import load_preset
+    from satchain._memory import keep_freed_memory
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.stream import choose_streamed, coarse_store, stream_bytes, write_streamed
 
+    keep_freed_memory()  # the process set up as ``satchain simulate`` sets up its own
     if getattr(args, "warmup", 0):
         warm = argparse.Namespace(**{**vars(args), "size": args.warmup, "warmup": 0, "tiff": None, "crop": 0})
         with contextlib.redirect_stdout(stdio.StringIO()):

@@ -327,7 +327,10 @@ def simulate(
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size); with several inputs or
     --sweep, one image per case into the -o directory, with manifest.json / manifest.csv."""
+    from satchain._memory import keep_freed_memory
     from satchain.engine.files import simulate_file
+
+    keep_freed_memory()  # this process is ours: tile buffers reused, not faulted in anew
 
     system_obj = _system(preset, system)
     if len(inputs) > 1 or sweep:
@@ -422,9 +425,11 @@ def run(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     import satchain
+    from satchain._memory import keep_freed_memory
     from satchain.pipeline import STAGES
     from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
 
+    keep_freed_memory()  # this process is ours: tile buffers reused, not faulted in anew
     if print_config:
         print(DEFAULT_CONFIG_TOML, end="")
         return

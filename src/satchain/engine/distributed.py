@@ -51,29 +51,14 @@ def _require(module: str):
         ) from None
 
 
-_ALLOCATOR_TUNED = False
-
-
 def _keep_freed_memory() -> None:
-    """Once per worker process (glibc only): let ``free`` keep up to 256 MiB and serve requests up to 32 MiB
-    from the heap. Dask starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's
-    mmap threshold at 128 KiB: every tile buffer is then a fresh mapping whose pages are faulted in again on
-    each task, which made a stage-1 tile up to twice as slow as in one process."""
-    global _ALLOCATOR_TUNED
-    if _ALLOCATOR_TUNED:
-        return
-    _ALLOCATOR_TUNED = True
-    import ctypes
-    import ctypes.util
+    """:func:`satchain._memory.keep_freed_memory` in a worker process: Dask starts its workers with
+    ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's mmap threshold at 128 KiB: every tile buffer is
+    then a fresh mapping whose pages are faulted in again on each task, which made a stage-1 tile up to twice
+    as slow as in one process."""
+    from satchain._memory import keep_freed_memory
 
-    name = ctypes.util.find_library("c")
-    try:
-        libc = ctypes.CDLL(name) if name else None
-        if libc is not None and hasattr(libc, "mallopt"):
-            libc.mallopt(-1, 256 << 20)  # M_TRIM_THRESHOLD
-            libc.mallopt(-3, 32 << 20)  # M_MMAP_THRESHOLD (glibc's largest)
-    except OSError:  # not glibc: nothing to tune
-        pass
+    keep_freed_memory()
 
 
 def _decimate_tile(sim: Simulator, source, tile: Tile, keep_memory: bool = False) -> tuple[Tile, np.ndarray]:
