@@ -425,11 +425,9 @@ def run(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     import satchain
-    from satchain._memory import keep_freed_memory
     from satchain.pipeline import STAGES
     from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
 
-    keep_freed_memory()  # this process is ours: tile buffers reused, not faulted in anew
     if print_config:
         print(DEFAULT_CONFIG_TOML, end="")
         return
