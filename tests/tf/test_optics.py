@@ -446,3 +446,25 @@ def test_oversized_fft_is_refused_up_front_saying_how_much():
         PupilOTF(**PUPIL, params=PupilParams(samples_across_pupil=20000))
     with pytest.raises(ResourceLimitError, match="max_fft_bytes"):
         pupil_psf(**PUPIL, samples_per_lambda_f_number=8, params=PupilParams(samples_across_pupil=4096))
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    ny=st.integers(8, 90),
+    nx=st.integers(1, 40),
+    centred=st.booleans(),
+    obscuration=st.sampled_from([0.0, 0.3]),
+    wfe=st.sampled_from([0.0, 0.05]),
+)
+def test_otf_on_an_outer_grid_equals_the_full_grid_bitwise(ny, nx, centred, obscuration, wfe):
+    """A clear or obscured pupil's OTF is computed once per distinct |fy| row on an outer grid (broadcast
+    views: the engine's spectra): the same floats as on the full grid, mirrored rows or not."""
+    o = Optics(aperture_diameter_m=0.1, f_number=10.0, wavelengths_m=(450e-9, 600e-9),
+               obscuration_ratio=obscuration, wfe_rms_waves=wfe)  # fmt: skip
+    otf = make_diffraction_otf(o)
+    m = np.fft.fftfreq(ny) * ny if centred else np.arange(ny, dtype=float)
+    fy = (m * 7.3)[:, None]
+    fx = (np.arange(nx) * 5.1)[None, :]
+    grid = np.broadcast_arrays(fx, fy)
+    full = [np.ascontiguousarray(a) for a in grid]
+    assert np.array_equal(otf(*grid), otf(*full))

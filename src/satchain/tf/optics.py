@@ -100,8 +100,10 @@ class DiffractionOTF:
     def __call__(self, fx_cy_per_mm, fy_cy_per_mm) -> np.ndarray:
         """Polychromatic OTF at focal-plane frequencies (cy/mm); real when :attr:`is_real`."""
         fx, fy = _broadcast_freqs(fx_cy_per_mm, fy_cy_per_mm)
-        fr = np.hypot(fx, fy)
-        out = np.zeros(fx.shape, dtype=np.float64 if self.is_real else np.complex128)
+        rows = _radial_rows(fx, fy) if self.pupils is None else None
+        # a clear (or obscured) pupil's OTF depends on |f| only: on an outer grid, once per distinct |fy| row
+        fr = np.hypot(fx, fy) if rows is None else np.hypot(rows[0][None, :], rows[1][:, None])
+        out = np.zeros(fr.shape, dtype=np.float64 if self.is_real else np.complex128)
         for i, (w, lam) in enumerate(zip(self.weights, self.wavelengths_m, strict=True)):
             if w == 0:
                 continue
@@ -114,7 +116,19 @@ class DiffractionOTF:
             if self.wfe_rms_waves[i] > 0:
                 mono = mono * shannon_atf(fr / cutoff, self.wfe_rms_waves[i])
             out += w * mono
-        return out
+        return out if rows is None else out[rows[2]]
+
+
+def _radial_rows(fx: np.ndarray, fy: np.ndarray):
+    """On an outer grid (``fx`` varying along the last axis only and ``fy`` along the first only, as
+    broadcast views give them) with repeated ``|fy|`` (a centred spectrum's -f and +f rows): ``(fx row,
+    distinct |fy|, the distinct row of each row)``; None otherwise."""
+    if fx.ndim != 2 or fx.shape[0] < 8 or fx.strides[0] != 0 or fy.strides[1] != 0:
+        return None
+    distinct, index = np.unique(np.abs(fy[:, 0]), return_inverse=True)
+    if distinct.size > 0.75 * fy.shape[0]:
+        return None
+    return fx[0], distinct, index
 
 
 def make_diffraction_otf(optics, *, params: PupilParams = PupilParams()) -> DiffractionOTF:  # noqa: B008
