@@ -44,3 +44,21 @@ def test_errors_name_parameter():
         smear_otf(1.0, 1.0, smear_alt_m=-1.0)
     with pytest.raises(ConfigError, match=r"rms_y_m = nan"):
         jitter_otf(1.0, 1.0, rms_x_m=0.0, rms_y_m=float("nan"))
+
+
+@settings(max_examples=25, deadline=None)
+@given(ny=st.integers(1, 40), nx=st.integers(1, 40), smear=st.floats(0.0, 2e-5), rms=st.floats(0.0, 1e-5))
+def test_outer_grids_give_the_full_grids_floats(ny, nx, smear, rms):
+    """On broadcast (outer) grids, the engine's spectra, each factor is computed once per row or column: the
+    same floats as on the full grid."""
+    fy = (np.fft.fftfreq(ny) * 170.0)[:, None]
+    fx = (np.arange(nx) * 4.3)[None, :]
+    grid = np.broadcast_arrays(fx, fy)
+    full = [np.ascontiguousarray(a) for a in grid]
+    for fn in (
+        lambda a, b: smear_otf(a, b, smear_alt_m=smear, smear_act_m=0.3 * smear),
+        lambda a, b: jitter_otf(a, b, rms_x_m=rms, rms_y_m=0.5 * rms),
+    ):
+        out, ref = fn(*grid), fn(*full)
+        assert out.shape == ref.shape == (ny, nx)
+        assert np.array_equal(out, ref)

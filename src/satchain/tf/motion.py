@@ -28,7 +28,7 @@ def smear_otf(fx_cy_per_mm, fy_cy_per_mm, *, smear_alt_m: float, smear_act_m: fl
     """
     ly_mm = check_range("smear_alt_m", smear_alt_m, 0, None) * MM_PER_M
     lx_mm = check_range("smear_act_m", smear_act_m, 0, None) * MM_PER_M
-    fx, fy = np.broadcast_arrays(np.asarray(fx_cy_per_mm, float), np.asarray(fy_cy_per_mm, float))
+    fx, fy = _outer(*np.broadcast_arrays(np.asarray(fx_cy_per_mm, float), np.asarray(fy_cy_per_mm, float)))
     return np.sinc(ly_mm * fy) * np.sinc(lx_mm * fx)
 
 
@@ -45,5 +45,14 @@ def jitter_otf(fx_cy_per_mm, fy_cy_per_mm, *, rms_x_m: float, rms_y_m: float) ->
     """
     sx = check_range("rms_x_m", rms_x_m, 0, None) * MM_PER_M
     sy = check_range("rms_y_m", rms_y_m, 0, None) * MM_PER_M
-    fx, fy = np.broadcast_arrays(np.asarray(fx_cy_per_mm, float), np.asarray(fy_cy_per_mm, float))
+    fx, fy = _outer(*np.broadcast_arrays(np.asarray(fx_cy_per_mm, float), np.asarray(fy_cy_per_mm, float)))
     return np.exp(-2.0 * np.pi**2 * ((sx * fx) ** 2 + (sy * fy) ** 2))
+
+
+def _outer(fx: np.ndarray, fy: np.ndarray):
+    """On an outer grid (``fx`` varying along the last axis only and ``fy`` along the first only, as broadcast
+    views give them), their one distinct row and column, which broadcast back to the grid in the arithmetic
+    that follows: each factor computed once per row or column, the same floats; else the grids as given."""
+    if fx.ndim == 2 and fx.strides[0] == 0 and fy.strides[1] == 0:
+        return fx[:1], fy[:, :1]
+    return fx, fy
