@@ -121,6 +121,7 @@ def test_median_equals_np_median(shape, nan, seed):
     if not nan:
         w = v.ravel()
         assert robust_sigma(v) == 1.482602218505602 * np.median(np.abs(w - np.median(w)))
+        assert robust_sigma(w.copy(), overwrite=True) == robust_sigma(v)  # (the caller's own array reused)
 
 
 @settings(max_examples=30, deadline=None)

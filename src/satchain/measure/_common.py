@@ -107,17 +107,26 @@ def fill_invalid(a: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     return a[tuple(idx)]
 
 
-def robust_sigma(values) -> float:
-    """Standard deviation estimated from the median absolute deviation (1.4826 MAD).
+def robust_sigma(values, *, overwrite: bool = False) -> float:
+    """Standard deviation estimated from the median absolute deviation (1.4826 MAD); ``overwrite``: a float
+    array of the caller's own that may be reordered and overwritten (no copies).
 
     Examples
     --------
     >>> round(robust_sigma(np.random.default_rng(0).normal(0, 2, 100000)), 1)
     2.0
     """
-    v = np.asarray(values, dtype=float).ravel()
+    if overwrite and isinstance(values, np.ndarray) and values.dtype == np.float64 and values.ndim == 1:
+        v = values
+    else:
+        v = np.asarray(values, dtype=float).ravel()
+        overwrite = False
     if v.size == 0:
         return 0.0
+    if overwrite:
+        med = _median_inplace(v)
+        np.abs(np.subtract(v, med, out=v), out=v)
+        return float(1.482602218505602 * _median_inplace(v))
     dev = np.abs(v - median(v))
     return float(1.482602218505602 * _median_inplace(dev))
 

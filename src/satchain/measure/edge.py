@@ -396,7 +396,7 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | Non
     ``line`` (a degree-1 polynomial) the ESF is projected on that line, not on the one fitted."""
     own, rows, flags, ridge = locate_edge(work, deg, valid)
     coef = own if line is None else line
-    d, v, slope, phase = project(work[rows], rows, coef)
+    d, v, slope, phase = project(_lines(work, rows), rows, coef)
     ok = None if valid is None else valid[rows].ravel()
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
@@ -412,10 +412,18 @@ def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | Non
         x, esf_raw, counts = bin_esf(d[sel], v[sel], w, origin)
         at = np.interp(d, x, esf_raw)
     resid = (v - at)[sel]
-    sigma = robust_sigma(resid)
+    sigma = robust_sigma(resid, overwrite=q_step is None)  # (the residuals are not needed after, then)
     if q_step is not None:
         flags += quantisation_flags(q_step, x, esf_raw, resid)
     return (coef, own), rows, slope, w, mode, (*_trim_ends(x, esf_raw, counts), sigma), flags, ridge
+
+
+def _lines(work: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``work[rows]``, without a copy when ``rows`` are all the lines in order (the usual case)."""
+    n = work.shape[0]
+    if rows.size == n and (n == 0 or (rows[0] == 0 and rows[-1] == n - 1)):
+        return work
+    return work[rows]
 
 
 def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
@@ -442,7 +450,7 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
         slope = np.polyval(np.polyder(coef), rr) if len(coef) > 1 else np.zeros(rr.size)
         # a sample's true distance is its projected one minus the edge's departure along the normal
         r = -(np.polyval(coef_k, rr) - np.polyval(coef, rr)) / np.sqrt(1.0 + slope**2)
-        d = project(work[rows], rows, coef)[0]
+        d = project(_lines(work, rows), rows, coef)[0]
         r = np.repeat(r, work.shape[1])
         if valid is not None:
             d, r = d[valid[rows].ravel()], r[valid[rows].ravel()]
