@@ -8,11 +8,13 @@ white noise):
 1. A first position per line: the centroid of the ``[-1/2, 0, 1/2]`` derivative in a window around the
    derivative's peak, searched near the edge fitted over the region.
 2. The edge's line profile, ``T(u)`` with ``u = column - position``, estimated from all lines at once: a
-   least-squares cubic B-spline (knots every 0.25 px) through every pixel near the edge, placed by its line's
-   position (the lines' sub-pixel phases sample ``T`` finely, as in the slanted-edge method).
-3. Each line fitted alone: ``v_k = a_i + c_i T(k - x_i)`` over ``2 W + 1`` pixels around the edge (Gauss-Newton
-   in ``a_i, c_i, x_i``), then steps 2-3 once more from the fitted positions.  ``x_i`` is reported relative to
-   the centroid of ``T'`` (the line spread), i.e. the edge's centre: its 50 % crossing for a symmetric blur.
+   least-squares cubic B-spline (knots every 0.5 px, wider where the phases leave a gap) through every pixel
+   near the edge, placed by its line's position (the lines' sub-pixel phases sample ``T`` finely, as in the
+   slanted-edge method).
+3. Each line fitted alone: ``v_k = a_i + c_i T(k - x_i)`` over ``2 (W + 2) + 1`` pixels around the edge
+   (Gauss-Newton in ``a_i, c_i, x_i``), then steps 2-3 twice more from the fitted positions, the last fit over
+   ``2 W + 1`` pixels.  ``x_i`` is reported relative to the 50 % crossing of ``T`` between its plateaus: the
+   edge's centre for a symmetric blur.
 
 Every pixel's value is a function of its distance to the edge only, whatever the sub-pixel phase, so the fit
 has no phase-dependent bias beyond the spline's error (a few 1e-4 px; a 50 % crossing interpolated between two
@@ -39,7 +41,9 @@ __all__ = ["edge_line_fields", "line_numbers", "line_positions", "rough_line"]
 _KNOT_PX = 0.5  # template knot spacing (finer knots let noise trade the profile for a phase-locked bias)
 _MAX_GAP_PX = 0.75  # largest gap in the lines' sub-pixel phases the template can bridge
 _CONTRAST_TOL = 0.3  # a line whose step differs more from the median step is not measured
-_TOL_STEP = 1e-5  # Gauss-Newton stops when every line's step is below this (px; relative for the levels)
+# Gauss-Newton stops when every line's step, or the steps still to come, are below this (px; relative for the
+# levels): :func:`_converged`
+_TOL_STEP = 1e-5
 _SORT_PHASES = 4096  # up to this many lines the phase gap comes from sorting them, above from 64 bins
 _RMS_TOL = 3.0  # ... nor one whose residual rms exceeds this x the median line's (plus 0.5 % of the step)
 
