@@ -51,21 +51,15 @@ def _require(module: str):
         ) from None
 
 
-def _keep_freed_memory() -> None:
-    """:func:`satchain._memory.keep_freed_memory` in a worker process: Dask starts its workers with
-    ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's mmap threshold at 128 KiB: every tile buffer is
-    then a fresh mapping whose pages are faulted in again on each task, which made a stage-1 tile up to twice
-    as slow as in one process."""
-    from satchain._memory import keep_freed_memory
-
-    keep_freed_memory()
-
-
 def _decimate_tile(sim: Simulator, source, tile: Tile, keep_memory: bool = False) -> tuple[Tile, np.ndarray]:
     """One stage-1 task (module-level, so process workers can import it); ``keep_memory``: first
-    :func:`_keep_freed_memory` in the worker process it runs in."""
+    :func:`satchain._memory.keep_freed_memory` in the worker process it runs in (Dask starts its workers with
+    ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's mmap threshold at 128 KiB: every tile buffer was a
+    fresh mapping faulted in again on each task, a stage-1 tile up to twice as slow as in one process)."""
     if keep_memory:
-        _keep_freed_memory()
+        from satchain._memory import keep_freed_memory
+
+        keep_freed_memory()
     return tile, sim.decimate_tile(source, tile)
 
 
