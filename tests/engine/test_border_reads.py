@@ -79,6 +79,35 @@ def test_fold_sums_each_residue():
         np.testing.assert_allclose(_fold(v.T, m, n, axis=1), want.T, atol=1e-12)
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    lo=st.integers(-60, 10), size=st.integers(1, 90), n=st.integers(1, 50), cuts=st.integers(0, 4),
+    seed=st.integers(0, 10**6),
+)
+def test_fold_of_runs_in_any_order_sums_each_residue_in_increasing_m(lo, size, n, cuts, seed):
+    """Consecutive frequencies split into runs given in any order: each residue's sum, exactly as summing
+    its terms in increasing ``m`` (the order of the former sorted, period-by-period fold)."""
+    rng = np.random.default_rng(seed)
+    full = np.arange(lo, lo + size)
+    pieces = np.split(full, np.sort(rng.choice(np.arange(1, size), min(cuts, size - 1), replace=False)))
+    m = np.concatenate([pieces[i] for i in rng.permutation(len(pieces))])
+    v = rng.normal(size=(m.size, 2)) + 1j * rng.normal(size=(m.size, 2))
+    want = np.zeros((n, 2), dtype=complex)
+    for j in np.argsort(m):  # increasing m
+        want[np.mod(m[j], n)] += v[j]
+    assert np.array_equal(_fold(v, m, n, axis=0), want)
+    assert np.array_equal(_fold(v.T.copy(), m, n, axis=1), want.T)
+
+
+def test_fold_of_non_consecutive_frequencies_scatters_them():
+    m = np.array([0, 3, 7, -5, 12])
+    v = np.arange(5) + 1j
+    want = np.zeros(4, dtype=complex)
+    for mi, vi in zip(m, v, strict=True):
+        want[mi % 4] += vi
+    np.testing.assert_allclose(_fold(v, m, 4, axis=0), want, atol=0)
+
+
 def test_sampling_matrix_is_the_footprint_sum_of_exponentials():
     centres, m, n = np.array([3.2, 140.7, 9000.5]), np.arange(-40, 41), 12000
     for width in (1.0, 3.5, 14.0):

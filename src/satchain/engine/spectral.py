@@ -125,27 +125,34 @@ def fold_onto_grid(
     spectrum onto the output DFT grid and inverse-transform. ``values`` must already contain the phase of
     the output grid's first sample; returns ``Re(sum values e^{2 pi i (my i / Ny + mx j / Nx)})``."""
     noy, nox = n_out
-    vy = _fold(values * cx[None, :], my, noy, axis=0)
+    vy = _fold(values, my, noy, axis=0)
+    vy *= cx[None, :]  # the Hermitian weights, after the rows' fold (fewer rows)
     v = _fold(vy, mx, nox, axis=1)
     return np.real(sfft.ifft2(v, overwrite_x=True)) * (noy * nox)
 
 
 def _fold(values: np.ndarray, m: np.ndarray, n: int, *, axis: int) -> np.ndarray:
     """``out[r] = sum of values[a] over m[a] = r (mod n)`` along ``axis`` (complex128). ``m`` holds consecutive
-    integers in any order (the DFT's): sorted, padded to whole periods of ``n`` and summed period by period."""
-    order = np.argsort(m, kind="stable")
-    ms = m[order]
-    if ms.size and np.any(np.diff(ms) != 1):  # not consecutive: the general (slower) scatter-add
-        shape = list(values.shape)
-        shape[axis] = n
-        out = np.zeros(shape, dtype=np.complex128)
+    integers in any order (the DFT's): each run of consecutive ``m`` is added slice by slice, the runs in
+    increasing ``m`` (every output sums its terms in increasing ``m``); no copy of ``values`` is made."""
+    m = np.asarray(m)
+    shape = list(values.shape)
+    shape[axis] = n
+    out = np.zeros(shape, dtype=np.complex128)
+    if m.size and np.any(np.diff(np.sort(m)) != 1):  # not consecutive: the general (slower) scatter-add
         np.add.at(np.moveaxis(out, axis, 0), np.mod(m, n), np.moveaxis(values, axis, 0))
         return out
-    v = np.moveaxis(np.asarray(values, dtype=np.complex128), axis, 0)[order]
-    periods = -(-v.shape[0] // n)
-    pad = np.zeros((periods * n - v.shape[0], *v.shape[1:]), dtype=v.dtype)
-    summed = np.concatenate([v, pad]).reshape(periods, n, *v.shape[1:]).sum(axis=0)
-    return np.moveaxis(np.roll(summed, int(ms[0]) % n if ms.size else 0, axis=0), 0, axis)
+    cut = np.flatnonzero(np.diff(m) != 1) + 1
+    runs = sorted(zip(np.concatenate([[0], cut]), np.concatenate([cut, [m.size]])), key=lambda se: m[se[0]])
+    src, dst = [slice(None)] * values.ndim, [slice(None)] * values.ndim
+    for a, end in runs:
+        while a < end:
+            r = int(m[a]) % n
+            length = min(int(end - a), n - r)
+            src[axis], dst[axis] = slice(a, a + length), slice(r, r + length)
+            out[tuple(dst)] += values[tuple(src)]
+            a += length
+    return out
 
 
 def sampling_matrix(centres: np.ndarray, width_px: float, n0: int, n: int, m: np.ndarray) -> np.ndarray:
