@@ -163,23 +163,23 @@ def fft_ratio(n: int, *, repeats: int = 3) -> None:
 
 def stream_scaling(sizes: list[int], repeat: int = 1) -> None:
     """(d): streamed throughput (``bench_stream.py``'s streamed run, each size in its own process; the
-    fastest of ``repeat`` runs, so that other load on the machine does not decide the spread), cold (a fresh
-    process) and warm (the same process after an untimed 4096^2 streamed run: the process's one-time costs --
-    first touch of its ~300 MB working set, FFT plans -- paid, which a long-lived service or a batch pays once)."""
+    fastest of ``repeat`` rounds over the sizes, so that other load on the machine does not decide the spread),
+    cold (a fresh process) and warm (the same process after an untimed 4096^2 streamed run: the process's
+    one-time costs -- first touch of its working set, FFT plans -- paid, which a long-lived service or a batch
+    pays once)."""
     import bench_stream
 
-    rows = {}
+    runs = {}
     with tempfile.TemporaryDirectory() as d:
         for warm in (0, 4096):
-            for n in sizes:
-                ns = argparse.Namespace(size=n, tile=512, margin=128, dir=d, tiff=None, stage1_mib=640, warmup=warm)
-                runs = []
-                for _ in range(repeat):
-                    runs.append(bench_stream._run("streamed", ns))
-                    os.remove(runs[-1]["path"])
-                best = min(runs, key=lambda r: r["wall_s"])
-                best["peak_rss_mib"] = max(r["peak_rss_mib"] for r in runs)
-                rows[warm, n] = best
+            for _ in range(repeat):  # rounds over the sizes, so that a slow minute hits every size alike
+                for n in sizes:
+                    ns = argparse.Namespace(size=n, tile=512, margin=128, dir=d, tiff=None, stage1_mib=640, warmup=warm)
+                    runs.setdefault((warm, n), []).append(bench_stream._run("streamed", ns))
+                    os.remove(runs[warm, n][-1]["path"])
+    rows = {}
+    for key, rs in runs.items():
+        rows[key] = dict(min(rs, key=lambda r: r["wall_s"]), peak_rss_mib=max(r["peak_rss_mib"] for r in rs))
     print(f"\n(d) streamed path (procedural input, coarse grid on disk, 512-px output tiles; best of {repeat})")
     print(f"  {'input':>13s} {'process':>7s} {'wall s':>8s} {'stage 1 s':>9s} {'Mpx/s':>7s} {'peak RSS MiB':>13s}")
     for (warm, n), r in rows.items():
