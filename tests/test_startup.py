@@ -57,3 +57,14 @@ def test_the_run_path_never_imports_scipy_stats_or_signal():
         "measure_edge(0.2 + 0.6 / (1 + np.exp(-x / 0.6)))\n"
     )
     assert _loaded(code, ("scipy.stats", "scipy.signal")) == []
+
+
+def test_the_figure_helper_preloads_no_fft_nor_measurement_code():
+    """The run folder's figure helper starts while the run simulates (on the same two cores): what it preloads
+    (``pipeline._FIGURE_MODULES``) must not pull scipy.fft (0.2 s, the pupil's FFTs import it when used) nor
+    the measurement code (the result keys live in ``satchain.measure._keys``)."""
+    from satchain.pipeline import _FIGURE_MODULES
+
+    code = "import importlib\n" + "".join(f"importlib.import_module({m!r})\n" for m in _FIGURE_MODULES)
+    heavy = ("scipy.fft", "satchain.measure.edge", "satchain.measure._edge_lines", "satchain.engine")
+    assert _loaded(code, heavy) == []

@@ -81,7 +81,10 @@ def test_fold_sums_each_residue():
 
 @settings(max_examples=40, deadline=None)
 @given(
-    lo=st.integers(-60, 10), size=st.integers(1, 90), n=st.integers(1, 50), cuts=st.integers(0, 4),
+    lo=st.integers(-60, 10),
+    size=st.integers(1, 90),
+    n=st.integers(1, 50),
+    cuts=st.integers(0, 4),
     seed=st.integers(0, 10**6),
 )
 def test_fold_of_runs_in_any_order_sums_each_residue_in_increasing_m(lo, size, n, cuts, seed):

@@ -143,7 +143,8 @@ def _fold(values: np.ndarray, m: np.ndarray, n: int, *, axis: int) -> np.ndarray
         np.add.at(np.moveaxis(out, axis, 0), np.mod(m, n), np.moveaxis(values, axis, 0))
         return out
     cut = np.flatnonzero(np.diff(m) != 1) + 1
-    runs = sorted(zip(np.concatenate([[0], cut]), np.concatenate([cut, [m.size]])), key=lambda se: m[se[0]])
+    starts, ends = np.concatenate([[0], cut]), np.concatenate([cut, [m.size]])
+    runs = sorted(zip(starts, ends, strict=True), key=lambda se: m[se[0]])
     src, dst = [slice(None)] * values.ndim, [slice(None)] * values.ndim
     for a, end in runs:
         while a < end:

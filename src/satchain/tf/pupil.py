@@ -20,7 +20,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.fft import fft2, irfft2, next_fast_len, rfft2
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import ConfigError, InputError, ResourceLimitError
@@ -245,6 +244,8 @@ def _autocorrelation(p: np.ndarray, m: int) -> np.ndarray:
     samples match the continuous autocorrelation to O(1/N^2) away from f = 0: in 1-D the discrete sum is
     exact at every nonzero integer lag, only the lag-0 value ``sum t^2`` falls short of the area.
     """
+    from scipy.fft import fft2, irfft2, rfft2  # (here: importing scipy.fft costs 0.2 s, most callers never need it)
+
     n = p.shape[0]
     area = np.sum(np.abs(p))
     if np.iscomplexobj(p):
@@ -356,6 +357,8 @@ def pupil_psf(
     lam, fno, d, eps, z = _check_pupil(
         wavelength_m, f_number, aperture_diameter_m, obscuration_ratio, spiders, zernike_rms_waves
     )
+    from scipy.fft import fft2, next_fast_len
+
     q = samples_per_lambda_f_number
     if isinstance(q, bool) or not isinstance(q, (int, np.integer)) or not 1 <= q <= 64:
         raise ConfigError(f"samples_per_lambda_f_number = {q!r}: must be an integer in [1, 64]")
