@@ -58,6 +58,8 @@ def _render_rgb(fig, dpi: float | None):
     finally:
         if dpi is not None:
             fig.set_dpi(old_dpi)
+    if rgba[..., 3].min() == 255:  # opaque (a figure's white face): on white it is itself, alpha dropped
+        return Image.fromarray(rgba, "RGBA").convert("RGB")
     a = rgba[..., 3:4].astype(np.float32) / 255.0  # composite on white
     rgb = rgba[..., :3].astype(np.float32) * a + 255.0 * (1.0 - a)
     return Image.fromarray(np.rint(rgb).astype(np.uint8), "RGB")
