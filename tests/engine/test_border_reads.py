@@ -112,8 +112,10 @@ def test_fold_of_non_consecutive_frequencies_scatters_them():
 
 
 def test_sampling_matrix_is_the_footprint_sum_of_exponentials():
-    centres, m, n = np.array([3.2, 140.7, 9000.5]), np.arange(-40, 41), 12000
-    for width in (1.0, 3.5, 14.0):
+    m, n = np.arange(-40, 41), 12000
+    cases = [(np.array([3.2, 140.7, 9000.5]), w) for w in (1.0, 3.5, 14.0)]
+    cases += [(6.5 + 14.0 * np.arange(5), 14.0), (7.0 + 14.0 * np.arange(5), 14.0)]  # integer ratio: alike footprints
+    for centres, width in cases:
         idx, w = footprint_weights(centres, width, 0)
         want = (w[:, :, None] * np.exp(2j * np.pi * idx[:, :, None] * m[None, None, :] / n)).sum(axis=1)
         np.testing.assert_allclose(sampling_matrix(centres, width, 0, n, m), want, atol=1e-12)

@@ -160,12 +160,14 @@ def sampling_matrix(centres: np.ndarray, width_px: float, n0: int, n: int, m: np
     """``M[i, a] = sum_n w_i(n) exp(2 pi i m_a (n - n0) / n)``: footprint averaging of a band-limited frame
     signal, evaluated from its DFT coefficients ``m`` (frame origin at input pixel ``n0``, ``n`` input
     pixels long). Any footprint width and position. A footprint's pixels are consecutive, so the sum is a
-    polynomial in ``exp(2 pi i m / n)`` (Horner's rule) times the phase of its first pixel: one exponential
-    per element instead of one per footprint pixel."""
+    polynomial in ``exp(2 pi i m / n)`` (Horner's rule, once when every footprint has the same weights) times
+    the phase of its first pixel: one exponential per element instead of one per footprint pixel."""
     idx, w = footprint_weights(centres, width_px, n0)
     m = np.asarray(m)
     r = np.exp(2j * np.pi * m / n)
-    acc = np.broadcast_to(w[:, -1, None], (centres.size, m.size)).astype(np.complex128)
+    if w.shape[0] > 1 and not np.any(w != w[:1]):  # every footprint alike (an integer ratio): one polynomial
+        w = w[:1]
+    acc = np.broadcast_to(w[:, -1, None], (w.shape[0], m.size)).astype(np.complex128)
     for k in range(idx.shape[1] - 2, -1, -1):
         acc *= r[None, :]
         acc += w[:, k, None]
