@@ -157,3 +157,26 @@ def test_a_frame_no_larger_than_one_window_is_formed_whole():
     far = FarField(sim, coarse, margin_px=sim.params.stream_margin_px)
     assert far.image is not None
     np.testing.assert_array_equal(_assemble(sim, coarse, far=far), sim.form_image(coarse))
+
+
+def test_the_far_field_on_a_dividing_output_grid_equals_its_matrix_dft(case):
+    """Integer ratios: the far field's band is transformed onto the whole output grid by FFTs (its rows once,
+    each band of output rows once); it equals the matrix DFT at each tile's pixels. A ratio that does not
+    divide the frame keeps the matrix DFT."""
+    from satchain.engine.stream import FarField
+
+    src, coarse, _ = case
+    p = SimParams(stream_tile_px=64, stream_margin_px=16)
+    sim = Simulator(BASE, input_pixel_m=PIXEL_M, input_shape=src.shape_px, params=p)
+    fft, matrix = (FarField(sim, coarse, margin_px=16) for _ in range(2))
+    assert fft.image is None and fft._grid is not None
+    matrix._grid = None
+    ny, nx = sim.output_shape
+    scale = max(float(np.ptp(fft.tile((0, ny), (0, nx)))), 1e-30)
+    for rows in ((0, 64), (64, 128), (ny - 40, ny)):
+        for cols in ((0, 64), (128, 192), (nx - 30, nx)):
+            np.testing.assert_allclose(fft.tile(rows, cols), matrix.tile(rows, cols), rtol=0, atol=1e-11 * scale)
+    odd = Simulator(BASE, input_pixel_m=0.0341, input_shape=src.shape_px, params=p)
+    assert odd.k_int == (None, None)
+    odd_coarse = odd.decimate(src)
+    assert FarField(odd, odd_coarse, margin_px=16)._grid is None

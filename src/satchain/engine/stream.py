@@ -76,10 +76,13 @@ def stream_bytes(sim: Simulator) -> float:
     band = 8.0 * t * sim.output_shape[1]
     preview = 8.0 * min(PREVIEW_MAX_PX**2, float(sim.output_shape[0]) * sim.output_shape[1])
     # the far field: its band of the frame (complex64, the transform's copy and the kept rows), one band of
-    # frame rows with its real FFT while it is built, and per tile the two sampling matrices and a product
+    # frame rows with its real FFT while it is built, and per tile the two sampling matrices and a product --
+    # or, on an output grid that divides the frame, the band on every output row and one band of output rows
     ly, lx = sim.frame_shape
     by, bx = (band_index(n, far_split(sim, m)) for n in (ly, lx))
+    noy, nox = (n * sim.D / kk for n, kk in zip(sim.frame_shape, sim.k, strict=True))
     far = 8.0 * (2 * ly + 2 * by + 1) * (bx + 1) + 16.0 * t * (2 * by + 2 * bx + 2)
+    far += 16.0 * noy * (bx + 1) + 40.0 * t * nox
     build = 3.0 * _FAR_BAND_BYTES
     return max(window + _TILE_OUT_BYTES_PER_PX * 1.5 * t * t, decim, build) + far + band + preview
 
@@ -196,6 +199,27 @@ class FarField:
         self.n_px = (ly * sim.D, lx * sim.D)
         self._rows: tuple[int, int] | None = None
         self._rows_values: np.ndarray | None = None
+        self._grid = self._output_grid_rows()
+
+    def _output_grid_rows(self):
+        """Where the output grid divides the frame (integer ratios, the frame a whole number of output pixels
+        from an output pixel's edge): the band transformed along the rows onto every output row of the frame
+        (its rows folded onto the output grid and inverse-transformed: FFTs, not a matrix DFT per band), the
+        columns' footprint transfer, the output grid's offset in the frame and its width; else None."""
+        import scipy.fft as sfft
+
+        from satchain.engine.spectral import _fold, footprint_transfer
+
+        sim = self.sim
+        (ky, kx), (oy, ox), (ny_px, nx_px) = sim.k_int, self.origin_px, self.n_px
+        if sim.time_path is not None or not (ky and kx) or ny_px % ky or nx_px % kx or oy % ky or ox % kx:
+            return None
+        noy = ny_px // ky
+        ay = footprint_transfer(self.my, centre=sim.ys.centres(0, 1)[0], width_px=sim.ys.width_px, n_total=ny_px)
+        ax = footprint_transfer(self.mx, centre=sim.xs.centres(0, 1)[0], width_px=sim.xs.width_px, n_total=nx_px)
+        rows = sfft.ifft(_fold(self.values * ay[:, None], self.my, noy, axis=0), axis=0, overwrite_x=True)
+        rows *= noy
+        return rows, ax, (-oy // ky, -ox // kx), nx_px // kx
 
     def low(self, fy: np.ndarray, fx: np.ndarray) -> np.ndarray:
         """``G(fy, fx)``, frequencies in cycles per coarse sample."""
@@ -220,6 +244,17 @@ class FarField:
             mx = sampling_matrix(sim.xs.centres(*cols) - self.origin_px[1], sim.xs.width_px, 0, self.n_px[1], self.mx)
             fy, fx = self.my * sim.k[0] / self.n_px[0], self.mx * sim.k[1] / self.n_px[1]
             return form_rows(sim.time_path, rows, my, self.values, mx, fy, fx)
+        if self._grid is not None:  # the band of rows on the whole output grid at once, by FFTs
+            import scipy.fft as sfft
+
+            from satchain.engine.spectral import _fold
+
+            grid_rows, ax, (dy, dx), nox = self._grid
+            if rows != self._rows:
+                band = grid_rows[rows[0] + dy : rows[1] + dy] * ax[None, :]
+                img = sfft.ifft(_fold(band, self.mx, nox, axis=1), axis=1, overwrite_x=True)
+                self._rows, self._rows_values = rows, img.real * nox
+            return self._rows_values[:, cols[0] + dx : cols[1] + dx]
         if rows != self._rows:
             my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
             self._rows, self._rows_values = rows, my @ self.values
