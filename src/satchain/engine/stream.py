@@ -161,7 +161,9 @@ class FarField:
     over an edge) and is formed per tile window; the part ``OTF G`` -- the smooth tail -- is formed here from
     the band ``|f| < f_split`` of the whole frame's DFT, computed exactly in bands of rows (a real FFT of each
     frame row, then an FFT along the columns of the kept band only: memory ``rows x band``), and evaluated
-    at each tile's output pixels by a matrix DFT. ``f_split = 22 / margin`` (coarse samples), so the part
+    at each tile's output pixels: where the output grid divides the frame (integer ratios) by folding the band
+    onto that grid and inverse FFTs, its rows once and each band of output rows once; else by a matrix DFT
+    (whose cost grows with the cube of the scene's side). ``f_split = 22 / margin`` (coarse samples), so the part
     ``G`` removes from the tile lies within half the margin.
 
     When the whole coarse frame needs no more memory than one tile's window, tiling would save nothing: the
@@ -232,8 +234,9 @@ class FarField:
         return 1.0 - self.low(fy, fx)
 
     def tile(self, rows: tuple[int, int], cols: tuple[int, int]) -> np.ndarray:
-        """The part ``OTF G`` at output pixels ``rows x cols`` (input units): a matrix DFT with footprint
-        averaging along each axis (the row transform is kept for the next tile of the same rows)."""
+        """The part ``OTF G`` at output pixels ``rows x cols`` (input units): from the output grid's rows (see
+        :meth:`_output_grid_rows`), else a matrix DFT with footprint averaging along each axis (the row
+        transform is kept for the next tile of the same rows)."""
         from satchain.engine.spectral import sampling_matrix
 
         sim = self.sim
