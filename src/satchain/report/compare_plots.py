@@ -98,6 +98,8 @@ def _figure(w: float, h: float, n_cols: int = 1) -> tuple[Figure, list, list]:
     bottom = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(n_cols)]
     for ax in top + bottom:
         ax.grid(alpha=0.3)
+    for ax in top:  # the residual panel below shares the axis and labels it
+        ax.tick_params(labelbottom=False)
     return fig, top, bottom
 
 
@@ -148,6 +150,8 @@ def _edge_figure() -> tuple[Figure, list, list]:
     bot = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(2)] + [fig.add_axes(full[1], sharex=top[2])]
     for ax in top + bot:
         ax.grid(alpha=0.3)
+    for ax in top:  # the residual panel below shares the axis and labels it
+        ax.tick_params(labelbottom=False)
     return fig, top, bot
 
 
