@@ -253,11 +253,11 @@ class FarField:
             from satchain.engine.spectral import _fold
 
             grid_rows, ax, (dy, dx), nox = self._grid
-            if rows != self._rows:
-                band = grid_rows[rows[0] + dy : rows[1] + dy] * ax[None, :]
+            if rows != self._rows:  # (the output grid is periodic over the frame)
+                band = grid_rows.take(np.arange(rows[0], rows[1]) + dy, axis=0, mode="wrap") * ax[None, :]
                 img = sfft.ifft(_fold(band, self.mx, nox, axis=1), axis=1, overwrite_x=True)
                 self._rows, self._rows_values = rows, img.real * nox
-            return self._rows_values[:, cols[0] + dx : cols[1] + dx]
+            return self._rows_values.take(np.arange(cols[0], cols[1]) + dx, axis=1, mode="wrap")
         if rows != self._rows:
             my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
             self._rows, self._rows_values = rows, my @ self.values
