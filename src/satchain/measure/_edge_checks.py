@@ -7,6 +7,8 @@ human sentence.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.ndimage import correlate1d
 
@@ -109,18 +111,32 @@ def _plateau_line(xs: np.ndarray, es: np.ndarray):
     ms = m_all / norm
     gram, rhs = ms.T @ ms, ms.T @ es
     keep = list(range(len(cols)))  # the terms in the model (0: the level, 1: the slope, 2: k / |x|)
+    g_all, r_all, nrm = gram.tolist(), rhs.tolist(), norm.tolist()
     while True:
         if len(keep) == 1:
-            return float(rhs[0] / gram[0, 0] / norm[0]), 0.0
-        g_inv = np.linalg.inv(gram[np.ix_(keep, keep)])  # (well conditioned: unit-norm columns)
-        coef = g_inv @ rhs[keep]
+            return r_all[0] / g_all[0][0] / nrm[0], 0.0
+        # (well conditioned: unit-norm columns; 2 x 2 or 3 x 3, inverted in plain floats)
+        g_inv = _inv_small([[g_all[i][j] for j in keep] for i in keep])
+        coef = [sum(g_inv[i][j] * r_all[k] for j, k in enumerate(keep)) for i in range(len(keep))]
         dof = max(xs.size - len(keep), 1)
-        s2 = float(np.sum((es - ms[:, keep] @ coef) ** 2)) / dof
-        se = np.sqrt(np.maximum(np.diag(g_inv) * s2, 1e-300))
-        t = np.abs(coef[1:]) / se[1:]
-        if np.all(t >= 3.0):
-            return float(coef[0] / norm[0]), float(coef[1] / norm[1]) if keep[1] == 1 else 0.0
-        keep.pop(1 + int(np.argmin(t)))
+        s2 = float(np.sum((es - ms[:, keep] @ np.array(coef)) ** 2)) / dof
+        t = [abs(coef[i]) / math.sqrt(max(g_inv[i][i] * s2, 1e-300)) for i in range(1, len(keep))]
+        if min(t) >= 3.0:
+            return coef[0] / nrm[0], coef[1] / nrm[1] if keep[1] == 1 else 0.0
+        keep.pop(1 + t.index(min(t)))
+
+
+def _inv_small(a: list) -> list:
+    """The inverse of a symmetric positive definite 2 x 2 or 3 x 3 matrix (lists) by its cofactors."""
+    if len(a) == 2:
+        (p, q), (_, r) = a
+        d = p * r - q * q
+        return [[r / d, -q / d], [-q / d, p / d]]
+    (a00, a01, a02), (_, a11, a12), (_, _, a22) = a
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+    d = a00 * c00 + a01 * c01 + a02 * c02
+    return [[c00 / d, c01 / d, c02 / d], [c01 / d, c11 / d, c12 / d], [c02 / d, c12 / d, c22 / d]]
 
 
 def check_single_edge(x, esf, counts, sigma, fits, lim) -> None:
