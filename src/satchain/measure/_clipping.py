@@ -31,7 +31,9 @@ its plateau value exactly.  Clipping is named when one of these holds:
          ``1e-9`` of the range at one phase, no lower than ``6.7e-6`` at two to five, over 9000 sharp edges).
 
 Not named, because the data alone cannot tell them from an unclipped target: a noise-free image clipped at
-both extremes, one blurred by less than ~0.3 px (as a pixel-sharp target), one whose other extreme is a
+both extremes, one blurred by less than ~0.3 px (as a pixel-sharp target) -- at an exact critical tilt
+(2-5 phases) by up to ~0.5 px, whose smooth side then steps onto its plateau by up to 2e-5 of the range --,
+one whose other extreme is a
 flat run sampled at one phase (a border along a pixel axis or at 45 deg); a plateau narrower than three
 pixels; a few clipped pixels when the full scale is not known.  Where the noise is only estimated, a noisy
 image clipped at both extremes is not named either (an exact plateau at the other extreme says the data is
