@@ -59,6 +59,7 @@ from satchain.raster import RasterReader, open_raster
 
 __all__ = [
     "BIGTIFF_THRESHOLD_BYTES",
+    "PNG_COMPRESS_LEVEL",
     "ImageReader",
     "atomic_path",
     "integer_scale",
@@ -74,6 +75,10 @@ __all__ = [
 
 #: classic TIFF offsets are 32-bit; switch to BigTIFF well before 4 GiB (with room for tags)
 BIGTIFF_THRESHOLD_BYTES = 2_000_000_000
+#: zlib level of every PNG satchain writes (previews, figures, report thumbnails). Level 3 encodes a default run
+#: folder's PNGs in half the time of zlib's default 6 (0.19 s against 0.37 s of CPU) for 20 % more bytes (1.6
+#: against 1.3 MB); PNG is lossless at any level, so the pixels are the same.
+PNG_COMPRESS_LEVEL = 3
 
 
 @contextlib.contextmanager
@@ -244,7 +249,7 @@ def write_png(
     if pixel_m is not None:
         meta["pixel_m"] = check_positive("pixel_m", pixel_m)
     info.add_text("satchain", json.dumps(meta))
-    kwargs: dict[str, Any] = {"pnginfo": info}
+    kwargs: dict[str, Any] = {"pnginfo": info, "compress_level": PNG_COMPRESS_LEVEL}
     if pixel_m is not None:
         ppm = 1.0 / pixel_m
         kwargs["dpi"] = (ppm * 0.0254, ppm * 0.0254)

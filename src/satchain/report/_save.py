@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from satchain.io import atomic_path
+from satchain.io import PNG_COMPRESS_LEVEL, atomic_path
 
 __all__ = ["PNG_COLOURS", "atomic_path", "save_figure", "write_text"]
 
@@ -81,4 +81,4 @@ def _save_palette_png(fig, path: Path, **kwargs) -> None:
     else:
         rgb = _render_rgb(fig, kwargs.get("dpi"))
     q = rgb.quantize(colors=PNG_COLOURS, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
-    q.save(path, format="PNG", compress_level=6)
+    q.save(path, format="PNG", compress_level=PNG_COMPRESS_LEVEL)

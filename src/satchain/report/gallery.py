@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from satchain.io import PNG_COMPRESS_LEVEL
 from satchain.report._save import save_figure
 from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import rc_for
@@ -144,7 +145,7 @@ def _png_grey8(u8: np.ndarray) -> tuple[bytes, int, int]:
     from PIL import Image
 
     buf = io.BytesIO()
-    Image.fromarray(u8, mode="L").save(buf, format="PNG", compress_level=6)
+    Image.fromarray(u8, mode="L").save(buf, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
     return buf.getvalue(), u8.shape[1], u8.shape[0]
 
 
