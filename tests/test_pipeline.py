@@ -319,3 +319,27 @@ def test_edge_figures_drawn_from_other_results_are_drawn_again_as_compared(reduc
     for name in names:  # the figures of the compared results, not of the early ones (digests: a short diff)
         again, first = ((d / "figures" / name).read_bytes() for d in (tmp_path / "again", tmp_path / "compared"))
         assert hashlib.sha256(again).hexdigest() == hashlib.sha256(first).hexdigest(), name
+
+
+def test_edge_curves_are_the_measurements_own_and_equal_a_new_measurement(reduced_run, tmp_path):
+    """The comparison figures' ESF and LSF come from the run's own EdgeResult objects; a view without them
+    (the fallback) measures each ROI again and must give the same curves, bit for bit."""
+    from satchain.pipeline import ReportInputs
+    from satchain.report.curves import edge_curves
+
+    _, res, _, result = reduced_run
+    view = ReportInputs(result, tmp_path, res)
+    assert set(view.edge_results) == {e["id"] for e in res["slanted_edges"]} != set()
+
+    class WithoutResults:  # the same view, without the measurement's objects
+        def __getattr__(self, name):
+            if name == "edge_results":
+                raise AttributeError(name)
+            return getattr(view, name)
+
+    kept, again = edge_curves(view), edge_curves(WithoutResults())
+    assert [c["id"] for c in kept] == [c["id"] for c in again] == [e["id"] for e in res["slanted_edges"]]
+    for a, b in zip(kept, again, strict=True):
+        for key in ("x_px", "esf_measured", "lsf_measured", "esf_predicted", "lsf_predicted", "mtf_measured"):
+            np.testing.assert_array_equal(a[key], b[key], err_msg=f"{a['id']} {key}")
+        assert view.edge_results[a["id"]].esf is not None

@@ -236,7 +236,6 @@ class ReportInputs:
     image = property(lambda self: self.result.simulation.image)
     focal_plane = property(lambda self: self.result.simulation.focal_plane)
     sensor = property(lambda self: self.result.simulation.sensor)
-    measured = property(lambda self: self.result.measurements.to_dict())
     comparison = property(lambda self: {"results": self.results})
     timings_s = property(lambda self: self.result.timings_s)
     #: The simulated image's pixel on the ground (m): the camera as built when ``[as_built]`` changes it.
@@ -245,6 +244,20 @@ class ReportInputs:
     @cached_property
     def truth(self) -> dict[str, Any]:
         return self.result.scene.truth_dict
+
+    @cached_property
+    def measured(self) -> dict[str, Any]:
+        """The measurements as results.json's ``measured`` holds them (built once per view: the report's pages
+        and figures read them many times)."""
+        return self.result.measurements.to_dict()
+
+    @cached_property
+    def edge_results(self) -> dict[str, Any]:
+        """The slanted edges' :class:`~satchain.measure.edge.EdgeResult` objects by truth id: their ESF and LSF,
+        as measured, for the comparison figures."""
+        from satchain.scene import SlantedEdge
+
+        return {it.id: it.result for it in self.result.measurements.auto.by_kind(SlantedEdge.kind)}
 
 
 class _EarlyFigures:

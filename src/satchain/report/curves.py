@@ -97,13 +97,16 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
 
     truth = {it["id"]: it for it in ctx.truth["items"]}
     by_id = {e["id"]: e for e in (ctx.measured or {}).get(EDGES.key, [])}
+    as_measured = getattr(ctx, "edge_results", None) or {}  # the run's own results: their ESF and LSF
     out = []
     for e in res.get(EDGES.key, []):
         m = by_id.get(e["id"], {})
         roi = m.get("roi_px")
         if roi is None:
             continue
-        r = measure_edge(np.asarray(ctx.image, float), roi=roi, pixel_m=ctx.image_gsd_m)
+        r = as_measured.get(e["id"])
+        if r is None:  # a view without the measurement's objects: measured again on its ROI (the same curves)
+            r = measure_edge(np.asarray(ctx.image, float), roi=roi, pixel_m=ctx.image_gsd_m)
         t = truth.get(e["id"], {})
         normal = t.get("normal_to_bright", (1.0, 0.0) if e["direction"] == "ACT" else (0.0, 1.0))
         x = np.asarray(r.esf_x_px, float)
