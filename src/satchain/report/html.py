@@ -209,7 +209,7 @@ def _fit_rows(system) -> list[dict]:
 @functools.lru_cache(maxsize=1)
 def _environment() -> Environment:
     """The report's Jinja environment, made once per process: it keeps the compiled template (compiling it costs
-    about 50 ms, more than rendering it), and reloads it if the file changes."""
+    about 60 ms, more than rendering it), and reloads it if the file changes."""
     env = Environment(
         loader=PackageLoader("satchain.report", "templates"), autoescape=select_autoescape(["html", "j2"])
     )
