@@ -96,11 +96,16 @@ def _figure(w: float, h: float, n_cols: int = 1) -> tuple[Figure, list, list]:
                   for i in range(n_cols)], left=left, top=0.45)  # fmt: skip
     top = [fig.add_axes(g[0][i]) for i in range(n_cols)]
     bottom = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(n_cols)]
+    _gridded_pairs(top, bottom)
+    return fig, top, bottom
+
+
+def _gridded_pairs(top: list, bottom: list) -> None:
+    """Grids on every panel; each plot's x tick labels left to the residual panel below, which shares its axis."""
     for ax in top + bottom:
         ax.grid(alpha=0.3)
-    for ax in top:  # the residual panel below shares the axis and labels it
+    for ax in top:
         ax.tick_params(labelbottom=False)
-    return fig, top, bottom
 
 
 def _band(ax, tol: float | None, *, x=None, label: str = "tolerance") -> None:
@@ -148,10 +153,7 @@ def _edge_figure() -> tuple[Figure, list, list]:
     full = [(x, y, 2 * w + gap / PRINT_WIDTH_IN, h) for (x, y, w, h), _ in (g[2], g[3])]
     top = [fig.add_axes(g[0][0]), fig.add_axes(g[0][1]), fig.add_axes(full[0])]
     bot = [fig.add_axes(g[1][i], sharex=top[i]) for i in range(2)] + [fig.add_axes(full[1], sharex=top[2])]
-    for ax in top + bot:
-        ax.grid(alpha=0.3)
-    for ax in top:  # the residual panel below shares the axis and labels it
-        ax.tick_params(labelbottom=False)
+    _gridded_pairs(top, bot)
     return fig, top, bot
 
 
