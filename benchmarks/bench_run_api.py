@@ -39,6 +39,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--reduced", action="store_true", help="the tests' reduced scene instead of the default run")
     a = ap.parse_args()
+    if a.repeat < 1:
+        ap.error(f"--repeat = {a.repeat}: must be a whole number >= 1")
     n = a.repeat
     text = (ROOT / "tests" / "conftest.py").read_text()
     scene = re.search(r'REDUCED_SCENE_TOML = """(.*?)"""', text, re.S).group(1)
