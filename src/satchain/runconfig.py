@@ -142,17 +142,7 @@ class RunConfig(_Frozen):
         sections: dict[str, dict[str, Any]] = {}
         path = self.as_built_path()
         if path is not None:
-            from satchain.system import _read_toml
-
-            try:
-                data = _read_toml(path)
-            except (ConfigError, SatchainIOError) as exc:
-                raise type(exc)(f"as_built.file: {exc}") from None
-            for key, value in data.items():
-                if key in _SYSTEM_SECTIONS and isinstance(value, dict):
-                    sections[key] = dict(value)
-                elif key not in ("name", "description", "provenance"):
-                    raise ConfigError(f"as_built.file {str(path)!r}: {key}: unknown key (a system file's sections)")
+            design, sections = _as_built_file(path, design)
         for key, value in self.as_built.items():
             if key != "file":
                 sections[key] = _deep_merge(sections.get(key, {}), value)
@@ -185,6 +175,32 @@ class RunConfig(_Frozen):
 _SYSTEM_SECTIONS = ("orbit", "optics", "detector", "motion", "radiometry", "illumination", "atmosphere")
 #: Keys a system section accepts besides its fields (the system file's shorthands).
 _SHORTHANDS = {"optics": ("wavelength_m",), "detector": ("pitch_m", "fill_factor")}
+
+
+def _as_built_file(path: Path, design: ImagingSystem) -> tuple[ImagingSystem, dict[str, dict[str, Any]]]:
+    """What an ``[as_built] file`` gives: ``(base, sections)``. A complete system file (one that is valid on its
+    own) is the camera as built: ``(its system, {})``; a partial one is ``(design, its sections)``, to be merged
+    over the design. A ``[motion.line_of_sight] file`` in it is relative to it, as in a system file."""
+    from satchain.system import _read_toml
+
+    try:
+        data = _read_toml(path)
+    except (ConfigError, SatchainIOError) as exc:
+        raise type(exc)(f"as_built.file: {exc}") from None
+    los = data.get("motion", {}).get("line_of_sight") if isinstance(data.get("motion"), dict) else None
+    if isinstance(los, dict) and isinstance(los.get("file"), str):
+        los["file"] = str((path.parent / los["file"]).resolve())
+    try:
+        return ImagingSystem.from_dict(data), {}
+    except ConfigError:
+        pass  # not a camera on its own: its sections are merged over the design (and named if invalid there)
+    sections: dict[str, dict[str, Any]] = {}
+    for key, value in data.items():
+        if key in _SYSTEM_SECTIONS and isinstance(value, dict):
+            sections[key] = dict(value)
+        elif key not in ("name", "description", "provenance"):
+            raise ConfigError(f"as_built.file {str(path)!r}: {key}: unknown key (a system file's sections)")
+    return design, sections
 
 
 def _deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:

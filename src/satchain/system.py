@@ -127,7 +127,7 @@ class ImagingSystem(_Frozen):
         """A new validated system with dotted keys replaced, e.g. ``{"optics.obscuration_ratio": 0.3}``.
 
         For ``optics.focal_length_m`` / ``optics.f_number`` the other one follows (aperture fixed);
-        for ``detector.pitch_*`` the active width keeps its fill factor. An entry of a table list is named by
+        for ``detector.pitch_*`` each active width keeps its fraction of its pitch. An entry of a table list is named by
         its index: ``{"motion.oscillation[0].amplitude_px": 2.0}``.
 
         Examples
@@ -138,24 +138,24 @@ class ImagingSystem(_Frozen):
         2.0
         """
         d = self.model_dump(mode="python")
+        area = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("detector.") and k[9:] in _AREA_KEYS}
         for key, v in values.items():
             section, _, field = key.partition(".")
             if section not in _SECTIONS or not field:
                 raise ConfigError(f"parameter {key!r}: must be '<{'|'.join(_SECTIONS)}>.<field>'")
             sub = d[section]
-            if field.split(".")[0].split("[")[0] not in sub and field not in ("pitch_m", "fill_factor", "wavelength_m"):
+            if section == "detector" and field in _AREA_KEYS:
+                continue  # pitches and active area together, below
+            if field.split(".")[0].split("[")[0] not in sub and field != "wavelength_m":
                 raise ConfigError(f"parameter {key!r}: {section} has no field {field!r}")
             if section == "optics" and field in ("focal_length_m", "f_number"):
                 sub.pop("f_number" if field == "focal_length_m" else "focal_length_m")
             if section == "optics" and field == "wavelength_m":
                 field, v = "wavelengths_m", (v,)
                 sub["wavelength_weights"] = None
-            if section == "detector" and field in ("pitch_m", "fill_factor"):
-                ff = sub.pop("active_width_x_m") * sub.pop("active_width_y_m") / (sub["pitch_x_m"] * sub["pitch_y_m"])
-                if field == "pitch_m":
-                    sub.pop("pitch_x_m"), sub.pop("pitch_y_m")
-                sub.setdefault("fill_factor", ff)
             _set(sub, field, v, key)
+        if area:
+            _set_detector_area(d["detector"], area)
         return type(self).from_dict(d)
 
     def for_band(self, index: int) -> ImagingSystem:
@@ -340,6 +340,37 @@ _TIME_KEYS = {
     "orbit": {"earth_rotation": False, "yaw_steering": False, "pass_direction": "descending"},
     "motion": {"line_rate_error": 0.0, "oscillation": [], "jitter_psd": []},
 }
+
+
+#: The detector keys that together give its pitches and active area (``replace`` sets them together).
+_AREA_KEYS = ("pitch_m", "pitch_x_m", "pitch_y_m", "fill_factor", "active_width_x_m", "active_width_y_m")
+
+
+def _set_detector_area(sub: dict[str, Any], new: dict[str, Any]) -> None:
+    """Set the pitch and active-area keys ``new`` in a detector's dict (explicit pitches and widths).
+
+    A ``fill_factor`` replaces both active widths; an active width not given keeps its fraction of its pitch
+    (a new pitch scales it). Conflicting keys given together (fill factor and widths, ``pitch_m`` and another
+    ``pitch_x_m``) are left for the detector's validator to name.
+    """
+    old_pitch = {ax: sub[f"pitch_{ax}_m"] for ax in "xy"}
+    old_width = {ax: sub.pop(f"active_width_{ax}_m") for ax in "xy"}
+    if "pitch_m" in new:
+        for ax in "xy":
+            if f"pitch_{ax}_m" not in new:
+                sub.pop(f"pitch_{ax}_m")
+    sub.update(new)
+    if "fill_factor" in new:
+        return
+    for ax in "xy":
+        if f"active_width_{ax}_m" in new:
+            continue
+        try:
+            pitch = float(new.get(f"pitch_{ax}_m", new.get("pitch_m", old_pitch[ax])))
+        except (TypeError, ValueError):
+            continue  # the validator names the pitch
+        if math.isfinite(pitch) and pitch > 0:
+            sub[f"active_width_{ax}_m"] = old_width[ax] * (pitch / old_pitch[ax])
 
 
 def _set(sub: dict[str, Any], field: str, value: Any, key: str) -> None:
