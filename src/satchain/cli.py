@@ -21,6 +21,7 @@ from satchain._safety import (
     check_output_files,
     check_run_dir,
     check_sidecars,
+    terminate_as_interrupt,
 )
 from satchain.cli_options import BandsOpt
 from satchain.errors import ConfigError
@@ -342,13 +343,23 @@ def simulate(
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
     check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
-    bars = _StageBars()
+    bars, previous = _StageBars(), out.exists()
     try:
-        r = simulate_file(
-            input_, out, system_obj, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
-            units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
-            scheduler=scheduler, progress=bars, notify=_say, names=_SIMULATE_OPTIONS, band=band,
-        )  # fmt: skip
+        with terminate_as_interrupt() as received:  # SIGTERM as Ctrl-C: the staging files are removed, as by run
+
+            def progress(stage: str, done: int, total: int) -> None:
+                received.check()  # a signal whose exception library code swallowed stops it here
+                bars(stage, done, total)
+
+            r = simulate_file(
+                input_, out, system_obj, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+                units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
+                scheduler=scheduler, progress=progress, notify=_say, names=_SIMULATE_OPTIONS, band=band,
+            )  # fmt: skip
+            received.check()
+    except KeyboardInterrupt as exc:
+        bars.close()
+        raise typer.Exit(_interrupted(exc, out, previous, what="simulation", kind="staging files")) from None
     finally:
         bars.close()
     how = ", streamed" if r.streamed else ""
@@ -471,8 +482,10 @@ def run(
         raise typer.Exit(1)
 
 
-def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
-    """Say what an interrupted run left (the staging folder is already removed); the exit status 128 + signal."""
+def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool, *, what: str = "run",
+                 kind: str = "staging folder") -> int:  # fmt: skip
+    """Say what an interrupted run (or ``what``) left (its staging ``kind`` is already removed); the exit status
+    128 + signal."""
     import signal
 
     signum = getattr(exc, "signum", signal.SIGINT)
@@ -486,9 +499,10 @@ def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool) -> int:
         if previous
         else f"nothing was written to {str(out)!r}"
     )
+    removed = "were" if kind.endswith("s") else "was"
     err_console.print(
         Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
-        + Text(f"the run stopped and its staging folder was removed; {kept}"),
+        + Text(f"the {what} stopped and its {kind} {removed} removed; {kept}"),
         highlight=False,
         soft_wrap=True,
     )

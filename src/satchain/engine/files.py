@@ -37,6 +37,7 @@ from satchain._safety import (
     memory_limit_bytes,
 )
 from satchain._validate import check_choice
+from satchain.engine.georaster import check_scales
 from satchain.engine.memory import check_simulation_memory
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import Simulator
@@ -198,6 +199,7 @@ def simulate_file(
     """
     name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     _check_options(units, noise, seed, focal_plane_grid, name)
+    check_scales(scene_pixel_m, input_scale, name)
     out, fp_path = Path(out), (None if focal_plane is None else Path(focal_plane))
     _check_paths(input_, out, fp_path, name)
     if fp_path is None and Path(input_).suffix.lower() in GDAL_SUFFIXES:

@@ -45,7 +45,7 @@ import numpy as np
 from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError
 
-__all__ = ["WORK_BYTES", "RasterBandSource", "invalid_cells", "output_transform", "simulate_raster"]
+__all__ = ["WORK_BYTES", "RasterBandSource", "check_scales", "invalid_cells", "output_transform", "simulate_raster"]
 
 #: working memory a raster simulation plans for by default (the machine's limit when lower)
 WORK_BYTES = 1.25 * 2**30
@@ -54,6 +54,8 @@ REFLECTANCE_RANGE = (-0.5, 4.0)
 #: output rows per strip when the nodata cells are found (and the in-memory image written)
 _STRIP_ROWS = 256
 _PREVIEW_MAX_PX = 2048
+#: a pixel size given for a raster that states its own agrees with it within this relative difference
+PIXEL_RTOL = 1e-3
 
 Progress = Callable[[str, int, int], None]
 
@@ -189,18 +191,43 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
                               f"{r.count} data band{'s' * (r.count > 1)})")  # fmt: skip
         meta = _gdal_meta(r)
         _check_grid(r, path, scene_pixel_m, name)
-        if scene_pixel_m is None and r.pixel_m is None and isinstance(meta.get("pixel_m"), float):
-            pixel_m = meta["pixel_m"]  # satchain's description or resolution tags of an ungeoreferenced TIFF
+        own = r.pixel_m[0] if r.pixel_m is not None else meta.get("pixel_m")
+        own = own if isinstance(own, float) else None  # the transform's, or satchain's tags of a local TIFF
+        if scene_pixel_m is None and r.pixel_m is None and own is not None:
+            pixel_m = own
         elif scene_pixel_m is None:
             pixel_m = r.require_pixel_m(name("scene_pixel_m"))[0]
         else:
-            pixel_m = float(scene_pixel_m)
+            pixel_m = _given_pixel_m(float(scene_pixel_m), own, path, name)
         transform = r.transform
         if not r.georeferenced:  # local metric grid, origin (0, 0), north up (as satchain's own TIFFs)
             from affine import Affine
 
             transform = Affine(pixel_m, 0.0, 0.0, 0.0, -pixel_m, 0.0)
         return _Plan(path, r.count, r.shape, pixel_m, r.crs, transform, r.descriptions, meta)
+
+
+def check_scales(scene_pixel_m: float | None, input_scale: float | None, name: Callable[[str], str]) -> None:
+    """Refuse a ground pixel size or an input scale that is not a finite number > 0 (a NaN pixel size has no
+    output size; a zero or NaN scale makes every value 0 or NaN), naming the option."""
+    from satchain._validate import check_positive, check_range
+
+    if scene_pixel_m is not None:
+        check_range(name("scene_pixel_m"), scene_pixel_m, 0.0, 1e6, lo_open=True)
+    if input_scale is not None:
+        check_positive(name("input_scale"), input_scale)
+
+
+def _given_pixel_m(given: float, own: float | None, path: Path, name: Callable[[str], str]) -> float:
+    """The pixel size to use when one is given: the file's where they agree (to :data:`PIXEL_RTOL`: the output's
+    transform is the file's, so it stays exact), refused where they contradict; the given one without the file's."""
+    if own is None:
+        return given
+    if not math.isclose(given, own, rel_tol=PIXEL_RTOL):
+        raise ConfigError(f"{name('scene_pixel_m')} = {given:g}: contradicts {str(path)!r}, whose pixels are "
+                          f"{own:.6g} m (its georeference); leave {name('scene_pixel_m')} out to use the file's, "
+                          "or resample the file to the size you mean (e.g. gdalwarp -tr RES RES)")  # fmt: skip
+    return own
 
 
 def _check_grid(r, path: Path, scene_pixel_m: float | None, name: Callable[[str], str]) -> None:
@@ -282,8 +309,9 @@ def _valid_mean(r, band: int, scaled: bool, gain: float, rows: int = 512) -> flo
     return total / count if count else None
 
 
-def _nodata_for(units: str, bits: int) -> tuple[np.dtype, float, float]:
-    """(file dtype, nodata value, the lowest valid value) of the output."""
+def _nodata_for(units: str, bits: int | None) -> tuple[np.dtype, float, float]:
+    """(file dtype, nodata value, the lowest valid value) of the output; ``bits`` (the camera's ADC bits) is
+    needed for DN only."""
     from satchain.io import simulated_dtype
 
     dt = simulated_dtype(units, bits)
@@ -340,6 +368,7 @@ def simulate_raster(
 
     name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     path, out = Path(input_), Path(out)
+    check_scales(scene_pixel_m, input_scale, name)
     plan = _plan_input(path, band, scene_pixel_m, name)
     from satchain.engine.files import MIN_INPUT_PX
 
@@ -360,8 +389,10 @@ def simulate_raster(
     planned = [_simulator(s, plan, budget, seed) for s in systems]  # one line-of-sight motion for every band
     sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
     sim0 = sims[0]
+    for b, src, sim in zip(bands, sources, sims, strict=True):
+        _check_some_valid(src, sim, b, name)
     sensor = sensor_from_system(systems[0]) if (units != "reflectance" or noise) else None
-    bits = sensor.bit_depth if sensor is not None else system.detector.bit_depth
+    bits = sensor.bit_depth if sensor is not None else None  # an ADC range only where a sensor forms DN
     dtype, nodata, lowest = _nodata_for(units, bits)
     transform = output_transform(plan.transform, sim0.k)
     meta = {"system": system.name, "seed": int(seed), "noise": bool(noise), "gsd_act_m": system.gsd_act_m,
@@ -402,6 +433,25 @@ def simulate_raster(
     preview = _write_preview(out, nodata)
     return {"shape_px": sim0.output_shape, "count": len(bands), "streamed": streamed, "metadata": meta,
             "preview": preview, "transform": transform, "crs": plan.crs}  # fmt: skip
+
+
+def _check_some_valid(src: RasterBandSource, sim, band: int, name: Callable[[str], str]) -> None:
+    """Refuse a band whose every output pixel would be nodata (each pitch cell touches an invalid input pixel):
+    read strip by strip, it stops at the first strip that holds a valid output pixel."""
+    if not src.masked:
+        return
+    ny = sim.output_shape[0]
+    for r0 in range(0, ny, _STRIP_ROWS):
+        bad = src.invalid_cells(sim, (r0, min(r0 + _STRIP_ROWS, ny)))
+        if bad is None or not bad.all():
+            return
+    ky, kx = sim.k
+    raise InputError(
+        f"{name('input')} {str(src.path)!r}: band {band}: every output pixel would be nodata: each output pixel "
+        f"covers {kx:.3g} x {ky:.3g} input pixels and an output pixel is valid only where all of them are, but no "
+        f"such cell of valid data exists (the valid data is narrower than one output pixel of "
+        f"{sim.system.gsd_act_m:g} x {sim.system.gsd_alt_m:g} m); nothing was written"
+    )
 
 
 def _check_output_disk(plan: _Plan, system, n_bands: int, units: str, out: Path) -> None:
@@ -464,10 +514,11 @@ class _Writer:
     """Writes output rows of one band into the staging dataset: DN rounded and clipped, nodata where the
     pitch cell touches an invalid input pixel (found in strips of :data:`_STRIP_ROWS` rows)."""
 
-    def __init__(self, dst, index: int, src: RasterBandSource, sim, dtype, nodata: float, lowest: float, bits: int):
+    def __init__(self, dst, index: int, src: RasterBandSource, sim, dtype, nodata: float, lowest: float,
+                 bits: int | None):  # fmt: skip
         self.dst, self.index, self.src, self.sim = dst, index, src, sim
         self.dtype, self.nodata, self.lowest = np.dtype(dtype), nodata, lowest
-        self.top = 2.0**bits - 1
+        self.top = None if self.dtype.kind == "f" else 2.0**bits - 1  # DN only: float units have no ADC range
         self.n_nodata = 0
 
     def rows(self, r0: int, img: np.ndarray) -> None:

@@ -1,0 +1,159 @@
+"""`satchain simulate` of GDAL rasters (issue 29): a system without ``bit_depth`` writes reflectance, float options
+that are not finite and > 0 are refused by name, a pixel size that contradicts the file's is refused, and an input
+whose valid data cannot give one valid output pixel is refused instead of written as 100 % nodata."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import rasterio
+from rasterio import Affine
+from typer.testing import CliRunner
+
+import satchain
+from satchain.cli import app
+from satchain.errors import ConfigError
+
+runner = CliRunner()
+PX = 0.07
+
+#: a complete but minimal system file: no full_well_e, no bit_depth (as the README's mycamera.toml)
+MINIMAL = """name = "mini"
+[orbit]
+altitude_m = 567000.0
+[optics]
+aperture_diameter_m = 0.70
+f_number = 9.72
+wavelengths_m = [6.5e-7]
+[detector]
+pitch_m = 5.88e-6
+"""
+PUSHBROOM = """[motion]
+[[motion.oscillation]]
+axis = "act"
+amplitude_px = 0.5
+frequency_hz = 4465.0
+"""
+
+
+def _write(path, data, *, px=PX, nodata=None):
+    data = np.asarray(data)
+    data = data[None] if data.ndim == 2 else data
+    with rasterio.open(path, "w", driver="GTiff", width=data.shape[2], height=data.shape[1], count=data.shape[0],
+                       dtype=data.dtype.name, crs="EPSG:32636", transform=Affine(px, 0, 5e5, 0, -px, 4.4e6),
+                       nodata=nodata) as d:  # fmt: skip
+        d.write(data)
+    return path
+
+
+def _edge(n=240, bands=1) -> np.ndarray:
+    """Reflectance 0.2 | 0.6 across a vertical edge, as float32."""
+    x = np.arange(n)[None, :] + np.zeros((n, 1))
+    a = np.where(x < n / 2, 0.2, 0.6).astype(np.float32)
+    return np.stack([a] * bands)
+
+
+def _sim(*args):
+    return runner.invoke(app, ["simulate", *map(str, args)])
+
+
+@pytest.fixture()
+def minimal(tmp_path):
+    p = tmp_path / "mycamera.toml"
+    p.write_text(MINIMAL)
+    return p
+
+
+# ------------------------------------------------------------------------------------- item 1: no bit_depth
+@pytest.mark.parametrize("extra", ["", "--band 1", "pushbroom"])
+def test_reflectance_without_noise_from_a_system_without_bit_depth(tmp_path, minimal, extra):
+    system = minimal
+    if extra == "pushbroom":
+        system = tmp_path / "pushbroom.toml"
+        system.write_text(MINIMAL + PUSHBROOM)
+    src = _write(tmp_path / "in.tif", _edge(bands=2))
+    out = tmp_path / "out.tif"
+    band = extra.split() if extra.startswith("--band") else []
+    r = _sim(src, "--system", system, "--units", "reflectance", "--no-noise", *band, "-o", out)
+    assert r.exit_code == 0, r.output
+    with rasterio.open(out) as o:
+        assert o.dtypes[0] == "float32" and o.count == (1 if band else 2)
+        a = o.read(1)
+    # the edge's two sides keep their reflectance (no DN range clips or rounds them)
+    assert np.nanmedian(a[:, :3]) == pytest.approx(0.2, abs=0.02)
+    assert np.nanmedian(a[:, -3:]) == pytest.approx(0.6, abs=0.02)
+
+
+def test_a_sweep_of_a_system_without_bit_depth_in_reflectance(tmp_path, minimal):
+    src = _write(tmp_path / "in.tif", _edge())
+    r = _sim(src, "--system", minimal, "--units", "reflectance", "--no-noise", "--sweep", "motion.smear_px=0.5,1",
+             "-o", tmp_path / "sw")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    cases = json.loads((tmp_path / "sw" / "manifest.json").read_text())["cases"]
+    assert [c["status"] for c in cases] == ["written", "written"]
+
+
+# ------------------------------------------------------------------------------ items 3 and 6: float options
+@pytest.mark.parametrize("option", ["--scene-pixel-m", "--input-scale"])
+@pytest.mark.parametrize("value", ["nan", "inf", "0", "-0.5"])
+@pytest.mark.parametrize("suffix", [".tif", ".npy"])
+def test_a_scale_that_is_not_finite_and_positive_is_refused_by_name(tmp_path, option, value, suffix):
+    if suffix == ".tif":
+        src = _write(tmp_path / "in.tif", _edge())
+    else:
+        src = tmp_path / "in.npy"
+        np.save(src, _edge()[0])
+    pixel = [] if option == "--scene-pixel-m" or suffix == ".tif" else ["--scene-pixel-m", PX]
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", option, value, *pixel, "-o", out)
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert option in line and "unexpected" not in line and "nodata" not in line
+    assert "finite" in line or "must be" in line
+    assert not out.exists()
+
+
+# ----------------------------------------------------------------------------- item 5: contradicting pixel size
+def test_a_pixel_size_that_contradicts_the_files_transform_is_refused(tmp_path):
+    src = _write(tmp_path / "in.tif", _edge())
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", "--scene-pixel-m", "0.5", "-o", out)
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "--scene-pixel-m" in line and "0.5" in line and "0.07" in line
+    assert not out.exists()
+
+
+def test_a_pixel_size_that_agrees_with_the_files_transform_is_accepted(tmp_path):
+    src = _write(tmp_path / "in.tif", _edge())
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", "--scene-pixel-m", "0.07", "--units", "reflectance", "--no-noise",
+             "-o", out)  # fmt: skip
+    assert r.exit_code == 0, r.output
+    with rasterio.open(out) as o:
+        system = satchain.load_preset("ankarasat3")
+        assert o.transform.a == pytest.approx(system.gsd_act_m, rel=1e-9)
+
+
+def test_simulate_image_refuses_a_pixel_m_that_contradicts_its_transform():
+    system = satchain.load_preset("ankarasat3")
+    t = Affine(PX, 0, 5e5, 0, -PX, 4.4e6)
+    with pytest.raises(ConfigError, match=r"pixel_m.*0\.5.*0\.07"):
+        satchain.simulate_image(_edge()[0], system, pixel_m=0.5, transform=t, noise=False, units="reflectance")
+    r = satchain.simulate_image(_edge()[0], system, pixel_m=PX, transform=t, noise=False, units="reflectance")
+    assert r.transform.a == pytest.approx(system.gsd_act_m, rel=1e-9)
+
+
+# --------------------------------------------------------------------- item 4: valid data narrower than a pixel
+def test_valid_data_narrower_than_an_output_pixel_is_refused_not_written_as_nodata(tmp_path):
+    a = np.zeros((240, 240), np.uint16)
+    a[:, 120:123] = 30000  # a 3-px (0.21 m) column: less than one 0.49 m output pixel
+    src = _write(tmp_path / "col.tif", a, nodata=0)
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", "-o", out)
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "nodata" in line and "output pixel" in line and "unexpected" not in line
+    assert not out.exists()
