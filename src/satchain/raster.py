@@ -194,8 +194,8 @@ class RasterReader:
             with _gdal_env():
                 out = self._ds.read(b, window=win)
         except Exception as exc:  # rasterio raises RasterioIOError / CPLE_* for damaged data
-            raise SatchainIOError(f"image = {str(self.path)!r}: cannot read window {(row0, col0, height, width)} "
-                                  f"of band {b}: {_one_line(exc)}") from None  # fmt: skip
+            what = f"window {(row0, col0, height, width)} of band {b}"
+            raise _read_failure(self.path, self.driver, what, exc) from exc
         if scaled:
             i = self._bands.index(b)
             out = out.astype(np.float64) * self.scales[i] + self.offsets[i]
@@ -212,8 +212,8 @@ class RasterReader:
             with _gdal_env():
                 return self._ds.read_masks(b, window=win) > 0
         except Exception as exc:
-            raise SatchainIOError(f"image = {str(self.path)!r}: cannot read the mask of window "
-                                  f"{(row0, col0, height, width)}: {_one_line(exc)}") from None  # fmt: skip
+            what = f"the mask of window {(row0, col0, height, width)}"
+            raise _read_failure(self.path, self.driver, what, exc) from exc
 
     def overview(self, max_px: int = 1024, *, band: int | None = None, scaled: bool = False):
         """``(values, valid)`` of the whole band decimated (nearest) to at most ``max_px`` a side, from the
@@ -229,7 +229,7 @@ class RasterReader:
                 out = self._ds.read(b, out_shape=shape, resampling=Resampling.nearest)
                 valid = self._ds.read_masks(b, out_shape=shape, resampling=Resampling.nearest) > 0
         except Exception as exc:
-            raise SatchainIOError(f"image = {str(self.path)!r}: cannot read band {b}: {_one_line(exc)}") from None
+            raise _read_failure(self.path, self.driver, f"band {b}", exc) from exc
         if scaled:
             i = self._bands.index(b)
             out = out.astype(np.float64) * self.scales[i] + self.offsets[i]
@@ -272,6 +272,90 @@ def open_raster(path: str | os.PathLike, *, band: int | None = None) -> RasterRe
 # ------------------------------------------------------------------------------------------------ helpers
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _read_failure(path: Path, driver: str, what: str, exc: BaseException) -> SatchainIOError:
+    """The error for a read GDAL refused, saying why where the file shows it: a VRT's missing source file, a
+    TIFF or JPEG 2000 file cut short, else data that cannot be decoded (corrupt); GDAL's own message (rasterio
+    puts it in the exception's cause) ends the line."""
+    cause = exc.__cause__ or exc.__context__
+    gdal = _one_line(cause if cause is not None else exc)
+    why = _damage(path, driver)
+    if why is None:
+        why = "its data cannot be decoded: the file is corrupt (damaged bytes) or in an encoding GDAL cannot read"
+    return SatchainIOError(f"image = {str(path)!r}: cannot read {what}: {why} (GDAL: {gdal})")
+
+
+def _damage(path: Path, driver: str) -> str | None:
+    """What is wrong with a file whose data GDAL could not read, where the file shows it; None where it does not."""
+    try:
+        size = path.stat().st_size
+        if driver == "VRT":
+            missing = _vrt_missing_sources(path)
+            if not missing:
+                return None
+            names = ", ".join(repr(str(m)) for m in missing[:3]) + (" ..." if len(missing) > 3 else "")
+            verb = "is" if len(missing) == 1 else "are"
+            return f"the VRT's source file{'s' * (len(missing) > 1)} {names} {verb} missing (no such file)"
+        need = None
+        if driver in ("GTiff", "COG"):
+            need = _tiff_data_end(path)
+        elif driver.startswith("JP2"):
+            need = _jp2_needs(path, size)
+    except Exception:  # the diagnosis is best effort: the read error itself is what is reported
+        return None
+    if need is None or need <= size:
+        return None
+    return (
+        f"the file is truncated: it is {size} bytes but its data runs to {need} bytes (a download or copy cut short?)"
+    )
+
+
+def _vrt_missing_sources(path: Path) -> list[Path]:
+    """The source files a VRT names that do not exist (relative names resolved as GDAL does)."""
+    import xml.etree.ElementTree as ET
+
+    missing = []
+    for el in ET.parse(path).getroot().iter("SourceFilename"):
+        name = (el.text or "").strip()
+        if not name or name.startswith("/vsi") or "://" in name:
+            continue
+        src = path.parent / name if el.get("relativeToVRT", "0") == "1" else Path(name)
+        if not src.exists() and src not in missing:
+            missing.append(src)
+    return missing
+
+
+def _tiff_data_end(path: Path) -> int:
+    """The byte where a TIFF's image data ends, by its strip / tile offsets and byte counts."""
+    import tifffile
+
+    with tifffile.TiffFile(path) as t:
+        ends = [int(o) + int(c) for pg in t.pages for o, c in zip(pg.dataoffsets, pg.databytecounts, strict=False)]
+    return max(ends, default=0)
+
+
+def _jp2_needs(path: Path, size: int) -> int | None:
+    """The size a JPEG 2000 file must have by its boxes (``size + 2`` when its codestream, running to the end of
+    the file, lacks its end-of-codestream marker), or None when it is not a JP2 box file."""
+    pos = 0
+    with path.open("rb") as f:
+        while pos + 8 <= size:
+            f.seek(pos)
+            head = f.read(16)
+            length, kind, n = int.from_bytes(head[:4], "big"), head[4:8], 8
+            if length == 1:
+                length, n = int.from_bytes(head[8:16], "big"), 16
+            if 0 < length < n:
+                return None
+            end = size if length == 0 else pos + length
+            if end > size:
+                return end
+            if kind == b"jp2c":
+                f.seek(end - 2)
+                return None if f.read(2) == b"\xff\xd9" else size + 2  # stops before its EOC marker
+            pos = end
+    return None
 
 
 def _open_dataset(path: Path):
