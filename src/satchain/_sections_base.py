@@ -83,6 +83,52 @@ def _config_error(exc: ValidationError, title: str = "invalid imaging system") -
     return ConfigError(f"{title}: " + "; ".join(lines))
 
 
+def _model_of(annotation: Any) -> type[BaseModel] | None:
+    """The section model a field holds (``Spiders | None``, ``tuple[Oscillation, ...]``), or None."""
+    if isinstance(annotation, type) and issubclass(annotation, _StrictNumbers):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        model = _model_of(arg)
+        if model is not None:
+            return model
+    return None
+
+
+def _unknown_key_lines(model: type[BaseModel], data: Any, loc: str = "") -> list[str]:
+    """One line per key of ``data`` (nested sections and arrays of tables included) that ``model`` does not
+    take, naming the closest valid key (difflib) or listing the allowed ones."""
+    import difflib
+
+    if not isinstance(data, dict):
+        return []
+    known = [*model.model_fields, *getattr(model, "_input_keys", ())]
+    lines = []
+    for key, value in data.items():
+        where = f"{loc}.{key}" if loc else str(key)
+        if key not in known:
+            close = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]}?" if close else f"allowed: {', '.join(known)}"
+            lines.append(f"{where}: unknown key; {hint}")
+            continue
+        sub = _model_of(model.model_fields[key].annotation) if key in model.model_fields else None
+        if sub is None:
+            continue
+        if isinstance(value, (list, tuple)):
+            for i, item in enumerate(value):
+                lines += _unknown_key_lines(sub, item, f"{where}[{i}]")
+        else:
+            lines += _unknown_key_lines(sub, value, where)
+    return lines
+
+
+def refuse_unknown_keys(model: type[BaseModel], data: Any, title: str) -> None:
+    """Refuse misspelt or unknown keys before any validation, so that the missing-key and consistency errors
+    that follow from a misspelling ("optics.f_number: required key is missing") do not hide it."""
+    lines = _unknown_key_lines(model, data)
+    if lines:
+        raise ConfigError(f"{title}: " + "; ".join(lines))
+
+
 class _StrictNumbers(BaseModel):
     """Refuses a bool (``true`` taken as 1), a string (``"0.035"``) or NaN/inf where a number is wanted, in
     every field and in the items of tuple and dict fields, and anything but true/false for a flag, with a
@@ -91,7 +137,11 @@ class _StrictNumbers(BaseModel):
     #: the start of the one-line error of a direct construction, e.g. ``ImagingSystem(orbit=5)``
     _error_title: ClassVar[str] = ""
 
+    #: keys a ``mode="before"`` validator takes besides the fields (``detector.pitch_m``, ``fill_factor``)
+    _input_keys: ClassVar[tuple[str, ...]] = ()
+
     def __init__(self, /, **data: Any) -> None:
+        refuse_unknown_keys(type(self), data, self._error_title or f"invalid {type(self).__name__}")
         try:
             super().__init__(**data)
         except ValidationError as exc:

@@ -93,13 +93,13 @@ def jitter(
     ``i`` is at ``t = i x --line-time``; frequencies above the line-rate Nyquist ``1 / (2 line time)`` appear
     folded (aliased).  ``-o DIR`` writes jitter.json and jitter.png.
     """
-    from satchain.measure.jitter import measure_jitter
+    from satchain.measure.jitter import check_line_time, measure_jitter
     from satchain.report.measure_plots import plot_jitter
 
     check_dir_outputs(out, ["jitter.json", "jitter.png"], {"IMAGE": image})
-    from satchain._validate import check_positive, check_range
+    from satchain._validate import check_range
 
-    check_positive("--line-time", line_time)
+    check_line_time("--line-time", line_time)
     check_range("--max-peaks", max_peaks, 1, 10)
     check_range("--false-alarm", false_alarm, 0.0, 0.5, lo_open=True, hi_open=True)
     data, p, meta = load_image(image, pixel_m, band)

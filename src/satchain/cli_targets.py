@@ -157,6 +157,19 @@ def _star_tables(r, name: str, region, p: float | None, note: str | None = None)
     print_flags(r.flags)
 
 
+def _check_center_inside(text: str, c, shape, roi_text, region) -> None:
+    """Refuse a ``--center`` outside the image (or outside ``--roi``), naming both (issue 29)."""
+    ny, nx = shape[-2:]
+    x0, y0, x1, y1 = (0, 0, nx, ny) if region is None else region
+    x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, nx), min(y1, ny)
+    if not (x0 <= c[0] <= x1 - 1 and y0 <= c[1] <= y1 - 1):
+        where = "the image" if region is None else f"--roi {roi_text}"
+        raise ConfigError(
+            f"--center = {text}: outside {where} (x in [{x0:g}, {x1 - 1:g}], y in [{y0:g}, {y1 - 1:g}] px); give "
+            "the star's approximate centre X,Y in whole-image pixels"
+        )
+
+
 @handle_errors
 def star(
     image: ImageArg,
@@ -188,6 +201,8 @@ def star(
     check_star_radius(radius, data.shape)
     region = parse_roi("--roi", roi)
     c = None if center is None else parse_numbers("--center", center, 2)
+    if c is not None:
+        _check_center_inside(center, c, data.shape, roi, region)
     if c is not None and region is not None:
         c = [c[0] - region[0], c[1] - region[1]]
     r = measure_star(

@@ -12,6 +12,7 @@ from typing import Any, Literal
 
 from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from satchain._sections_base import refuse_unknown_keys
 from satchain.errors import ConfigError, SatchainIOError
 from satchain.sections import _StrictNumbers
 from satchain.system import ImagingSystem, _config_error, load_preset
@@ -114,6 +115,7 @@ class RunConfig(_Frozen):
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], *, base_dir: str | Path = ".") -> RunConfig:
+        refuse_unknown_keys(cls, data, "invalid run configuration")
         try:
             return cls.model_validate({**data, "base_dir": str(base_dir)})
         except ValidationError as exc:

@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -217,6 +217,8 @@ class Detector(_Frozen):
     area by ``fill_factor`` (area fraction, square active area centred in the pixel) or by
     ``active_width_x_m`` / ``active_width_y_m``."""
 
+    _input_keys: ClassVar[tuple[str, ...]] = ("pitch_m", "fill_factor")  # turned into fields by _pitch_and_fill
+
     pitch_x_m: float = Field(gt=0, le=1e-3)
     pitch_y_m: float = Field(gt=0, le=1e-3)
     active_width_x_m: float = Field(gt=0)
@@ -360,6 +362,15 @@ class Motion(_Frozen):
     @classmethod
     def _one_or_more(cls, v: Any) -> Any:
         return as_tables(v)
+
+    @field_validator("oscillation", mode="before")
+    @classmethod
+    def _array_of_tables(cls, v: Any) -> Any:
+        if isinstance(v, dict):  # [motion.oscillation] (one table) where [[motion.oscillation]] is meant
+            raise ValueError(
+                "motion.oscillation must be an array of tables: write [[motion.oscillation]] (one per oscillation)"
+            )
+        return v
 
     @property
     def time_varying(self) -> bool:

@@ -14,7 +14,7 @@ that axis (the GSD on the ground).
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -102,6 +102,8 @@ class LineOfSightLog(_Frozen):
     >>> log.alt_px, log.duration_s
     ((0.0, 0.0, 0.0), 0.02)
     """
+
+    _input_keys: ClassVar[tuple[str, ...]] = ("file",)  # read into time_s, act_px, alt_px by _file
 
     time_s: tuple[float, ...] = Field(min_length=2, max_length=MAX_LOG_SAMPLES)
     act_px: tuple[float, ...] | None = Field(default=None, max_length=MAX_LOG_SAMPLES)

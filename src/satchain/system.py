@@ -36,6 +36,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from satchain._sections_base import refuse_unknown_keys
 from satchain.sections import (  # noqa: F401  (re-exported: the sections are part of this module's API)
     EARTH_GM_M3_PER_S2,
     EARTH_RADIUS_M,
@@ -100,6 +101,7 @@ class ImagingSystem(_Frozen):
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ImagingSystem:
         """Validate a nested mapping (as read from TOML); raise ConfigError naming the key on failure."""
+        refuse_unknown_keys(cls, data, "invalid imaging system")
         try:
             return cls.model_validate(data)
         except ValidationError as exc:

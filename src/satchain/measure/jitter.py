@@ -181,9 +181,22 @@ def measure_jitter(
     )  # fmt: skip
 
 
+#: The line times accepted (s): a line rate of 1 mHz to 1 GHz; far outside, the fit's frequencies overflow.
+LINE_TIME_RANGE_S = (1e-9, 1e3)
+
+
+def check_line_time(name: str, value) -> float:
+    """``value`` as a line time in :data:`LINE_TIME_RANGE_S`, else a ConfigError naming ``name`` and the range."""
+    lo, hi = LINE_TIME_RANGE_S
+    dt = check_positive(name, value)
+    if not lo <= dt <= hi:
+        raise ConfigError(f"{name} = {value!r}: must be in [{lo:g}, {hi:g}] s (a line rate of 1 mHz to 1 GHz)")
+    return dt
+
+
 def _check_args(line_time_s, max_peaks, false_alarm, min_amplitude_px):
     """The checked options of :func:`measure_jitter`."""
-    dt = check_positive("line_time_s", line_time_s)
+    dt = check_line_time("line_time_s", line_time_s)
     n = check_range("max_peaks", max_peaks, 1, 10)
     if n != int(n):
         raise ConfigError(f"max_peaks = {max_peaks!r}: must be an integer in [1, 10]")

@@ -203,6 +203,11 @@ def _geometry(data, n, center, radius_px, f_max):
     """Start centre, outer and inner radius (checked)."""
     ny, nx = data.shape
     xc, yc = ((nx - 1) / 2, (ny - 1) / 2) if center is None else (float(center[0]), float(center[1]))
+    if not (0 <= xc <= nx - 1 and 0 <= yc <= ny - 1):  # (a NaN is refused here too)
+        raise InputError(
+            f"center = ({xc:g}, {yc:g}): outside the region (x in [0, {nx - 1}], y in [0, {ny - 1}] px); give "
+            "the star's approximate centre in pixels of the region"
+        )
     r_out = min(xc, yc, nx - 1 - xc, ny - 1 - yc) if radius_px is None else float(radius_px)
     return xc, yc, r_out, max(n / (2 * np.pi * f_max), 2.0)
 
