@@ -231,12 +231,13 @@ def test_bars_target_corrected_to_the_square_wave_ctf(tmp_path):
 
 
 def test_bars_table_names_a_refused_group_instead_of_nan(tmp_path):
-    """One group of a 4-group target flattened to a uniform grey: the table says "refused" in its row and
-    gives the reason; no "nan" is printed; the other groups keep their numbers."""
+    """One group of a 4-group target replaced by a 2.7 px grating (no bars of its 6 px period; a uniform grey would
+    be a CTF ~0 at the noise floor, issue 29): the table says "refused" in its row and gives the reason; no "nan"
+    is printed; the other groups keep their numbers."""
     periods = (12.0, 6.0, 4.0, 3.0)
     img, rois = _bar_target(periods)
     x0, _, x1, _ = (int(v) for v in rois[1].split(","))
-    img[:, x0 - 3 : x1 + 3] = 100.0
+    img[:, x0 - 3 : x1 + 3] = 100.0 + 50.0 * np.cos(2 * np.pi * np.arange(x0 - 3, x1 + 3) / 2.7)
     path = _write(tmp_path, "target", img, "npy")
     args = ["bars", str(path), "--periods-px", ",".join(f"{p:g}" for p in periods), "--levels", "40,160"]
     for r in rois:

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 
 from satchain.errors import InputError
 from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
+from satchain.measure._bargroups import renumber
 from satchain.measure._common import to_jsonable
 from satchain.measure.bars import measure_bars
 from satchain.measure.edge import measure_edge
@@ -225,6 +227,7 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     direction = "ACT" if orientation == "act" else "ALT"
     r = _measure_kept(ctx, it, keep, rois, (direction, levels), skipped)
     groups = [it["groups"][k] for k in keep]
+    r = replace(r, flags=tuple(renumber(r.flags, keep)))  # every group named by its index in the target's design
     periods_px = [_period_px(frame, g, orientation) for g in groups]
     summary = {
         "id": it["id"],
@@ -301,17 +304,23 @@ def _measure_kept(ctx: AutoContext, it: dict, keep: list, rois: list, opts: tupl
             if bad is None or len(keep) < 2:
                 raise
             j = int(bad.group(1))
-            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {exc}"))
+            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {_design(exc, keep)}"))
             del keep[j], rois[j]
             continue
         if not r.refused:
             return r
         for j, why in sorted(r.refused, reverse=True):  # refused alone by measure_bars: listed, the rest remeasured
-            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {why}"))
+            skipped.append(skip_entry(f"{it['id']}/group_{keep[j]}", "bar_group", f"refused: {_design(why, keep)}"))
             del keep[j], rois[j]
 
 
 def _group_rows(r, keep: list, groups: list, periods_px: list, rois: list) -> list[dict]:
+def _design(msg, keep: list) -> str:
+    """A refusal of :func:`measure_bars` with its groups named by their index in the target's design (``keep``:
+    the design index of each group it was given)."""
+    return re.sub(r"(group_rois|periods_px)\[(\d+)\]", lambda m: f"{m.group(1)}[{keep[int(m.group(2))]}]", str(msg))
+
+
     """One summary row per measured group."""
     return [
         {
@@ -324,7 +333,7 @@ def _group_rows(r, keep: list, groups: list, periods_px: list, rois: list) -> li
             "mtf": m,
             "phase_px": ph,
             "ctf_correction": None if r.ctf_correction is None else float(r.ctf_correction[j]),
-            "flags": [f for f in r.flags if f.startswith(f"group {j}:")],
+            "flags": [f for f in r.flags if f.startswith(f"group {k}:")],
         }
         for j, (k, g, pp, roi, c, cs, m, ph) in enumerate(
             zip(keep, groups, periods_px, rois, r.ctf, r.ctf_std, r.mtf, r.phase_px, strict=True)

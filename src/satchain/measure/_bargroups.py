@@ -17,8 +17,9 @@ from satchain.errors import InputError
 from satchain.measure._barfinite import group_centres
 from satchain.measure._barfit import GroupFit, fit_group
 from satchain.measure._common import clipping_flag, crop_roi
+from satchain.measure._keys import AT_NOISE_FLOOR
 
-__all__ = ["measure_groups", "validate_deferred", "scatter", "renumber", "refusal_flags", "Groups"]
+__all__ = ["AT_NOISE_FLOOR", "measure_groups", "validate_deferred", "scatter", "renumber", "refusal_flags", "Groups"]
 
 
 def _profile(image, roi, direction: str, period: float, index: int, full_scale: float | None = None):
@@ -40,20 +41,29 @@ def _profile(image, roi, direction: str, period: float, index: int, full_scale: 
     return prof, noise, ([f"group {index}: {clip}"] if clip else [])
 
 
-def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, deferred: dict | None = None) -> list[str]:
+#: A fitted modulation is significant above this many of its 1-sigma.
+SIGNIFICANT_SIGMAS = 5.0
+
+
+def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, deferred: dict | None = None,
+                 floor_ok: bool = False, noise: float | None = None) -> list[str]:  # fmt: skip
     """Refuse profiles that are not bars at ``period``; return flags.  With ``deferred`` (a target of three or
     more groups), a profile the periodic model misfits is not refused here: its refusal is recorded under
-    ``index`` and decided against the target's MTF model (``validate_deferred``)."""
+    ``index`` and decided against the target's MTF model (``validate_deferred``).  With ``floor_ok`` (a target
+    of two or more groups), a modulation not above the noise is a measurement at the noise floor
+    (:func:`_noise_floor_flag`; ``noise``: the profile's, from its rows), not a refusal."""
     from satchain.measure._barfit import period_gain
 
     g_claim, g_other, f_other = period_gain(prof, period)
+    if floor_ok and not _significant(fit):
+        return _noise_floor_flag(fit, prof, period, index, (g_other, f_other), noise)
     if prof.size >= 2.5 * period and not g_claim > g_other:  # shorter: too few bins (misfit check below)
         raise InputError(
             f"periods_px[{index}] = {period:g}: the profile's dominant period is {1 / f_other:.3g} px "
             f"(frequency {f_other:.3f} cy/px), not {period:g} px: no bars at that period in the region"
         )
     amp = abs(float(np.sum(fit.amps)))
-    if not (np.isfinite(fit.modulation_std) and fit.modulation > 5 * fit.modulation_std) or amp <= 0:
+    if not _significant(fit):
         raise InputError(
             f"group_rois[{index}]: no significant bar modulation at period {period:g} px "
             f"({fit.modulation:.3g} +- {fit.modulation_std:.2g})"
@@ -96,6 +106,43 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, def
             "are sampled at their zero crossings at this phase (unobserved, not in the CTF): a sharp system's CTF "
             "may be off by a few %"
         )
+    if period < 2.5:
+        flags.append(_short_period_flag(index, period))
+    return flags
+
+
+def _significant(fit: GroupFit) -> bool:
+    """The fitted modulation stands above :data:`SIGNIFICANT_SIGMAS` of its 1-sigma."""
+    amp = abs(float(np.sum(fit.amps)))
+    above = np.isfinite(fit.modulation_std) and fit.modulation > SIGNIFICANT_SIGMAS * fit.modulation_std
+    return bool(above and amp > 0)
+
+
+def _noise_floor_flag(fit: GroupFit, prof: np.ndarray, period: float, index: int, other: tuple[float, float],
+                      noise: float | None) -> list[str]:  # fmt: skip
+    """A group whose modulation is not above the noise: measured at the noise floor (its CTF ~0 with its
+    1-sigma: a blur whose MTF vanishes at the group's frequency, e.g. a smear's sinc null, is a result), unless
+    another period stands significantly in its region, or the profile is not noise about a level (its fit's
+    misfit above the rows' noise): then no bars of this period are there (refused)."""
+    n, (g_other, f_other) = prof.size, other
+    noise = fit.noise if noise is None or not np.isfinite(noise) else float(noise)
+    other_amp, amp_sigma = np.sqrt(2.0 * max(g_other, 0.0) / n), noise * np.sqrt(2.0 / n)
+    if n >= 2.5 * period and other_amp > SIGNIFICANT_SIGMAS * amp_sigma:
+        raise InputError(
+            f"periods_px[{index}] = {period:g}: no modulation above the noise at {period:g} px, but a period of "
+            f"{1 / f_other:.3g} px stands out (frequency {f_other:.3f} cy/px): no bars at that period in the region"
+        )
+    if fit.misfit > 3 * max(noise, 1e-12):
+        raise InputError(
+            f"group_rois[{index}]: no modulation above the noise at period {period:g} px, and the profile is not "
+            f"noise about a level either (rms misfit {fit.misfit:.3g} > 3 x the rows' noise {noise:.2g}): no bars "
+            "of that period in the region"
+        )
+    flags = [
+        f"group {index}: {AT_NOISE_FLOOR}: modulation {fit.modulation:.3g} +- {fit.modulation_std:.2g} is not above "
+        f"{SIGNIFICANT_SIGMAS:g} sigma of the noise: the CTF is ~0 (measured at the noise floor, with its 1-sigma), "
+        "not corrected to the square-wave CTF"
+    ]
     if period < 2.5:
         flags.append(_short_period_flag(index, period))
     return flags
@@ -163,7 +210,8 @@ def validate_deferred(deferred, model, fits, profiles, periods, c_large, n_bars,
 
 @dataclass
 class Groups:
-    """Per group (all of them): profile, fit, noise, flags; ``refused`` maps an index to its reason."""
+    """Per group (all of them): profile, fit, noise, flags; ``refused`` maps an index to its reason; ``floor``:
+    the groups measured at the noise floor."""
 
     profiles: dict = field(default_factory=dict)
     fits: dict = field(default_factory=dict)
@@ -171,6 +219,7 @@ class Groups:
     flags: dict = field(default_factory=dict)
     deferred: dict = field(default_factory=dict)
     refused: dict = field(default_factory=dict)
+    floor: set = field(default_factory=set)  # measured at the noise floor (AT_NOISE_FLOOR)
 
 
 def measure_groups(image, periods, group_rois, direction, full_scale: float | None = None) -> Groups:
@@ -184,7 +233,7 @@ def measure_groups(image, periods, group_rois, direction, full_scale: float | No
         try:
             prof, noise, fl = _profile(image, roi, direction, p, i, full_scale)
             fit = fit_group(prof, p, noise)
-            fl = fl + _check_group(fit, prof, p, i, deferred)
+            fl = fl + _check_group(fit, prof, p, i, deferred, floor_ok=periods.size >= 2, noise=noise)
         except InputError as exc:
             why = str(exc) + "".join(f" ({f.removeprefix(f'group {i}: ')})" for f in fl)  # e.g. the clipping
             if periods.size < 2:
@@ -194,10 +243,19 @@ def measure_groups(image, periods, group_rois, direction, full_scale: float | No
         if deferred is not None and i in deferred:  # kept out of the joint model until the model has explained it
             fit = replace(fit, cov=None)
             g.deferred[i] = deferred.pop(i)
+        if any(f.startswith(f"group {i}: {AT_NOISE_FLOOR}") for f in fl):  # out of the joint model, uncorrected
+            fit = replace(fit, cov=None)
+            g.floor.add(i)
         g.profiles[i], g.fits[i], g.noises[i], g.flags[i] = prof, fit, noise, fl
     if len(g.refused) == periods.size:
         reasons = "; ".join(f"group {i}: {m}" for i, m in sorted(g.refused.items()))
         raise InputError(f"group_rois: no group is measurable ({reasons})")
+    if len(g.refused) + len(g.floor) == periods.size:  # no bars seen anywhere: no target to measure
+        reasons = "; ".join(f"group {i}: {m}" for i, m in sorted(g.refused.items()))
+        raise InputError(
+            f"group_rois: no group is measurable: no group's modulation stands above the noise (groups "
+            f"{sorted(g.floor)}), so no bar target is seen in the regions" + (f"; {reasons}" if reasons else "")
+        )
     return g
 
 

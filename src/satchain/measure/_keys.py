@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
-__all__ = ["RESULT_KEY"]
+__all__ = ["AT_NOISE_FLOOR", "RESULT_KEY"]
 
 #: scene kind -> the key its results are grouped under, in the order of ``AutoResult.to_dict()``.
 RESULT_KEY: dict[str, str] = {
@@ -15,3 +15,7 @@ RESULT_KEY: dict[str, str] = {
     BarTarget.kind: "bar_targets",
     HyperbolicWedge.kind: "hyperbolic_wedge",
 }
+
+#: The flag of a bar group whose modulation is not above the noise (``group K: at_noise_floor: ...``, K its index in
+#: the target's design): its CTF ~0, with its 1-sigma, is a result (a blur whose MTF vanishes there), not a refusal.
+AT_NOISE_FLOOR = "at_noise_floor"

@@ -360,7 +360,10 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
     plateau = np.zeros(len(fits), dtype=bool)
     for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
         found, _ = _plateau(prof, fit, float(p), noise=_rows_noise(noises[i]))
+    floor = [j for j, i in enumerate(kept) if i in groups.floor]  # at the noise floor: the fit's modulation as is
         if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
+        if i in floor:
+            continue
             mod[i], mod_std[i] = found
             plateau[i] = True
             flags = [f for f in flags if not (f.startswith(f"group {i}: ") and "alias" in f)]
@@ -371,6 +374,8 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
         )
     elif bars_per_group is not None:
         flags.append(
+        corr[floor], corr_std[floor] = 0.0, 0.0  # no bars seen to render: nothing to correct
+        flags = [f for f in flags if not _correction_flag_of(f, floor)]
             f"fewer than 3 groups with a measurable fundamental: each CTF is that of its finite {bars_per_group}-bar "
             "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
             "or a sharp system they can differ by a few %"
@@ -402,6 +407,13 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
 
 def _rows_noise(noise) -> float | None:
     """The rows' noise of a profile (None: a single row, no noise estimate: the fit residual is used)."""
+def _correction_flag_of(flag: str, groups) -> bool:
+    """A square-wave correction's flag (applied, or not for the region) of one of ``groups``."""
+    starts = any(flag.startswith(f"group {j}: CTF corrected") or flag.startswith(f"group {j}: its region")
+                 for j in groups)  # fmt: skip
+    return bool(starts)
+
+
     return None if noise is None else float(noise)
 
 
