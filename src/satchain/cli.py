@@ -393,7 +393,9 @@ def _print_run(result) -> None:
     from satchain.comparison import row_texts
 
     c = result.comparison
-    t = Table(title=f"{result.system.name}: measured vs predicted ({c.n_checked - c.n_failed}/{c.n_checked} pass)")
+    n_na = len(c.rows) - c.n_checked  # n/a rows are counted apart: neither passed nor failed
+    na = f", {n_na} n/a" if n_na else ""
+    t = Table(title=f"{result.system.name}: measured vs predicted ({c.n_checked - c.n_failed}/{c.n_checked} pass{na})")
     cols = ("measured", "predicted", "error", "sigma", "z", "tolerance")
     t.add_column("figure of merit", justify="left")
     for col in (*cols, "result"):

@@ -123,6 +123,10 @@ def _stage_measure(
     cal = auto.calibration  # its gain models the diffraction tail that pulls the plateaus' medians
     gain = cal.get("gain") if cal.get("fitted") else None
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m, gain=gain, image_affine=geo)
+    if not noise:  # the background's scatter is the scene's and the optics' own: no noise, so no SNR (nor NIIRS)
+        why = "the image is noise-free ([simulation] noise = false): it has no noise to measure an SNR from"
+        snr = dataclasses.replace(snr, snr=float("nan"), noise_dn=None, reason=why, snr_sigma=None,
+                                  snr_sigma_null_means=f"the SNR is not measured: {why}")  # fmt: skip
     progress("measure", 1, 1)
     return Measurements(auto, snr)
 

@@ -189,6 +189,8 @@ def _with_sigma(row: dict, s: dict | None, flags: dict) -> dict:
         anchor=_ANCHORS.get(str(s.get("kind")), ""),
         n_flags=len(flags.get(s.get("id"), ())) if s.get("kind") != "edge_angle" else 0,
     )
+    if s.get("pass") is None and s.get("reason"):  # n/a: why the image does not support the check
+        row["target"] += f" (n/a: {s['reason']})"
     return row
 
 
