@@ -110,7 +110,23 @@ class Spiders(_Frozen):
 
 
 class Optics(_Frozen):
-    """Telescope: aperture, focal length or F#, central obscuration, spectral band, aberrations."""
+    """Telescope: aperture, focal length or F#, central obscuration, spectral band, aberrations.
+
+    ``zernike_rms_waves`` is the wavefront ``W = sum_j c_j Z_j`` (Noll's order and unit-rms normalisation,
+    :mod:`satchain.tf.zernike`; ``Z_2 = 2 rho cos(theta)``, ``theta`` from +x = ACT towards +y = ALT), in waves at
+    the effective wavelength. Sign: the pupil carries ``exp(+2 pi i W)`` and the PSF is
+    ``|FT{p}|^2`` with the kernel ``exp(-2 pi i u.x / (lambda f))`` (Goodman's), so with
+    ``zernike_sign = "satchain"`` (the default) a positive Z2 (Z3) moves the image towards +x, ACT, increasing
+    column (+y, ALT, increasing row) by ``4 c lambda F#`` in the focal plane (``4 c lambda / D`` rad), and a
+    positive Z8 (Z7) moves its centroid the same way (``sqrt 2`` times as far per wave for a clear pupil, more
+    with an obscuration) while its core stays. ``zernike_sign = "zemax"`` reads coefficients in the opposite
+    convention, the kernel ``exp(+2 pi i ...)`` of Zemax OpticStudio's FFT PSF and of GalSim's default
+    (``fft_sign = "+"``): a positive Z2 moves the image towards -x. The change of convention is ``W -> -W``,
+    which for a real pupil transmission is exactly ``PSF(x) -> PSF(-x)`` (a 180-degree rotation; the OTF
+    becomes its complex conjugate): even terms (defocus, astigmatism, spherical) alone are unchanged, odd ones
+    (tilt, coma, trefoil) move the other way. :attr:`wavefront_zernikes_waves` gives the coefficients in
+    satchain's convention.
+    """
 
     aperture_diameter_m: float = Field(gt=0, le=100)
     focal_length_m: float = Field(gt=0, le=1e3)
@@ -121,7 +137,13 @@ class Optics(_Frozen):
     transmission: float = Field(default=1.0, gt=0, le=1)
     wfe_rms_waves: float = Field(default=0.0, ge=0, le=0.25, description="random wavefront error, rms waves")
     zernike_rms_waves: dict[int, float] = Field(
-        default_factory=dict, description="Noll index -> rms coefficient in waves (defocus is 4)"
+        default_factory=dict,
+        description="Noll index -> rms coefficient in waves (defocus is 4); sign as zernike_sign says",
+    )
+    zernike_sign: Literal["satchain", "zemax"] = Field(
+        default="satchain",
+        description="convention of zernike_rms_waves: 'satchain' (a positive Z2 moves the image +x, ACT) or "
+        "'zemax' (Zemax OpticStudio's and GalSim's: -x); 'zemax' is W -> -W, the PSF rotated by 180 deg",
     )
     spiders: Spiders | None = None
     diffraction_model: Literal["auto", "analytic", "pupil_fft"] = "auto"
@@ -202,6 +224,13 @@ class Optics(_Frozen):
     def effective_wavelength_m(self) -> float:
         """Weight-averaged wavelength."""
         return float(np.dot(self.weights, self.wavelengths_m))
+
+    @property
+    def wavefront_zernikes_waves(self) -> dict[int, float]:
+        """``zernike_rms_waves`` in satchain's sign convention (negated, ``W -> -W``, for ``zernike_sign =
+        "zemax"``): the wavefront the pupil FFT uses."""
+        flip = -1.0 if self.zernike_sign == "zemax" else 1.0
+        return {j: flip * c for j, c in self.zernike_rms_waves.items()}
 
     @property
     def needs_pupil_fft(self) -> bool:

@@ -86,7 +86,7 @@ class DiffractionOTF:
                     aperture_diameter_m=optics.aperture_diameter_m,
                     obscuration_ratio=optics.obscuration_ratio,
                     spiders=optics.spiders,
-                    zernike_rms_waves={j: c * lam_eff / lam for j, c in optics.zernike_rms_waves.items()},
+                    zernike_rms_waves={j: c * lam_eff / lam for j, c in optics.wavefront_zernikes_waves.items()},
                     params=params,
                 )
                 for lam in self.wavelengths_m

@@ -3,7 +3,10 @@
 :class:`PupilOTF` / :func:`pupil_otf` compute the autocorrelation of the sampled pupil function by FFT, i.e.
 the Fourier transform of the PSF of the reference paper's eq. 1, ``PSF = |FT{p}|^2 / ((lambda f)^2 * integral
 p)``; :func:`pupil_psf` samples that PSF. The pupil is sampled by exact area coverage (annulus minus vanes) and
-carries ``exp(+2 pi i W)`` with ``W`` in waves (:mod:`satchain.tf.zernike`). Accuracy and memory knobs travel
+carries ``exp(+2 pi i W)`` with ``W`` in waves (:mod:`satchain.tf.zernike`) and is transformed with the kernel
+``exp(-2 pi i u.x / (lambda f))``: a positive Noll Z2 (Z3) moves the PSF by ``4 c lambda F#`` towards +x (+y).
+Zemax OpticStudio and GalSim use the kernel of the other sign (``W -> -W``: the PSF rotated by 180 degrees), which
+:class:`satchain.system.Optics` accepts as ``zernike_sign = "zemax"``. Accuracy and memory knobs travel
 in :class:`PupilParams`. Part of :mod:`satchain.tf.optics`, which re-exports every public name.
 
 Examples
