@@ -157,3 +157,20 @@ def test_valid_data_narrower_than_an_output_pixel_is_refused_not_written_as_noda
     line = " ".join(r.output.split())
     assert "nodata" in line and "output pixel" in line and "unexpected" not in line
     assert not out.exists()
+
+
+# ------------------------------------------------------------------------- item 19: a sweep checks every case
+@pytest.mark.parametrize("suffix", [".tif", ".npy"])
+def test_a_sweep_whose_later_case_cannot_be_simulated_writes_nothing(tmp_path, suffix):
+    if suffix == ".tif":
+        src, pixel = _write(tmp_path / "in.tif", _edge()), []
+    else:
+        src, pixel = tmp_path / "in.npy", ["--scene-pixel-m", PX]
+        np.save(src, _edge()[0])
+    out = tmp_path / "sweep"
+    # case 2: a 1 mm pitch gives an 83 m GSD, larger than the whole 17 m input
+    r = _sim(src, "--preset", "ankarasat3", *pixel, "--sweep", "detector.pitch_m=5.88e-6,1e-3", "-o", out)
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "detector.pitch_m=0.001" in line and "smaller than one detector pixel" in line
+    assert not out.exists()  # case 1 was not written: every case is checked first

@@ -55,6 +55,7 @@ __all__ = [
     "IMAGE_SUFFIXES",
     "REFLECTANCE_RANGE",
     "SimulatedFile",
+    "check_case",
     "ground_truth_source",
     "simulate_file",
 ]
@@ -234,6 +235,18 @@ def simulate_file(
     coarse = _decimate(sim, src, scheduler, f"simulating {src.shape_px[0]}x{src.shape_px[1]} px", report)
     shape, fp_pixel = _write_in_memory(sim, src, coarse, out, fp_path, focal_plane_grid, **run)
     return SimulatedFile(out, out.with_suffix(".png"), shape, units, False, fp_path, fp_pixel, meta)
+
+
+def check_case(system: ImagingSystem, src: SceneSource, *, names: Mapping[str, str] | None = None) -> None:
+    """What :func:`simulate_file` checks of ``system`` on the ground truth ``src`` before it writes anything
+    (the ground truth's size in detector pixels, memory); a sweep checks every case with it first."""
+    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
+    _plan(system, src, None)
+    if min(src.shape_px) < MIN_INPUT_PX:
+        raise ConfigError(
+            f"{name('input')} at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; a "
+            f"ground truth needs at least {MIN_INPUT_PX} px a side: check {name('scene_pixel_m')}"
+        )
 
 
 def _check_paths(input_: str | os.PathLike, out: Path, fp_path: Path | None, name: Callable[[str], str]) -> None:

@@ -35,7 +35,7 @@ import math
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from satchain.engine.tiling import Window
-from satchain.errors import ConfigError, InputError
+from satchain.errors import ConfigError, InputError, SatchainError
 
 __all__ = ["WORK_BYTES", "RasterBandSource", "check_scales", "invalid_cells", "output_transform", "simulate_raster"]
 
@@ -358,12 +358,15 @@ def simulate_raster(
     notify: Callable[[str], None] | None = None,
     names: Mapping[str, str] | None = None,
     check_only: bool = False,
+    also_check: Sequence[tuple[Any, str | os.PathLike]] = (),
 ) -> dict[str, Any] | None:
     """Simulate every band (or only ``band``) of a raster file and write the COG ``out`` (and its ``.png``
     preview); see the module docstring. Returns ``{"shape_px", "count", "streamed", "metadata", "preview"}``.
     Options and inputs are checked before anything is written; a failure leaves nothing under ``out``.
-    ``check_only``: only those checks (the input, its values' sample, memory and disk); returns None."""
-    from satchain._safety import check_disk, clean_stale, memory_limit_bytes
+    ``check_only``: only those checks (the input, its values' sample, memory and disk); returns None.
+    ``also_check``: ``(system, out)`` of other simulations of this input (a sweep's cases), whose checks that
+    depend on the system are made too, before anything is written."""
+    from satchain._safety import clean_stale
     from satchain.engine.sensor import sensor_from_system
 
     name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
@@ -379,21 +382,21 @@ def simulate_raster(
             f"{name('scene_pixel_m')}"
         )
     bands = [band] if band is not None else list(range(1, plan.count + 1))
-    if system.bands and len(system.bands) != plan.count:
-        raise ConfigError(f"{name('input')} {str(path)!r} has {plan.count} bands but the system {system.name!r} "
-                          f"describes {len(system.bands)} ([[bands]]); they must match")  # fmt: skip
-    systems = [system.for_band(b - 1) for b in bands]
     sources = [_band_source(plan, b, input_scale) for b in bands]
-    _check_output_disk(plan, system, len(bands), units, out)  # before planning, which grows with the input
-    budget = min(float(memory_bytes or WORK_BYTES), float(memory_limit_bytes()))
-    planned = [_simulator(s, plan, budget, seed) for s in systems]  # one line-of-sight motion for every band
-    sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
+    try:
+        for other, other_out in also_check:  # a sweep's other cases of this input: their system's checks alone
+            try:
+                _plan_case(plan, bands, sources, other, Path(other_out), units, noise, seed, memory_bytes, name)
+            except SatchainError as exc:
+                raise type(exc)(f"case {Path(other_out).stem}: {exc}") from None
+        job = _plan_case(plan, bands, sources, system, out, units, noise, seed, memory_bytes, name)
+    except BaseException:
+        for src in sources:
+            src.close()
+        raise
+    systems, planned, sims, streamed, budget = job.systems, job.planned, job.sims, job.streamed, job.budget
+    sensor, bits, dtype, nodata, lowest = job.sensor, job.bits, job.dtype, job.nodata, job.lowest
     sim0 = sims[0]
-    for b, src, sim in zip(bands, sources, sims, strict=True):
-        _check_some_valid(src, sim, b, name)
-    sensor = sensor_from_system(systems[0]) if (units != "reflectance" or noise) else None
-    bits = sensor.bit_depth if sensor is not None else None  # an ADC range only where a sensor forms DN
-    dtype, nodata, lowest = _nodata_for(units, bits)
     transform = output_transform(plan.transform, sim0.k)
     meta = {"system": system.name, "seed": int(seed), "noise": bool(noise), "gsd_act_m": system.gsd_act_m,
             "gsd_alt_m": system.gsd_alt_m, "input": str(path), "input_pixel_m": plan.pixel_m, "units": units,
@@ -403,9 +406,6 @@ def simulate_raster(
         meta["bit_depth"] = int(bits)
     if not math.isclose(system.gsd_act_m, system.gsd_alt_m, rel_tol=1e-9):
         meta["pixel_m_xy"] = [system.gsd_act_m, system.gsd_alt_m]
-    oy, ox = sim0.output_shape
-    scratch = max(4.0 * s.n_coarse[0] * s.n_coarse[1] for s in sims) if streamed else 0.0
-    check_disk(scratch + 2.0 * len(bands) * oy * ox * dtype.itemsize, [out], f"simulating {str(path)!r}")
     if check_only:
         for src in sources:
             src.close()
@@ -433,6 +433,49 @@ def simulate_raster(
     preview = _write_preview(out, nodata)
     return {"shape_px": sim0.output_shape, "count": len(bands), "streamed": streamed, "metadata": meta,
             "preview": preview, "transform": transform, "crs": plan.crs}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Job:
+    """What one system makes of a planned input: the band systems, their simulators (and whether they stream),
+    the memory budget, the sensor and the output's DN bits, file type, nodata and lowest valid value."""
+
+    systems: list
+    planned: list
+    sims: list
+    streamed: bool
+    budget: float
+    sensor: Any
+    bits: int | None
+    dtype: np.dtype
+    nodata: float
+    lowest: float
+
+
+def _plan_case(plan: _Plan, bands: list[int], sources: list[RasterBandSource], system, out: Path, units: str,
+               noise: bool, seed: int, memory_bytes: float | None, name: Callable[[str], str]) -> _Job:  # fmt: skip
+    """Everything ``system`` needs checked before the input is simulated by it into ``out``: its bands, the
+    output's disk, the simulators in the memory budget, an output pixel that is not nodata."""
+    from satchain._safety import check_disk, memory_limit_bytes
+    from satchain.engine.sensor import sensor_from_system
+
+    if system.bands and len(system.bands) != plan.count:
+        raise ConfigError(f"{name('input')} {str(plan.path)!r} has {plan.count} bands but the system "
+                          f"{system.name!r} describes {len(system.bands)} ([[bands]]); they must match")  # fmt: skip
+    systems = [system.for_band(b - 1) for b in bands]
+    _check_output_disk(plan, system, len(bands), units, out)  # before planning, which grows with the input
+    budget = min(float(memory_bytes or WORK_BYTES), float(memory_limit_bytes()))
+    planned = [_simulator(s, plan, budget, seed) for s in systems]  # one line-of-sight motion for every band
+    sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
+    for b, src, sim in zip(bands, sources, sims, strict=True):
+        _check_some_valid(src, sim, b, name)
+    sensor = sensor_from_system(systems[0]) if (units != "reflectance" or noise) else None
+    bits = sensor.bit_depth if sensor is not None else None  # an ADC range only where a sensor forms DN
+    dtype, nodata, lowest = _nodata_for(units, bits)
+    oy, ox = sims[0].output_shape
+    scratch = max(4.0 * s.n_coarse[0] * s.n_coarse[1] for s in sims) if streamed else 0.0
+    check_disk(scratch + 2.0 * len(bands) * oy * ox * dtype.itemsize, [out], f"simulating {str(plan.path)!r}")
+    return _Job(systems, planned, sims, streamed, budget, sensor, bits, dtype, nodata, lowest)
 
 
 def _check_some_valid(src: RasterBandSource, sim, band: int, name: Callable[[str], str]) -> None:

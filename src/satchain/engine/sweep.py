@@ -346,7 +346,7 @@ def simulate_sweep(
     _check_options(options, name)
     cases, systems = plan_sweep(inputs, system, out_dir, sweep=sweep, seed=seed, names=names)
     out = Path(out_dir)
-    _check_outputs(cases, out, options, names, name, system)
+    _check_outputs(cases, out, options, names, name, systems)
     out.mkdir(parents=True, exist_ok=True)
     write_run_marker(out, kind="simulate")
     report = progress or (lambda stage, done, total: None)
@@ -394,10 +394,11 @@ def _check_options(options: Mapping[str, Any], name: Callable) -> None:
 
 
 def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], names, name: Callable,
-                   system: ImagingSystem) -> None:  # fmt: skip
-    """The output directory and every output name, before any work; and every input readable (a GDAL raster
-    checked as simulating it checks it: its grid, bands, values, memory and disk)."""
-    from satchain.engine.files import IMAGE_SUFFIXES, ground_truth_source
+                   systems: list[ImagingSystem]) -> None:  # fmt: skip
+    """The output directory and every output name, before any work; every input readable, and every case
+    checked as simulating it checks it (a GDAL raster: its grid, bands, values; each case's memory, disk and
+    valid output; any other input: each case's simulator)."""
+    from satchain.engine.files import IMAGE_SUFFIXES, check_case, ground_truth_source
     from satchain.engine.georaster import simulate_raster
     from satchain.io import GDAL_SUFFIXES
 
@@ -416,18 +417,24 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
     if not (out / MARKER).exists():  # in a sweep's own directory, its files may be replaced
         check_sidecars({**previews, **manifests})
     raster = {k: options[k] for k in ("band", "scene_pixel_m", "input_scale", "units", "noise") if k in options}
-    first: dict[str, Case] = {}
-    for c in cases:
-        first.setdefault(c.input, c)
-    for input_, case in first.items():
+    by_input: dict[str, list[tuple[Case, ImagingSystem]]] = {}
+    for c, s in zip(cases, systems, strict=True):
+        by_input.setdefault(c.input, []).append((c, s))
+    for input_, (first, *others) in by_input.items():
         if Path(input_).suffix.lower() in IMAGE_SUFFIXES and not Path(input_).is_file():
             what = "is not a file" if Path(input_).exists() else "no such file"
             raise SatchainIOError(f"{name('inputs', 'inputs')} {input_!r}: {what}")
         if Path(input_).suffix.lower() in GDAL_SUFFIXES:
-            simulate_raster(input_, case.image, system, names=names, check_only=True, **raster)
-        else:
-            ground_truth_source(input_, pixel_m=options.get("scene_pixel_m"), input_scale=options.get("input_scale"),
-                                names=names)  # fmt: skip
+            simulate_raster(input_, first[0].image, first[1], names=names, check_only=True,
+                            also_check=[(s, c.image) for c, s in others], **raster)  # fmt: skip
+            continue
+        src, _ = ground_truth_source(input_, pixel_m=options.get("scene_pixel_m"),
+                                     input_scale=options.get("input_scale"), names=names)  # fmt: skip
+        for c, s in (first, *others):
+            try:
+                check_case(s, src, names=names)
+            except SatchainError as exc:
+                raise type(exc)(f"case {c.id}: {exc}") from None
 
 
 def _remove_case_files(case: Case) -> None:

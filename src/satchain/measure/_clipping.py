@@ -157,7 +157,20 @@ def find_clipping(
             return Clipping("maximum", full_scale, n, frac, "full_scale", msg)
     if span <= 0:
         return None
-    return _plateau_evidence(d, lo, hi, noise_std, ok, unique)
+    return _fill_hint(_plateau_evidence(d, lo, hi, noise_std, ok, unique))
+
+
+def _fill_hint(clip: Clipping | None) -> Clipping | None:
+    """A plateau at exactly 0 at the minimum is as likely a fill outside the data (a cal/val crop's area of
+    interest, an integer file without a nodata tag) as a dark area clipped at 0: the message says how to
+    leave the zeros out."""
+    if clip is None or clip.side != "minimum" or clip.level != 0:
+        return clip
+    hint = (
+        "; if these zeros are a fill outside the data (no nodata tag in the file), not a dark area clipped at 0, "
+        "give --nodata 0 (nodata=0 in Python) to leave them out"
+    )
+    return Clipping(clip.side, clip.level, clip.n_pixels, clip.fraction, clip.evidence, clip.message + hint)
 
 
 def _check_valid(valid, shape) -> np.ndarray:
