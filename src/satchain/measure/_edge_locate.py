@@ -328,12 +328,15 @@ def curvature(coef, rows) -> float:
     return float(d2 / (1 + d1 * d1) ** 1.5)
 
 
-def project(work: np.ndarray, rows: np.ndarray, coef):
-    """Signed distance of every pixel centre to the fitted edge along its local normal.
+def project(work: np.ndarray, rows: np.ndarray, coef, shift=None):
+    """Signed distance of every pixel centre to the fitted edge along its local normal; ``shift`` (px along the
+    row, one per row of ``rows``) moves each row's edge from the polynomial (:mod:`satchain.measure._edge_align`).
 
     Returns (distances, values, slope at the middle row, each row's sub-pixel phase frac(-x_e))."""
     nx = work.shape[1]
     xe = np.polyval(coef, rows.astype(float))
+    if shift is not None:
+        xe = xe + shift
     slope_r = np.polyval(np.polyder(coef), rows.astype(float)) if len(coef) > 1 else np.zeros(rows.size)
     cos_t = 1.0 / np.sqrt(1.0 + slope_r**2)
     d = (np.arange(nx)[None, :] - xe[:, None]) * cos_t[:, None]

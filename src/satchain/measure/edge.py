@@ -59,6 +59,7 @@ from satchain.measure._common import (
     first_crossing,
     robust_sigma,
 )
+from satchain.measure._edge_align import align_lines
 from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
@@ -149,6 +150,11 @@ class EdgeResult(ResultMixin):
     lines: np.ndarray | None = None
     edge_position_px: np.ndarray | None = None
     edge_position_sigma_px: np.ndarray | None = None
+    mtf_aligned: np.ndarray | None = None
+    mtf_as_imaged: np.ndarray | None = None
+    mtf_as_imaged_sigma: np.ndarray | None = None
+    mtf_as_imaged_at_nyquist: float = float("nan")
+    los_motion_rms_px: float = float("nan")
 
     @property
     def edge_angle_deg(self) -> float:
@@ -279,10 +285,69 @@ def measure_edge(
     flags += _cnr_flags(contrast, sigma)
     f, mtf, mtf_sig, scale = on_axis(f, mtf, mtf_sig, slope, axis, f_max)
     lines = _line_positions(work, own, okw, (full_scale, sign), (transposed, roi), flags)
+
+    def moved(shift):  # the curve of the ESF projected on the located edge moved line by line
+        located = ((own, rows, [], ridge), shift)
+        return _moved_curve(work, okw, located, (os_, sigma, contrast), (f_top, noise_target, debias), (axis, f_max))
+
+    aligned, imaged, los = _los_curves(lines, (transposed, roi), own, moved if line is None else None, flags)
+    if aligned is not None and deg is None:  # (a forced degree keeps its own fit as the headline)
+        x, esf_n, (f, mtf, mtf_sig), half_w = aligned
+    mtf_al = mtf if aligned is None else _on_grid(f, aligned[2])[0]
+    imaged = (mtf, mtf_sig) if imaged is None else _on_grid(f, imaged)
     return _result(
         (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
         (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m), lines,
+        (mtf_al, *imaged, los),
     )  # fmt: skip
+
+
+def _moved_curve(work, valid, moved, stats, opts, axis_opts):
+    """``(x, esf, (f, mtf, 1-sigma), window half-width)`` of the ESF projected on the located edge moved line by
+    line (``moved = (locate_edge's result, per-line offsets)``), with the region's noise and contrast (``stats =
+    (oversampling, noise, contrast)``), ``opts = (f_max, noise target, debias)``, ``axis_opts = (frequency
+    axis, f_max)``; None where the moved edge leaves the ESF unmeasurable."""
+    os_, sigma, contrast = stats
+    f_top, noise_target, debias = opts
+    try:
+        _, rows, slope, w, _, (x, esf_raw, counts, _), _, _ = _binned_esf(work, None, os_, None, valid, None, moved)
+        esf_n = _normalise(x, esf_raw, counts, sigma, len(rows))[0]
+        f, mtf, sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_top, w, noise_target, debias), [])
+    except InputError:
+        return None
+    return x, esf_n, on_axis(f, mtf, sig, slope, *axis_opts)[:3], half_w
+
+
+def _los_curves(lines, where, own, moved, flags):
+    """The line-of-sight motion in the lines' edge positions (:func:`align_lines`): ``(aligned curve or None
+    (the located polynomial's is kept), as-imaged (f, mtf, sigma) or None (the same as the aligned), los motion
+    px rms)``, flag ``line_of_sight_motion`` where the positions depart from the polynomial beyond their noise.
+    ``own`` is the located edge polynomial, ``moved``: :func:`_moved_curve` of per-line offsets from it (None:
+    the ESF is projected on a given line, kept)."""
+    transposed, roi = where
+    pos = lines[1] - line_numbers(1, not transposed, roi)[0]
+    at_aligned, at_imaged, los, significant, noise = align_lines(pos, lines[2], len(own) - 1)
+    base = np.polyval(own, np.arange(pos.size, dtype=float))
+    aligned = None if moved is None or at_aligned is None else moved(at_aligned - base)
+    imaged = None if moved is None or at_imaged is None else moved(at_imaged - base)
+    if significant:
+        flags.append(
+            (
+                "line_of_sight_motion",
+                f"the lines' edge positions depart from one straight edge by {los:.3f} px rms, beyond their noise "
+                f"({noise:.3f} px; line-of-sight motion, or a wavy edge): the MTF is measured with each line "
+                "located (mtf_aligned; the headline mtf unless fit_degree is forced); the edge as imaged, the "
+                "lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged",
+            )
+        )
+    return aligned, (None if imaged is None else imaged[2]), los
+
+
+def _on_grid(f_ref, curve):
+    """A curve ``(f, mtf, sigma)`` on the frequencies ``f_ref`` (NaN beyond its own band)."""
+    f, mtf, sig = curve
+    out = [np.interp(f_ref, f, y, right=np.nan) for y in (mtf, sig)]
+    return out[0], out[1]
 
 
 def _line_positions(work, coef, valid, clip, where, flags):
@@ -297,10 +362,11 @@ def _line_positions(work, coef, valid, clip, where, flags):
         return line_numbers(work.shape[0], transposed, roi), nan, nan
 
 
-def _result(curve, esf, fit, stats, scales, lines) -> EdgeResult:
+def _result(curve, esf, fit, stats, scales, lines, imaged) -> EdgeResult:
     """The :class:`EdgeResult`: ``curve = (f, mtf, sigma, axis, scale)``, ``esf = (x, esf)``, ``fit = (coef,
     rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``,
-    ``scales = (pixel_m, pitch_m)`` and ``lines = (lines, edge positions, their 1-sigma)``."""
+    ``scales = (pixel_m, pitch_m)``, ``lines = (lines, edge positions, their 1-sigma)`` and ``imaged = (MTF
+    aligned, MTF as imaged, its 1-sigma, los motion px rms)``."""
     f, mtf, mtf_sig, axis, scale = curve
     x, esf_n = esf
     coef, rows, slope, transposed, roi = fit
@@ -340,6 +406,11 @@ def _result(curve, esf, fit, stats, scales, lines) -> EdgeResult:
         lines=lines[0],
         edge_position_px=lines[1],
         edge_position_sigma_px=lines[2],
+        mtf_aligned=imaged[0],
+        mtf_as_imaged=imaged[1],
+        mtf_as_imaged_sigma=imaged[2],
+        mtf_as_imaged_at_nyquist=float(imaged[1][_I_NYQ]),
+        los_motion_rms_px=float(imaged[3]),
     )
 
 
@@ -390,13 +461,19 @@ def _mtf(x, esf_n, counts, rel_sigma, opts, flags):
     return f, mtf, mtf_sig, half_w
 
 
-def _binned_esf(work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None, valid=None, line=None):
+def _binned_esf(
+    work: np.ndarray, deg: int | None, os_: int, q_step: float | None = None, valid=None, line=None, moved=None
+):
     """Locate the edge, project and bin: ((coef used, coef fitted), rows, slope, bin width, bin mode, (x, esf,
     counts, sigma), flags, (lines, edge positions) of the ridge).  Pixels outside ``valid`` are left out.  With
-    ``line`` (a degree-1 polynomial) the ESF is projected on that line, not on the one fitted."""
-    own, rows, flags, ridge = locate_edge(work, deg, valid)
+    ``line`` (a degree-1 polynomial) the ESF is projected on that line, not on the one fitted.  ``moved =
+    (locate_edge's result, per-line offsets)`` projects on the located polynomial moved line by line
+    (:mod:`satchain.measure._edge_align`) without locating it again."""
+    located, shift = (None, None) if moved is None else moved
+    own, rows, flags, ridge = locate_edge(work, deg, valid) if located is None else located
+    flags = list(flags)
     coef = own if line is None else line
-    d, v, slope, phase = project(_lines(work, rows), rows, coef)
+    d, v, slope, phase = project(_lines(work, rows), rows, coef, None if shift is None else shift[rows])
     ok = None if valid is None else valid[rows].ravel()
     w, origin, mode = choose_bins(phase, 1.0 / np.hypot(1.0, slope), os_)
     if w > 0.75:
