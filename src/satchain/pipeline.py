@@ -159,9 +159,12 @@ def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, 
 
 
 def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
+    """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
+    in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it)."""
+    from satchain.image_geometry import run_geometry
     from satchain.prediction import predict
 
-    return predict(
+    p = predict(
         budget.system,
         truth,
         otf=budget.otf,
@@ -169,6 +172,9 @@ def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResu
         sensor=sim.sensor,
         wedge_threshold=config.measurement.wedge_threshold,
     )
+    truth_d = truth if isinstance(truth, dict) else truth.to_dict()
+    geo = run_geometry(sim.system or budget.system, truth_d, sim.simulator, sim.image.shape)
+    return p if geo is None else dataclasses.replace(p, geometry=geo)
 
 
 def _edge_results(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,

@@ -180,6 +180,9 @@ class Predictions:
         Contrast at which a wedge stops resolving.
     warnings : tuple of str
         Predicted problems (saturated targets).
+    geometry : satchain.image_geometry.ImageGeometry, optional
+        A pushbroom image's geometry row by row (its mean map and each row's line-of-sight displacement): the
+        edges' angles are predicted through it, as the edge measurement fits the positions it predicts.
     """
 
     mtf_along: Mapping[str, Callable[[Any], np.ndarray]] = field(repr=False)
@@ -194,6 +197,7 @@ class Predictions:
     warnings: tuple[str, ...] = ()
     mtf2d: MTF2D | None = field(default=None, repr=False, compare=False)
     stars: Mapping[str, StarPrediction] = field(default_factory=dict)
+    geometry: Any = field(default=None, repr=False, compare=False)
 
     def edge(self, edge_id: str, direction: str) -> EdgePrediction:
         """The prediction of edge ``edge_id``; an edge the truth does not list gets its axis ``direction``."""

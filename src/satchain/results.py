@@ -158,7 +158,8 @@ def strict_json(value: Any) -> Any:
 @dataclass(frozen=True)
 class RunResult:
     """Everything one run produced, in memory. ``passed``: False if any check failed, None if none could be
-    evaluated, True otherwise. ``to_json_dict()`` is the content of results.json."""
+    evaluated, True otherwise. ``to_json_dict()`` is the content of results.json. ``kept_files``: the files (and
+    empty folders, ``/``-ended) of the run folder it replaced that satchain did not write, kept (relative paths)."""
 
     config: RunConfig
     budget: BudgetResult
@@ -168,6 +169,7 @@ class RunResult:
     predictions: Predictions
     comparison: Comparison
     timings_s: Mapping[str, float] = field(default_factory=dict)
+    kept_files: tuple[str, ...] = ()
 
     def __repr__(self) -> str:  # short: the full objects are a click away in a notebook
         c, img = self.comparison, self.simulation.image
@@ -217,4 +219,9 @@ class RunResult:
         out.update(c.to_dict())
         out["skipped"] = list(self.measurements.auto.skipped)
         out["tolerances"] = self.config.tolerances.model_dump()
+        from satchain.image_geometry import geometry_table
+
+        geometry = geometry_table(self.simulation.system or s)  # pushbroom motion: its inputs and geometry
+        if geometry:
+            out["image_geometry"] = geometry
         return strict_json(out)

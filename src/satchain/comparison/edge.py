@@ -26,8 +26,9 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
         err = None if meas is None else meas - p.mtf_at_nyquist
         f = np.asarray(e.get("f_cy_per_px", []), float)
         a, a_true = finite(e.get("angle_deg")), finite(e.get("angle_deg_truth"))
-        geometric = e.get("angle_deg_expected") is not None
-        a_ref = finite(e.get("angle_deg_expected")) if geometric else a_true
+        a_los = _angle_through_rows(e, pred)
+        geometric = a_los is not None or e.get("angle_deg_expected") is not None
+        a_ref = a_los if a_los is not None else finite(e.get("angle_deg_expected")) if geometric else a_true
         a_err = None if a is None or a_ref is None else a - a_ref
         details.append(
             {
@@ -71,6 +72,13 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 if a_true is not None
                 else "measured vs the truth mapped through the image geometry"
             )
+        if a_los is not None and finite(e.get("angle_deg_expected")) is not None:
+            note += (
+                f"; the line of sight moves the rows (mean map alone: {finite(e.get('angle_deg_expected')):.3f} "
+                f"deg), so the prediction is the edge measurement's own fit (degree {int(e.get('fit_degree') or 1)}) "
+                "of the positions the line-of-sight model puts the edge at on the region's lines (the per-line "
+                "plot 'line_of_sight.png' shows them against the measured ones)"
+            )
         rows.append(
             CheckRow(
                 label, "edge_angle", e["id"], a, a_ref, a_err, tol.edge_angle_deg,
@@ -78,3 +86,14 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
             )
         )  # fmt: skip
     return [EdgeCheck.from_dict(d) for d in details], rows
+
+
+def _angle_through_rows(e: dict, pred: Predictions) -> float | None:
+    """The angle the measurement should give of edge ``e`` on a pushbroom image whose rows the line of sight
+    displaces (``pred.geometry``, :class:`satchain.image_geometry.ImageGeometry`): its fit of the positions the
+    geometry predicts on the lines it measured; None without that geometry or those lines."""
+    geo = getattr(pred, "geometry", None)
+    if geo is None or not geo.moves or not e.get("lines") or e.get("direction_truth", e["direction"]) != e["direction"]:
+        return None  # (straight rows: the mean map's angle; an edge measured across the other axis: the same)
+    fit = geo.edge_angle_deg(e["id"], e["lines"], e.get("edge_position_px"), e.get("fit_degree") or 1, e["direction"])
+    return finite(fit)
