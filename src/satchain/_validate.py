@@ -83,6 +83,44 @@ def as_float_array(name: str, value, *, ndim: int | None = None, finite: bool = 
     return a
 
 
+def split_mask(name: str, value):
+    """(data, mask) of an image argument: a :class:`numpy.ma.MaskedArray`'s data (a plain array of its own
+    dtype) and its mask (bool, True = masked; None where no pixel is masked); anything else as it is, with
+    None. A boolean array is refused: it is a mask, not an image.
+
+    Examples
+    --------
+    >>> data, mask = split_mask("image", np.ma.masked_array([[1, 2], [3, 4]], mask=[[0, 1], [0, 0]]))
+    >>> type(data).__name__, mask.tolist()
+    ('ndarray', [[False, True], [False, False]])
+    >>> split_mask("image", np.ma.masked_array([1.0, 2.0]))[1] is None
+    True
+    """
+    if getattr(getattr(value, "dtype", None), "kind", None) == "b":
+        raise InputError(
+            f"{name}: a boolean array is a mask, not an image; give the image's values (image.astype(float) for "
+            "a 0/1 image), and a mask as valid= or as a numpy masked array's mask"
+        )
+    if not isinstance(value, np.ma.MaskedArray):
+        return value, None
+    mask = np.ma.getmask(value)
+    data = np.ma.getdata(value)
+    if mask is np.ma.nomask or not mask.any():
+        return data, None
+    return data, np.array(np.broadcast_to(mask, data.shape), dtype=bool)
+
+
+def masked_as_nan(name: str, value):
+    """An image argument with a masked array's masked pixels set to NaN (a float64 copy; nodata, as NaN is
+    everywhere in satchain); anything else (and a masked array with no masked pixel: its data) as it is."""
+    data, mask = split_mask(name, value)
+    if mask is None:
+        return data
+    out = np.array(data, dtype=np.float64)
+    out[mask] = np.nan
+    return out
+
+
 def _check_array_like(name: str, value) -> None:
     """Refuse, naming the parameter, what is not an array of numbers: None, a path or string (a file name
     where the image's pixels are wanted), a mapping, a boolean or complex/object/string array."""

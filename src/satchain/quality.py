@@ -34,10 +34,11 @@ import numpy as np
 
 from satchain._argcheck import checked
 from satchain._validate import as_float_array, check_positive, check_range
-from satchain.errors import InputError
+from satchain.errors import ConfigError, InputError
 
 __all__ = [
     "QualityResult",
+    "complete_quality",
     "edge_response_from_mtf",
     "giqe3",
     "giqe4",
@@ -413,3 +414,45 @@ def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.00
         mtfa_alt=b["mtfa"],
         otf_kind="mtf" if "mtf" in (a["kind"], b["kind"]) else "signed_otf",
     )
+
+
+#: the figures of a quality mapping that a prediction uses (:func:`satchain.prediction.predict`)
+QUALITY_USED = ("giqe5", "rer_giqe5", "snr")
+
+
+def complete_quality(system, quality=None, *, otf=None) -> dict[str, Any]:
+    """A quality mapping with every figure it does not give taken from :func:`predict_quality` (``system``).
+
+    ``quality`` (None: all predicted) may give any of :class:`QualityResult`'s fields (a whole ``.to_dict()``
+    too); ``giqe5``, ``rer_giqe5`` and ``snr`` are used. Without ``giqe5`` the NIIRS is that of the RER and
+    SNR used (:func:`giqe5`), so ``{"snr": 50}`` gives the system's NIIRS at SNR 50. A key that is no field
+    is refused naming it and the allowed ones, as is a used figure that is no finite number (> 0 for the RER
+    and SNR).
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> s = load_preset("ankarasat3")
+    >>> q = complete_quality(s, {"snr": 50.0})
+    >>> q["snr"], q["rer_giqe5"] == predict_quality(s).rer_giqe5, q["giqe5"] > predict_quality(s).giqe5
+    (50.0, True, True)
+    """
+    allowed = tuple(QualityResult.__dataclass_fields__)
+    given = {} if quality is None else dict(quality)
+    unknown = [k for k in given if k not in allowed]
+    if unknown:
+        raise ConfigError(
+            f"quality: unknown key(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)} (the fields "
+            f"of predict_quality(...).to_dict(); {', '.join(QUALITY_USED)} are used)"
+        )
+    for k in QUALITY_USED:
+        if k in given:
+            lo = None if k == "giqe5" else 0.0
+            given[k] = check_range(f"quality[{k!r}]", given[k], lo, None, lo_open=True)
+    if all(k in given for k in QUALITY_USED):
+        return given
+    out = {**predict_quality(system, otf=otf).to_dict(), **given}
+    if "giqe5" not in given:
+        elev = system.orbit.elevation_deg
+        out["giqe5"] = giqe5(gsd_in=out["gsd_in"], rer=out["rer_giqe5"], snr=out["snr"], elevation_deg=elev)
+    return out

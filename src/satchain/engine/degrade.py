@@ -35,8 +35,9 @@ __all__ = ["SimulatedImage", "simulate_image"]
 @dataclass(frozen=True)
 class SimulatedImage:
     """What :func:`simulate_image` returns: ``image`` ((rows, cols) for one band, (bands, rows, cols) for
-    several; float64 in ``units``, DN rounded and clipped as in the file), ``valid`` (same shape, False where
-    the output pixel touches invalid input; None when every pixel is valid), the affine ``transform`` and
+    several; float64 in ``units``, DN rounded and clipped as in the file; a numpy masked array, masked where
+    ``valid`` is False, when the source is one), ``valid`` (same shape, False where the output pixel touches
+    invalid input; None when every pixel is valid), the affine ``transform`` and
     ``crs`` (the input's; None without one) and the output pixel size ``pixel_m`` = (ACT, ALT) GSD in m."""
 
     image: np.ndarray
@@ -56,7 +57,7 @@ class _ArrayBand:
         finite = np.isfinite(a)
         self.masked = not bool(finite.all())
         if not finite.any():
-            raise InputError("image: every pixel is NaN; nothing to simulate")
+            raise InputError("image: every pixel is NaN or masked (no data); nothing to simulate")
         self.fill = float(a[finite].mean()) * self.gain
 
     def read(self, window: Window) -> np.ndarray:
@@ -69,13 +70,29 @@ class _ArrayBand:
         return np.isfinite(self.a[window.rows, window.cols]) if self.masked else None
 
 
+def _source_values(source, input_scale) -> tuple[np.ndarray, np.dtype]:
+    """(the array, the dtype its values are stored in): a numpy masked array's masked pixels NaN (no data, as
+    NaN is); refuses a boolean array, and integers wider than 16 bits without ``input_scale``, whose width
+    states no DN range (``np.array([[0, 200]])`` is int64: its 2**63 - 1 would make 200 a reflectance of 2e-17)."""
+    from satchain._validate import masked_as_nan, split_mask
+
+    dtype = np.asarray(split_mask("image", source)[0]).dtype
+    if dtype.kind in "iu" and dtype.itemsize > 2 and input_scale is None:
+        raise InputError(
+            f"image: dtype {dtype} states no DN range (only 8- and 16-bit integers are scaled by their range); "
+            "give input_scale (1 for values that are reflectance, 1 / 4095 for 12-bit DN), or the array as float "
+            "reflectance or uint8 / uint16 DN"
+        )
+    return np.asarray(masked_as_nan("image", source)), dtype
+
+
 def _array_bands(source, pixel_m, transform, input_scale) -> tuple[list, Any, float]:
     from affine import Affine
 
     from satchain._validate import check_positive
     from satchain.io import integer_scale
 
-    a = np.asarray(source)
+    a, stored = _source_values(source, input_scale)
     if a.ndim not in (2, 3) or min(a.shape) < 1 or a.dtype.kind not in "biuf":
         raise InputError(f"image: must be a real 2-D (rows, cols) or 3-D (bands, rows, cols) array, got "
                          f"shape {a.shape}, dtype {a.dtype}")  # fmt: skip
@@ -93,7 +110,7 @@ def _array_bands(source, pixel_m, transform, input_scale) -> tuple[list, Any, fl
                           "keeps the transform); give one of them, or both agreeing")  # fmt: skip
     pixel_m = sx if transform is not None else pixel_m  # agreeing: the transform's, so the output's stays exact
     t = transform if transform is not None else Affine(pixel_m, 0.0, 0.0, 0.0, -pixel_m, 0.0)
-    gain = integer_scale(a.dtype) if input_scale is None else check_positive("input_scale", input_scale)
+    gain = integer_scale(stored) if input_scale is None else check_positive("input_scale", input_scale)
     planes = a if a.ndim == 3 else a[None]
     return [_ArrayBand(p, pixel_m, gain) for p in planes], t, float(pixel_m)
 
@@ -116,9 +133,11 @@ def simulate_image(
     Parameters
     ----------
     source : ndarray or path
-        A (rows, cols) or (bands, rows, cols) array (NaN = no data; integers scaled by ``1 / (2**bits - 1)``
-        unless ``input_scale``), or any GDAL raster (every band, or ``band``; its georeference, nodata, mask,
-        scale and offset used as ``satchain simulate`` uses them).
+        A (rows, cols) or (bands, rows, cols) array (NaN = no data, as are a numpy masked array's masked
+        pixels: the result's ``image`` is then a masked array, masked where ``valid`` is False; uint8 / uint16
+        (int8 / int16) DN scaled by ``1 / (2**bits - 1)`` (``2**(bits - 1) - 1``) unless ``input_scale``; wider
+        integers need ``input_scale``; a boolean array is refused), or any GDAL raster (every band, or
+        ``band``; its georeference, nodata, mask, scale and offset used as ``satchain simulate`` uses them).
     pixel_m, transform, crs : an array's ground pixel size (m), affine transform (default: north up, origin
         (0, 0), ``pixel_m``) and CRS. ``pixel_m`` with a ``transform`` (or a path whose georeference states a
         pixel size) must agree with its pixel size to 0.1 % (the output keeps the transform): one that
@@ -166,5 +185,7 @@ def simulate_image(
     image = np.stack(images)
     if squeeze:
         image, valid = image[0], valid[0]
+    if isinstance(source, np.ma.MaskedArray):  # masked in, masked out: every output pixel a masked pixel touches
+        image = np.ma.masked_array(image, mask=~valid)
     return SimulatedImage(image, None if valid.all() else valid, out_t, crs, units,
                           (system.gsd_act_m, system.gsd_alt_m))  # fmt: skip

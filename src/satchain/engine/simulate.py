@@ -588,6 +588,9 @@ def simulate(
 ) -> np.ndarray:
     """Simulate the satellite image of ``ground_truth`` (an array with ``pixel_m``, a scene, or a source).
 
+    An array holds reflectance (any real dtype, its values as they stand), every pixel valid: NaN, inf and a
+    numpy masked array's masked pixels are refused (:func:`satchain.simulate_image` takes them as no data).
+
     Examples
     --------
     >>> from satchain import load_preset

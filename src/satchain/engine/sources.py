@@ -18,7 +18,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from satchain._validate import check_choice, check_positive
+from satchain._validate import check_choice, check_positive, split_mask
 from satchain.engine.tiling import Window
 from satchain.errors import InputError
 
@@ -70,6 +70,12 @@ class ArraySource:
     """
 
     def __init__(self, array, *, pixel_m: float):
+        array, masked = split_mask("image", array)
+        if masked is not None:
+            raise InputError(
+                f"image: {int(masked.sum())} pixel(s) are masked; simulate() takes no data gaps (as NaN is refused): "
+                "satchain.simulate_image takes them as no data and marks the output pixels they touch invalid"
+            )
         a = np.asarray(array) if not isinstance(array, np.ndarray) else array
         if a.ndim != 2:
             raise InputError(f"image: must be 2-D (rows, cols), got shape {a.shape}")

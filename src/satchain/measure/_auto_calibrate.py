@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from satchain.measure._auto_common import Frame, Skip
+from satchain.measure._common import fill_invalid
 from satchain.scene.targets import SlantedEdge
 
 __all__ = ["ERODE_PX", "TAIL_RMAX_PX", "TAIL_RMIN_PX", "calibrate"]
@@ -236,6 +237,16 @@ def _inside(box, rows: np.ndarray, cols: np.ndarray) -> bool:
     return bool(x0 <= cols[0] < x1 and y0 <= rows[0] < y1)
 
 
+def _without_nodata(regions: list[_Region], owner: list[int], data: np.ndarray):
+    """The regions free of nodata (NaN: nodata, a masked array's masked pixels), their owners, and ``data``
+    with each NaN replaced by its nearest valid value (the tail sums see no NaN; the areas used hold none)."""
+    bad = ~np.isfinite(data)
+    if not bad.any():
+        return regions, owner, data
+    keep = [k for k, (_, rows, cols) in enumerate(regions) if not bad[rows, cols].any()]
+    return [regions[k] for k in keep], [owner[k] for k in keep], fill_invalid(data, ~bad)
+
+
 def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) -> dict:
     """``value = offset + gain * reflectance`` from the truth's uniform areas, the PSF's diffraction tail
     modelled (see the module docstring).  Returns ``offset``, ``gain``, ``fitted``, ``note``, ``levels``
@@ -259,6 +270,7 @@ def calibrate(data: np.ndarray, truth: dict, items: list[dict], frame: Frame) ->
         if bg is not None:
             regions.append(bg)
             owner.append(i)
+    regions, owner, data = _without_nodata(regions, owner, data)
     levels = [(r, float(np.median(data[rows, cols])), int(rows.size)) for r, rows, cols in regions]
     info = {
         "levels": [{"reflectance": r, "median": v, "n_px": n} for r, v, n in levels],

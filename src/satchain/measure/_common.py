@@ -7,12 +7,14 @@ import math
 
 import numpy as np
 
-from satchain._validate import as_float_array
+from satchain._validate import as_float_array, masked_as_nan, split_mask
 from satchain.errors import InputError
 from satchain.measure._zero_fill import zero_fill_mask
 
 __all__ = [
     "valid_mask",
+    "unmask",
+    "masked_as_nan",
     "zero_fill_mask",
     "fill_invalid",
     "crop_roi",
@@ -53,7 +55,10 @@ def crop_roi(image, roi, *, name: str = "image", min_size: int = 8) -> np.ndarra
         a = a[y0:y1, x0:x1]
     if not np.all(np.isfinite(a)):
         n = int(np.count_nonzero(~np.isfinite(a)))
-        raise InputError(f"{name}: the region contains {n} NaN/inf value(s); all values must be finite")
+        raise InputError(
+            f"{name}: the region contains {n} NaN/inf value(s) (no data: NaN, or a masked array's masked pixels); "
+            "all values must be finite"
+        )
     if min(a.shape) < min_size:
         raise InputError(f"{name}: region of shape {a.shape} is too small; both sides must be >= {min_size} px")
     return np.array(a, dtype=np.float64)
@@ -93,6 +98,31 @@ def valid_mask(image, valid=None, nodata=None, *, name: str = "image") -> np.nda
     if out is not None and not np.any(out):
         raise InputError(f"{name}: every pixel is excluded (nodata / valid mask); nothing to measure")
     return out
+
+
+def unmask(image, valid=None, *, name: str = "image"):
+    """``(image, valid)`` for a measurement that takes a ``valid`` mask: a numpy masked array's masked pixels
+    are excluded as ``valid = False`` pixels are (never edge, plateau, noise or clipping), its data keep their
+    dtype (an integer image's full scale and zero-fill test); anything else passes as it is. Measurements
+    without ``valid`` take :func:`masked_as_nan` (masked pixels are NaN, refused in any region they fall in).
+
+    Examples
+    --------
+    >>> img = np.ma.masked_array(np.arange(4).reshape(2, 2), mask=[[1, 0], [0, 0]])
+    >>> data, ok = unmask(img)
+    >>> data.dtype.kind, ok.tolist()
+    ('i', [[False, True], [True, True]])
+    """
+    data, masked = split_mask(name, image)
+    if masked is None:
+        return data, valid
+    keep = ~masked
+    if valid is not None:
+        keep &= valid_mask(data, valid, name=name)
+    if not keep.any():
+        extra = " and valid" if valid is not None else ""
+        raise InputError(f"{name}: every pixel is masked (the masked array's mask{extra}); nothing to measure")
+    return data, keep
 
 
 def fill_invalid(a: np.ndarray, mask: np.ndarray | None) -> np.ndarray:

@@ -60,7 +60,7 @@ from typing import Any
 
 import numpy as np
 
-from satchain._validate import as_float_array, check_positive, check_range
+from satchain._validate import as_float_array, check_positive, check_range, masked_as_nan
 from satchain.errors import InputError
 from satchain.measure._auto_calibrate import calibrate
 from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
@@ -152,7 +152,9 @@ def measure_auto(
     Parameters
     ----------
     image : array_like, 2-D
-        The simulated (or real) image covering the scene's ground.
+        The simulated (or real) image covering the scene's ground.  NaN and a numpy masked array's masked
+        pixels are nodata: left out of the calibration's areas and of the edges' lines; a star, bar group or
+        wedge whose region holds one is skipped with the reason.
     truth : dict
         The scene truth record (``satchain-scene-truth/1``, the ``*.truth.json`` written with a render).
     pixel_m : float, optional
@@ -192,8 +194,8 @@ def measure_auto(
     >>> e["direction"], round(e["angle_deg"], 1), e["angle_deg_truth"]
     ('ACT', 5.0, 5.0)
     """
-    raw = np.asarray(image)
-    data = as_float_array("image", raw, ndim=2, finite=False)
+    raw = image if isinstance(image, np.ma.MaskedArray) else np.asarray(image)  # edges: masked pixels excluded
+    data = as_float_array("image", masked_as_nan("image", raw), ndim=2, finite=False)  # other targets: nodata
     items = _truth_items(truth)
     frame = _frame(truth, data.shape, pixel_m, origin_m, image_affine)
     p, origin = frame.pixel_m, frame.origin_m

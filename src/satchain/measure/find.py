@@ -36,7 +36,7 @@ from scipy import ndimage as ndi
 
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, fill_invalid, valid_mask
+from satchain.measure._common import ResultMixin, fill_invalid, unmask, valid_mask
 
 __all__ = ["EdgeCandidate", "EdgeSearch", "Rejection", "estimate_noise", "find_edges"]
 
@@ -462,7 +462,8 @@ def find_edges(
     Parameters
     ----------
     image : array_like, 2-D
-        The image (any real dtype; read band by band in float32, never copied whole as float64).
+        The image (any real dtype; read band by band in float32, never copied whole as float64); a numpy
+        masked array's masked pixels are excluded as ``valid = False`` ones are.
     min_length_px : float
         Shortest usable segment (px, along the edge).
     min_cnr : float
@@ -504,6 +505,7 @@ def find_edges(
     >>> len(s), s.candidates[0].direction, round(s.candidates[0].angle_deg, 1)
     (1, 'ACT', 6.0)
     """
+    image, valid = unmask(image, valid)
     a = as_float_array("image", image, ndim=2, finite=False) if not isinstance(image, np.ndarray) else image
     ok = valid_mask(a, valid, nodata)
     inner = None

@@ -35,7 +35,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import ResultMixin, first_crossing, valid_mask
+from satchain.measure._common import ResultMixin, first_crossing, unmask, valid_mask
 from satchain.measure._edge_axis import check_axis
 from satchain.measure._zero_fill import zero_fill_mask
 from satchain.measure.edge import EdgeResult, measure_edge
@@ -363,7 +363,8 @@ def measure_found_edges(
     Parameters
     ----------
     image : array_like, 2-D
-        The image (no truth file needed).
+        The image (no truth file needed); a numpy masked array's masked pixels are excluded as ``valid =
+        False`` ones are.
     pixel_m : float, optional
         Ground sample distance (m): adds ground frequencies (cy/m) to every edge, the combined curves and
         the CEOS table.
@@ -407,6 +408,7 @@ def measure_found_edges(
     >>> sorted(res.combined), res.edges[0].direction
     (['ACT'], 'ACT')
     """
+    image, valid = unmask(image, valid)
     ok, fill_note = valid_mask(image, valid, nodata), None
     if ok is None and valid is None and nodata is None:
         ok, fill_note = zero_fill_mask(image)

@@ -27,7 +27,7 @@ import numpy as np
 from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, to_jsonable
+from satchain.measure._common import ResultMixin, to_jsonable, unmask
 from satchain.measure._edge_checks import check_saturation
 from satchain.measure._edge_lines import edge_line_fields, rough_line
 from satchain.measure._edge_locate import edge_region
@@ -125,7 +125,8 @@ def measure_jitter(
     Parameters
     ----------
     image : array_like, 2-D
-        Pushbroom image (rows = lines in time) holding one long near-vertical straight edge.
+        Pushbroom image (rows = lines in time) holding one long near-vertical straight edge; a numpy masked
+        array's masked pixels are excluded as ``valid = False`` ones are.
     line_time_s : float
         Time between consecutive lines (s), > 0.
     roi : (x0, y0, x1, y1), optional
@@ -162,6 +163,7 @@ def measure_jitter(
     >>> round(p.frequency_hz, 2), round(p.amplitude_px, 3), round(p.phase_deg, 1)
     (25.0, 1.5, 22.9)
     """
+    image, valid = unmask(image, valid)
     dt, n_max, alpha, a_min = _check_args(line_time_s, max_peaks, false_alarm, min_amplitude_px)
     fs = resolve_full_scale(image, full_scale, None)
     data, ok, flags = edge_region(image, roi, valid, nodata)

@@ -33,7 +33,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from satchain._validate import as_float_array, check_positive
+from satchain._validate import as_float_array, check_positive, split_mask
+from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, robust_sigma
 from satchain.scene.targets import SlantedEdge
 
@@ -207,7 +208,8 @@ def measure_snr(
     Parameters
     ----------
     image : array_like, 2-D
-        The image (any linear unit: DN, electrons, ...), its top-left pixel at the scene origin.
+        The image (any linear unit: DN, electrons, ...), its top-left pixel at the scene origin; every pixel
+        valid (NaN and a numpy masked array's masked pixels are refused).
     truth : mapping or Truth
         The scene's truth record (``items`` with ``bbox_m``; slanted edges with ``edge_point_m``,
         ``normal_to_bright``, ``bright``, ``dark``).
@@ -237,6 +239,12 @@ def measure_snr(
     from satchain.measure._auto_common import Frame
     from satchain.measure.auto import check_image_affine
 
+    image, masked = split_mask("image", image)
+    if masked is not None:
+        raise InputError(
+            f"image: {int(masked.sum())} pixel(s) are masked; the SNR's plateaus and background patches are placed "
+            "over the whole scene and take no mask (as NaN is refused): give an image whose every pixel is valid"
+        )
     a = as_float_array("image", image, ndim=2)
     pixel_m = check_positive("pixel_m", pixel_m)
     frame = Frame(pixel_m, (0.0, 0.0), a.shape, check_image_affine(image_affine))

@@ -37,7 +37,7 @@ import numpy as np
 from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, clipping_flag, crop_roi
+from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, masked_as_nan
 from satchain.measure._starfit import annulus_fit, coarse_center, fit_center, harmonic_spectrum, symmetry_center
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
@@ -239,6 +239,7 @@ def measure_star(
     Parameters
     ----------
     image : array_like, 2-D
+        The image; NaN (nodata) and a numpy masked array's masked pixels are refused inside ``roi``.
     cycles : int
         Periods per revolution of the star (>= 4); checked against the data.
     center : (x, y), optional
@@ -283,7 +284,7 @@ def measure_star(
     """
     n, f_max, input_modulation = _check_args(cycles, annulus_px, f_max_cy_per_px, input_modulation)
     full_scale = resolve_full_scale(image, full_scale)
-    data = crop_roi(image, roi, min_size=16)
+    data = crop_roi(masked_as_nan("image", image), roi, min_size=16)  # masked pixels: nodata, refused in the region
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
     (xc, yc), r_in, r_out, c_std, c_from = _centre_and_radii(

@@ -37,7 +37,7 @@ import numpy as np
 from satchain._validate import check_choice, check_range
 from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, first_crossing, robust_sigma
+from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, first_crossing, masked_as_nan, robust_sigma
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["WedgeResult", "measure_wedge"]
@@ -95,6 +95,7 @@ def measure_wedge(
     Parameters
     ----------
     image : array_like, 2-D
+        The image; NaN (nodata) and a numpy masked array's masked pixels are refused inside ``roi``.
     line_width_px : callable or array_like
         Stripe width (px) at each position along the wedge axis: a function of the position (px, in the
         region's coordinates) or an array with one value per position.
@@ -130,7 +131,7 @@ def measure_wedge(
     """
     thr, avg = _check_args(direction, threshold, average_px, seed)
     full_scale = resolve_full_scale(image, full_scale)
-    data = crop_roi(image, roi, min_size=4)
+    data = crop_roi(masked_as_nan("image", image), roi, min_size=4)  # masked pixels: nodata, refused in the region
     work = data if direction == "ALT" else data.T  # profiles are columns of `work`
     pos, lw = _widths(work, line_width_px)
     keep = _valid_mask(valid, np.shape(image), roi, direction)
