@@ -58,6 +58,7 @@ from satchain.measure._common import (
     ResultMixin,
     first_crossing,
     robust_sigma,
+    unmask,
 )
 from satchain.measure._edge_align import align_lines
 from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
@@ -192,7 +193,8 @@ def measure_edge(
     Parameters
     ----------
     image : array_like, 2-D
-        Image containing one straight or gently curved edge.
+        Image containing one straight or gently curved edge (any real dtype, its values as they stand; a
+        numpy masked array's masked pixels are excluded as ``valid = False`` ones are).
     roi : (x0, y0, x1, y1), optional
         Half-open pixel region to analyse; the whole image by default.
     pixel_m : float, optional
@@ -262,6 +264,7 @@ def measure_edge(
     >>> r.direction, round(r.angle_deg, 2), r.flags
     ('ACT', 5.73, ())
     """
+    image, valid = unmask(image, valid)
     os_, f_max, deg, full_scale = _check_args(
         image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level
     )
