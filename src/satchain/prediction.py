@@ -339,18 +339,20 @@ def predict(
     otf : SystemOTF, optional
         The system OTF (built from ``system`` when not given).
     quality : mapping, optional
-        :func:`satchain.quality.predict_quality` ``.to_dict()`` (computed when not given).
+        :func:`satchain.quality.predict_quality` ``.to_dict()``, or some of its figures (``giqe5``,
+        ``rer_giqe5``, ``snr`` are used): the others are computed, and without ``giqe5`` the NIIRS is that of
+        the RER and SNR used (:func:`satchain.quality.complete_quality`); an unknown key is refused.
     sensor : SensorModel, optional
         For saturation warnings, and the image noise that gives the wedge crossings their 1-sigma.
     wedge_threshold : float
         Contrast at which a wedge stops resolving (the paper's 0.15).
     """
-    from satchain.quality import predict_quality
+    from satchain.quality import complete_quality
     from satchain.tf.budget import SystemOTF
 
     truth = truth.to_dict() if hasattr(truth, "to_dict") else truth  # a satchain.scene.truth.Truth
     otf = SystemOTF(system) if otf is None else otf
-    quality = predict_quality(system, otf=otf).to_dict() if quality is None else quality
+    quality = complete_quality(system, quality, otf=otf)
     names = getattr(otf, "component_names", ())
     return predict_from_mtf(
         system_mtf_cy_per_px(otf, local=True),
