@@ -166,7 +166,8 @@ def read_los_csv(path: Any) -> dict[str, tuple[float, ...]]:
 
     p = Path(str(path))
     if not p.is_file():
-        raise SatchainIOError(f"motion.line_of_sight.file = {str(p)!r}: not found")
+        what = "a folder, not a file; give the CSV log" if p.is_dir() else "not found"
+        raise SatchainIOError(f"motion.line_of_sight.file = {str(p)!r}: {what}")
     try:
         lines = [
             ln for ln in p.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.lstrip().startswith("#")

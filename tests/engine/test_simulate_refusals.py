@@ -174,3 +174,34 @@ def test_a_sweep_whose_later_case_cannot_be_simulated_writes_nothing(tmp_path, s
     line = " ".join(r.output.split())
     assert "detector.pitch_m=0.001" in line and "smaller than one detector pixel" in line
     assert not out.exists()  # case 1 was not written: every case is checked first
+
+
+def test_an_unreachable_scheduler_is_named_not_taken_for_a_file_problem(tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    from satchain.engine import distributed
+
+    monkeypatch.setattr(distributed, "CONNECT_TIMEOUT_S", 1.0)
+    src = _write(tmp_path / "in.tif", _edge())
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", "--scheduler", "tcp://127.0.0.1:1", "-o", out)  # port 1: nobody listens
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "tcp://127.0.0.1:1" in line and "cannot reach a Dask scheduler" in line
+    assert "disk" not in line and not out.exists()
+
+
+@pytest.mark.parametrize("where", ["scene", "sweep input", "line of sight"])
+def test_a_folder_given_as_a_file_is_called_a_folder_not_missing(tmp_path, where):
+    folder = tmp_path / {"scene": "layout.toml", "sweep input": "b.tif", "line of sight": "los.csv"}[where]
+    folder.mkdir()
+    if where == "scene":
+        r = _sim(folder, "--preset", "ankarasat3", "-o", tmp_path / "out.tif")
+    elif where == "sweep input":
+        r = _sim(_write(tmp_path / "a.tif", _edge()), folder, "--preset", "ankarasat3", "-o", tmp_path / "sw")
+    else:
+        system = tmp_path / "los.toml"
+        system.write_text(MINIMAL + f'[motion.line_of_sight]\nfile = "{folder.name}"\n')
+        r = runner.invoke(app, ["budget", "--system", str(system)])
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert folder.name in line and "folder" in line and "no such file" not in line and "not found" not in line

@@ -37,6 +37,8 @@ __all__ = ["decimate_distributed", "simulate_distributed", "write_zarr"]
 
 Progress = Callable[[int, int], None]
 _EXTRA = "pip install 'satchain[dask]'"
+#: seconds a connection to a scheduler address may take before it is refused as unreachable (distributed's default)
+CONNECT_TIMEOUT_S = 30.0
 
 
 def _require(module: str):
@@ -75,7 +77,14 @@ def _client_for(scheduler) -> tuple[Any, bool]:
                 "'tcp://10.0.0.5:8786', or a distributed.Client"
             )
         distributed = _require("distributed")
-        return distributed.Client(scheduler), True
+        try:
+            return distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S), True
+        except (OSError, TimeoutError) as exc:  # refused, unknown host, or no answer (distributed's OSError)
+            raise SatchainIOError(
+                f"scheduler = {scheduler!r}: cannot reach a Dask scheduler at that address in {CONNECT_TIMEOUT_S:g} "
+                "s: check that the scheduler runs, its host and port, and the network between (or leave the "
+                "scheduler out to run in this process)"
+            ) from exc
     if hasattr(scheduler, "scatter") and hasattr(scheduler, "submit"):
         return scheduler, False
     raise ConfigError(

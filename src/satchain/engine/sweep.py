@@ -422,7 +422,8 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
         by_input.setdefault(c.input, []).append((c, s))
     for input_, (first, *others) in by_input.items():
         if Path(input_).suffix.lower() in IMAGE_SUFFIXES and not Path(input_).is_file():
-            what = "is not a file" if Path(input_).exists() else "no such file"
+            here = Path(input_)
+            what = "is a folder, not a file" if here.is_dir() else "is not a file" if here.exists() else "no such file"
             raise SatchainIOError(f"{name('inputs', 'inputs')} {input_!r}: {what}")
         if Path(input_).suffix.lower() in GDAL_SUFFIXES:
             simulate_raster(input_, first[0].image, first[1], names=names, check_only=True,

@@ -259,7 +259,8 @@ def load_layout(source: str | Path) -> Scene:
         return paper_layout()
     path = Path(source)
     if not path.is_file():
-        raise SatchainIOError(f"layout = {str(source)!r}: not 'paper' and no such file")
+        what = "a folder, not a scene file (.toml or .json)" if path.is_dir() else "not 'paper' and no such file"
+        raise SatchainIOError(f"layout = {str(source)!r}: {what}")
     try:
         text = path.read_text(encoding="utf-8")
         if path.suffix.lower() == ".toml":
