@@ -146,11 +146,14 @@ def test_in_memory_run_writes_nothing_and_matches_the_run_directory(reduced_run,
 
 def test_rerun_replaces_and_refuses_foreign_dirs(reduced_run, tmp_path):
     out, _, _, _ = reduced_run
-    stale = out / "stale.txt"
-    stale.write_text("old")
+    stale, notes = out / "figures" / "stale.png", out / "notes.txt"
+    stale.write_text("old")  # a figure of satchain's (its manifest lists it) that the rerun does not draw
+    manifest = json.loads((out / "manifest.json").read_text())
+    (out / "manifest.json").write_text(json.dumps(manifest | {"files": [*manifest["files"], "figures/stale.png"]}))
+    notes.write_text("mine")  # the user's (not listed): kept
     cfg = RunConfig.from_dict({"scene": {"layout": str(out.parent / "scene.toml"), "pixel_m": 0.49}})
     run_pipeline(cfg, out)
-    assert not stale.exists()  # the old directory was replaced whole, not mixed
+    assert not stale.exists() and notes.read_text() == "mine"  # satchain's files replaced whole, the user's kept
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "thesis.tex").write_text("precious")

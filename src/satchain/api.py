@@ -85,7 +85,8 @@ def run(
         reference paper's camera and scene, which takes a minute or two).
     out_dir : path, optional
         Write report.html, results.json, images, figures and manifest.json there (replaced atomically; an
-        existing directory must be a satchain run directory).
+        existing directory must be a satchain run directory; its files that satchain did not write are kept,
+        ``RunResult.kept_files``).
     progress : callable, optional
         ``progress(stage, done, total)``, stage one of :data:`satchain.pipeline.STAGES`.
 

@@ -472,6 +472,10 @@ def run(
         raise typer.Exit(_interrupted(exc, out, previous)) from None
     _print_run(result)
     console.print(f"report: {out / 'report.html'}   results: {out / 'results.json'}", markup=False, highlight=False)
+    if result.kept_files:  # the user's files in the folder this run replaced
+        n, shown = len(result.kept_files), ", ".join(result.kept_files[:5])
+        more = f", ... ({n} in all)" if n > 5 else ""
+        _say(f"kept {n} file{'s' if n != 1 else ''} satchain did not write in {str(out)!r}: {shown}{more}")
     if result.passed is False and not exit_zero:
         n = result.comparison.n_failed
         err_console.print(f"[bold red]{n} check(s) failed[/] (exit status 1; --exit-zero to ignore)")

@@ -15,11 +15,9 @@ run leaves the previous results untouched.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import functools
 import json
-import os
 import platform
 import shutil
 import tempfile
@@ -481,6 +479,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
     Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
     or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
     """
+    from satchain._runfolder import swap_in, written_files
     from satchain._safety import terminate_as_interrupt
 
     out = Path(out_dir).resolve()
@@ -515,9 +514,10 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
             result = dataclasses.replace(result, timings_s=timings)
             from satchain.report._save import write_text
 
-            write_text(staging / MANIFEST, json.dumps(_manifest(result), indent=1, default=_json_default))
+            manifest = _manifest(result) | {"files": written_files(staging)}  # what a rerun may replace
+            write_text(staging / MANIFEST, json.dumps(manifest, indent=1, default=_json_default))
             received.check()  # a signal whose exception library code swallowed still stops the run here
-            _swap_in(staging, out)
+            result = dataclasses.replace(result, kept_files=swap_in(staging, out))  # the user's files kept
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
             raise
@@ -535,26 +535,3 @@ def _claim_run_dir(directory: Path, *, marker: bool = True) -> None:
     claim(directory)
     if marker:
         write_run_marker(directory)
-
-
-def _swap_in(staging: Path, out: Path) -> None:
-    """Replace ``out`` by ``staging`` with two renames; the old results are removed only afterwards."""
-    old = None
-    if out.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        os.rmdir(old)
-        _claim_run_dir(out, marker=False)  # owned by this process from before it is renamed
-        os.replace(out, old)
-    try:
-        os.replace(staging, out)
-    except BaseException:
-        if old is not None:
-            os.replace(old, out)
-        raise
-    from satchain._safety import OWNER
-
-    with contextlib.suppress(OSError):
-        (out / OWNER).unlink()  # the results no longer belong to a process
-    if old is not None:
-        with contextlib.suppress(OSError):
-            shutil.rmtree(old)
