@@ -11,6 +11,7 @@ from scipy.integrate import quad
 
 from satchain.comparison import (
     NOISE_SIGMAS,
+    REAL_DIFFERENCE_Z,
     SNR_REL_SIGMA,
     CheckRow,
     compare,
@@ -42,13 +43,23 @@ def test_z_is_error_over_sigma_and_absent_without_either():
 
 
 @pytest.mark.parametrize(
-    ("tolerance", "sigma", "inside"),
-    [(0.004, 0.004, True), (0.008, 0.0041, True), (0.008, 0.004, False), (0.02, 0.004, False), (0.02, None, None)],
+    ("tolerance", "sigma", "error", "inside"),
+    [
+        (0.004, 0.0041, 0.001, True),  # a +-0.004 tolerance against a 1-sigma of 0.0041: inside the noise
+        (0.004, 0.004, 0.001, False),
+        (0.008, 0.0041, 0.001, False),  # under 2 sigma but above 1: noise alone rarely decides it (was marked)
+        (0.02, 0.004, 0.001, False),
+        (0.02, None, 0.001, None),
+        (0.05, 0.027, -0.265, False),  # issue 29: the star's FAIL at z -9.8 was marked "inside noise"
+        (0.06, 0.073, 0.356, False),  # ... and the bars' at z +4.9 (tolerance < sigma, but |z| >= 3: real)
+        (0.06, 0.073, 0.2, True),  # |z| 2.7: the same tolerance is inside the noise
+    ],
 )
-def test_tolerance_inside_noise_when_below_two_sigma(tolerance, sigma, inside):
-    """The issue's case: a +-0.004 tolerance against a +-2 sigma band of +-0.008 is inside the noise."""
-    assert NOISE_SIGMAS == 2.0
-    r = row(0.001, sigma, tolerance)
+def test_tolerance_inside_noise_only_below_one_sigma_and_never_at_a_real_difference(tolerance, sigma, error, inside):
+    """Issue 29: "tolerance inside noise" only where the tolerance is smaller than the measurement's sigma, and
+    never on a row whose |z| (>= 3) shows a real difference."""
+    assert NOISE_SIGMAS == 1.0 and REAL_DIFFERENCE_Z == 3.0
+    r = row(error, sigma, tolerance)
     assert r.tolerance_inside_noise is inside
     assert r.to_dict()["tolerance_inside_noise"] is inside
     assert ("tolerance inside noise" in row_texts(r)["result"]) is bool(inside)

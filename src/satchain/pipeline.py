@@ -151,13 +151,27 @@ def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, 
     from satchain.comparison import compare
 
     predicted = _predict(config, budget, scene.truth, sim)
-    comparison = compare(measured, predicted, config.tolerances)
+    comparison = _with_as_built(config, budget, scene.truth, sim, measured,
+                                compare(measured, predicted, config.tolerances))  # fmt: skip
     progress("compare", 1, 1)
     return predicted, comparison
 
 
 def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
     """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
+def _with_as_built(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult, measured: Measurements,
+                   comparison: Comparison) -> Comparison:  # fmt: skip
+    """``comparison`` (against the design) with the prediction for the camera as built beside each row and
+    target (:func:`satchain.comparison.as_built.with_as_built`) when ``[as_built]`` changed the camera."""
+    if config.as_built is None or sim.system is None or sim.system == budget.system:
+        return comparison
+    from satchain.comparison import compare
+    from satchain.comparison.as_built import with_as_built
+
+    built = BudgetResult(sim.system, sim.simulator.otf, {"quality": None})  # its quality from its own budget
+    return with_as_built(comparison, compare(measured, _predict(config, built, truth, sim), config.tolerances))
+
+
     in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it)."""
     from satchain.image_geometry import run_geometry
     from satchain.prediction import predict
@@ -188,7 +202,9 @@ def _edge_results(config: RunConfig, budget: BudgetResult, scene: SceneResult, s
     edges_only = dict(truth, items=[it for it in truth["items"] if it.get("kind") == EDGES.kind])
     auto = measured.auto
     auto = dataclasses.replace(auto, items=tuple(it for it in auto.items if it.kind == EDGES.kind), skipped=())
-    c = compare(Measurements(auto, measured.snr), _predict(config, budget, edges_only, sim), config.tolerances)
+    edges = Measurements(auto, measured.snr)
+    c = compare(edges, _predict(config, budget, edges_only, sim), config.tolerances)
+    c = _with_as_built(config, budget, edges_only, sim, edges, c)
     return strict_json([d.to_dict() for d in c.details[EDGES.key]])
 
 

@@ -328,7 +328,7 @@ def test_summary_rows_show_sigma_z_and_every_row_has_sigma_or_a_reason(run):
         assert (r["sigma"] is not None) != bool(r["sigma_null_means"]), r
         if r["sigma"] is not None and r["error"] is not None:
             assert r["z"] == pytest.approx(r["error"] / r["sigma"])
-            assert r["tolerance_inside_noise"] is (r["tolerance_value"] < 2 * r["sigma"])
+            assert r["tolerance_inside_noise"] is (r["tolerance_value"] < r["sigma"] and abs(r["z"]) < 3)
     assert sum(r["sigma"] is not None for r in rows if r["kind"] != "wedge_resolution") >= len(rows) - 2
     text = run.html
     assert text.count('data-label="σ"') == len(rows) and text.count('data-label="z"') == len(rows)

@@ -30,8 +30,9 @@ its compared errors from their measured 1-sigma (:func:`~satchain.comparison.sta
 ``ctf_std`` at the group of the largest error; the NIIRS's RER (bounded from each edge's MTF 1-sigma) and SNR
 (its measured ``snr_sigma``; :data:`SNR_REL_SIGMA` of it only when it has none, and the row's ``note`` says
 so) sigmas through GIQE 5 (the formulas in :mod:`satchain.check_sigma`).
-``z = error / sigma``; a row whose tolerance is below :data:`NOISE_SIGMAS` sigma is ``tolerance_inside_noise``
-(it can fail on noise alone). For bars the error is a maximum over many points, so its z is biased high (a
+``z = error / sigma``; a row whose tolerance is below :data:`NOISE_SIGMAS` sigma and whose ``|z|`` is below
+:data:`REAL_DIFFERENCE_Z` is ``tolerance_inside_noise`` (it can fail on noise alone; a larger ``|z|`` is a real
+difference). For bars the error is a maximum over many points, so its z is biased high (a
 maximum of noise); the star's sigma is that of its maximum.
 """
 
@@ -43,6 +44,7 @@ from satchain.comparison.bars import BAR_COMPARE_MAX_CY_PER_PX
 from satchain.comparison.core import CHECKS, TargetChecks, compare
 from satchain.comparison.records import (
     NOISE_SIGMAS,
+    REAL_DIFFERENCE_Z,
     BarCheck,
     CheckRow,
     Comparison,
@@ -60,6 +62,7 @@ __all__ = [
     "CHECKS",
     "NOISE_SIGMAS",
     "PREDICTION_SIGMA_NOTE",
+    "REAL_DIFFERENCE_Z",
     "SNR_REL_SIGMA",
     "STAR_F_MIN_CY_PER_PX",
     "BarCheck",

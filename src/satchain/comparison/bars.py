@@ -9,6 +9,7 @@ import numpy as np
 from satchain import ctf as _ctf
 from satchain.comparison._common import finite, floats, sigma_or_why, within
 from satchain.comparison.records import BarCheck, CheckRow
+from satchain.measure._keys import AT_NOISE_FLOOR
 from satchain.prediction import Predictions
 
 __all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "bar_checks"]
@@ -37,6 +38,7 @@ def bar_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[B
         if ok.any():
             i = int(np.flatnonzero(ok)[np.argmax(np.abs(meas[ok] - col[ok]))])
             err = float(abs(meas[i] - col[i]))
+        groups = _design_indices(b, f.size)
         details.append(
             {
                 "id": b["id"],
@@ -56,15 +58,37 @@ def bar_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[B
                 "ctf_raw_measured": np.where(np.isfinite(corr), meas - corr, meas).tolist(),
                 "max_abs_error_sigma": None if i is None else finite(std[i]),
                 "worst_f_cy_per_px": None if i is None else float(f[i]),
+                "group": groups,
+                "at_noise_floor": [_at_floor(b.get("flags"), k) for k in groups],
+                "worst_group": None if i is None else groups[i],
             }
         )
         lim = BAR_COMPARE_MAX_CY_PER_PX
         why = None if err is not None else f"no group with >= {1 / lim:g} px per period (<= {lim} cy/px)"
         sig = sigma_or_why(details[-1]["max_abs_error_sigma"], err, "the bar measurement gave no CTF sigma")
+        note = None if i is None else (
+            f"largest error at group {groups[i]} ({f[i]:.3f} cy/px, period {1 / f[i]:.2f} px): CTF measured "
+            f"{meas[i]:.3f}, Coltman {col[i]:.3f}" + (" (at the noise floor)" if _at_floor(b.get("flags"), groups[i])
+                                                     else "")
+        )  # fmt: skip
         rows.append(
             CheckRow(
                 f"bars {b['id']} max |CTF error| (Coltman)", "bar_ctf", b["id"], err, 0.0, err, tol.bar_ctf,
-                f"≤{tol.bar_ctf}", within(err, tol.bar_ctf), why, *sig,
+                f"≤{tol.bar_ctf}", within(err, tol.bar_ctf), why, *sig, note=note,
             )
         )  # fmt: skip
     return [BarCheck.from_dict(d) for d in details], rows
+
+
+def _design_indices(b: dict, n: int) -> list[int]:
+    """Each measured group's index in the target's design (``groups[].group`` of ``measure auto``; 0..n-1 for a
+    measurement without them)."""
+    rows = b.get("groups") or []
+    if len(rows) == n and all(g.get("group") is not None for g in rows):
+        return [int(g["group"]) for g in rows]
+    return list(range(n))
+
+
+def _at_floor(flags, k: int) -> bool:
+    """Group ``k`` was measured at the noise floor (its CTF ~0 with its 1-sigma is a result)."""
+    return any(str(f).startswith(f"group {k}: {AT_NOISE_FLOOR}") for f in flags or ())

@@ -20,6 +20,7 @@ def result_key(kind: str) -> str:
 
 __all__ = [
     "NOISE_SIGMAS",
+    "REAL_DIFFERENCE_Z",
     "BarCheck",
     "CheckRow",
     "Comparison",
@@ -31,8 +32,11 @@ __all__ = [
     "signed_text",
 ]
 
-#: A tolerance narrower than this many sigma of its error is "inside the noise": the check can fail on noise.
-NOISE_SIGMAS = 2.0
+#: A tolerance narrower than this many sigma of its error is "inside the noise": the check can fail on noise alone
+#: (issue 29: the tolerance smaller than the measurement's sigma; was 2).
+NOISE_SIGMAS = 1.0
+#: A row whose ``|z|`` reaches this shows a real difference: it is never marked "inside the noise", whatever its sigma.
+REAL_DIFFERENCE_Z = 3.0
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,9 @@ class CheckRow:
     in the unit of ``error``; when it is None, ``sigma_null_means`` says why. ``model_prediction``: where the
     prediction is the measurement made on a noise-free predicted image (star), the system model's own value
     beside it (their difference is the estimator's systematic); ``note`` says what the row compares, in words.
+    ``as_built`` (a run whose camera was simulated as built): the same check against the as-built camera's
+    prediction, ``{"predicted", "error", "sigma", "z", "pass"}``, written ``predicted_as_built``, ... (see
+    :func:`satchain.comparison.as_built.with_as_built`).
     """
 
     figure: str
@@ -63,6 +70,7 @@ class CheckRow:
     sigma_null_means: str | None = None
     model_prediction: float | None = None
     note: str | None = None
+    as_built: dict[str, Any] | None = None
 
     @property
     def z(self) -> float | None:
@@ -73,10 +81,13 @@ class CheckRow:
 
     @property
     def tolerance_inside_noise(self) -> bool | None:
-        """True when the tolerance is narrower than 2 sigma: the check can fail on noise alone (None: no sigma)."""
+        """True when the tolerance is smaller than the measurement's sigma (:data:`NOISE_SIGMAS`) and ``|z|`` is
+        below :data:`REAL_DIFFERENCE_Z`: the check can pass or fail on noise alone. A row whose ``|z|`` shows a
+        real difference is never marked, whatever its sigma (None: no sigma)."""
         if self.sigma is None:
             return None
-        return bool(self.tolerance < NOISE_SIGMAS * self.sigma)
+        z = self.z
+        return bool(self.tolerance < NOISE_SIGMAS * self.sigma and (z is None or abs(z) < REAL_DIFFERENCE_Z))
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -96,18 +107,24 @@ class CheckRow:
             "tolerance_inside_noise": self.tolerance_inside_noise,
             "model_prediction": self.model_prediction,
             "note": self.note,
+            **({} if self.as_built is None else {f"{k}_as_built": v for k, v in self.as_built.items()}),
         }
 
 
 class _Detail:
-    """Per-target detail: ``to_dict()`` gives the results.json entry (``passed`` is written ``pass``)."""
+    """Per-target detail: ``to_dict()`` gives the results.json entry (``passed`` is written ``pass``). Each has an
+    ``as_built`` entry, written only for a run simulated as built: its predicted quantities (and errors, pass) for
+    the camera as built (:func:`satchain.comparison.as_built.with_as_built`)."""
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]):
         return cls(**{("passed" if k == "pass" else k): v for k, v in d.items()})
 
     def to_dict(self) -> dict[str, Any]:
-        return {("pass" if f.name == "passed" else f.name): getattr(self, f.name) for f in fields(self)}
+        d = {("pass" if f.name == "passed" else f.name): getattr(self, f.name) for f in fields(self)}
+        if d.get("as_built", 0) is None:  # written only for a run simulated as built
+            del d["as_built"]
+        return d
 
 
 @dataclass(frozen=True)
@@ -136,6 +153,7 @@ class EdgeCheck(_Detail):
     mtf_sigma: list | None = None
     flags: list | None = None
     angle_deg_expected: float | None = None  # the truth through the image geometry (written only when given)
+    as_built: dict | None = None  # the prediction for the camera as built (written only for such a run)
 
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
@@ -180,6 +198,7 @@ class StarCheck(_Detail):
     estimator_systematic_f_cy_per_px: float | None = None
     max_abs_error_to_model: float | None = None
     prediction: str | None = None
+    as_built: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -190,7 +209,9 @@ class BarCheck(_Detail):
     modulation (``ctf_raw_measured``) plus ``ctf_correction``, the difference between the model's Coltman CTF
     and the same estimator on the group rendered through the target's joint MTF model (finite 3-bar group,
     aliased harmonics, grid phase; see measure/_barjoint.py). ``max_abs_error_sigma`` is ``ctf_std_measured``
-    at the group with the largest error (``worst_f_cy_per_px``)."""
+    at the group with the largest error (``worst_f_cy_per_px``, ``worst_group``). ``group``: each group's index in
+    the target's design (the number every flag, table and file uses for it); ``at_noise_floor``: per group, whether
+    its modulation was not above the noise (its CTF ~0 with its 1-sigma is measured and compared, not refused)."""
 
     id: str
     compared_up_to_cy_per_px: float
@@ -209,6 +230,10 @@ class BarCheck(_Detail):
     ctf_raw_measured: list = field(default_factory=list)
     max_abs_error_sigma: float | None = None
     worst_f_cy_per_px: float | None = None
+    group: list = field(default_factory=list)
+    at_noise_floor: list = field(default_factory=list)
+    worst_group: int | None = None
+    as_built: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -243,6 +268,7 @@ class WedgeCheck(_Detail):
     resolution_predicted_m_std: float | None = None
     resolution_predicted_by_placement_m: list | None = None
     relative_error_sigma: float | None = None
+    as_built: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -261,6 +287,7 @@ class NiirsCheck(_Detail):
     reason: str | None = None
     giqe5_measured_sigma: float | None = None
     snr_measured_sigma: float | None = None
+    as_built: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -333,7 +360,7 @@ def signed_text(v: float | None, digits: int = 3) -> str:
 
 def row_texts(r: CheckRow) -> dict[str, str]:
     """A row's cells as text for the terminal: numbers to 4 significant digits, the error and z signed, and
-    the result with "tolerance inside noise" when the tolerance is below :data:`NOISE_SIGMAS` sigma."""
+    the result with "tolerance inside noise" when :attr:`CheckRow.tolerance_inside_noise`."""
 
     def num(v) -> str:
         return "-" if v is None else f"{v:.4g}"

@@ -62,6 +62,31 @@ def rc_for(width_in: float) -> dict:
 
 
 MEAS, PRED, TOL = "black", "tab:red", "tab:green"
+#: The prediction for the camera as built (a run with ``[as_built]``) and the mark of a failing point.
+AS_BUILT, FAIL = "tab:purple", "#d40000"
+_AB_LS = (0, (6, 2, 1.5, 2))  # dash-dot: the as-built prediction
+
+
+def _fail_mark(ax, x, y, label: str | None = None) -> None:
+    """A failing point: a large red cross behind the measured marker (distinct from every measured marker, which
+    stays visible on it), with its label."""
+    x, y = np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(y, float))
+    ok = np.isfinite(x) & np.isfinite(y)
+    if ok.any():
+        ax.plot(x[ok], y[ok], "X", color=FAIL, mec="white", mew=0.8, ms=15, zorder=1.9, alpha=0.85, label=label)
+
+
+def _residual_limits(ax, values, sigmas, tol: float | None, pad: float = 0.12) -> None:
+    """y limits of a residual panel from its data: every residual with its error bar and the tolerance band."""
+    v, sg = np.asarray(values, float).ravel(), np.nan_to_num(np.asarray(sigmas, float).ravel())
+    ok = np.isfinite(v)
+    ext = [abs(tol)] if tol is not None and np.isfinite(tol) else []
+    if ok.any():
+        ext.append(float(np.max(np.abs(v[ok]) + sg[ok])))
+    top = max(ext + [1e-3]) * (1 + pad)
+    ax.set_ylim(-top, top)
+
+
 _DIR_STYLE = {
     "ACT": dict(color="tab:blue", marker="o", ls="-"),
     "ALT": dict(color="tab:red", marker="s", ls="--"),
@@ -180,10 +205,17 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         sig = np.asarray(c.get("mtf_sigma", np.full(f.size, np.nan)), float)
         if np.isfinite(sig).any():
             ax.fill_between(f, mm - 2 * sig, mm + 2 * sig, color=MEAS, alpha=0.2, lw=0, label="measured ± 2σ (noise)")
-        ax.plot(f, mp, color=PRED, ls="--", lw=1.4, label="predicted")
+        ax.plot(f, mp, color=PRED, ls="--", lw=1.4, label="predicted" + (" (design)" if "mtf_predicted_as_built" in c
+                                                                        else ""))  # fmt: skip
+        mab = np.asarray(c.get("mtf_predicted_as_built", np.full(f.size, np.nan)), float)
+        if np.isfinite(mab).any():
+            ax.plot(f, mab, color=AS_BUILT, ls=_AB_LS, lw=1.4, label="predicted as built")
         ax.axvline(0.5, color="gray", lw=1)
         _mark(ax, 0.5, "Nyquist", 0.72)
         nm, npred = c["nyquist"]
+        failed = c.get("passed") is False and nm is not None and npred is not None
+        if failed:
+            _fail_mark(ax, 0.5, nm, "FAIL: outside the tolerance at Nyquist")
         for (fm, fp), lvl, mk, name in (
             (c["mtf50"], 0.5, "o", "MTF50"),
             (c["mtf10"], 0.1, "s", "MTF10"),
@@ -203,6 +235,10 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         r.plot(f[ok], (mm - mp)[ok], color=MEAS, lw=1)
         if np.isfinite(sig).any():
             r.fill_between(f[ok], (mm - mp - 2 * sig)[ok], (mm - mp + 2 * sig)[ok], color=MEAS, alpha=0.2, lw=0)
+        if np.isfinite(mab).any():
+            r.plot(f[ok], (mm - mab)[ok], color=AS_BUILT, ls=_AB_LS, lw=1, label="meas. - as built")
+        if failed:
+            _fail_mark(r, 0.5, nm - npred)
         _band(r, tol, label="tol. at Nyquist")
         r.axvline(0.5, color="gray", lw=1)
         r.set_xlabel("frequency along the edge normal (cy/px)")
@@ -221,31 +257,50 @@ def plot_star_comparison(st: dict, path: Path, *, tol: float | None) -> None:
     with matplotlib.rc_context(rc_for(8.5)):
         fig, (ax,), (r,) = _figure(8.5, 6.4)
         f = np.asarray(st["f_cy_per_px"], float)
-        shown_model = False
+        x_max = min(0.8, float(np.nanmax(f)) if f.size else 0.8)
+        shown_model = shown_ab = False
+        res_all, sig_all, handles = [], [], {}
         for d, curve in (st.get("mtf_measured") or {}).items():
             sty = _DIR_STYLE.get(d, dict(color="gray", marker="x", ls="-"))
             meas = np.asarray(curve, float)
             pred = np.asarray(st["directions"][d]["mtf_predicted"], float)
-            ax.plot(f, meas, sty["marker"], color=sty["color"], ms=4, mfc="none", label=f"{d} measured")
-            ax.plot(f, pred, ls=sty["ls"], color=sty["color"], lw=1.4, label=f"{d} predicted")
+            (hm,) = ax.plot(f, meas, sty["marker"], color=sty["color"], ms=4, mfc="none")
+            (hp,) = ax.plot(f, pred, ls=sty["ls"], color=sty["color"], lw=1.4)
+            handles[f"{d} measured / predicted"] = (hm, hp)
             model = st["directions"][d].get("mtf_model")
             if model is not None and not np.allclose(np.asarray(model, float), pred, equal_nan=True):
                 lab = "system MTF (model)" if not shown_model else None
                 ax.plot(f, np.asarray(model, float), ls=(0, (1, 2)), color="0.35", lw=0.9, label=lab)
                 shown_model = True
-            r.plot(f, meas - pred, ls=sty["ls"], marker=sty["marker"], ms=3, color=sty["color"], lw=1)
+            ab = (((st.get("as_built") or {}).get("directions") or {}).get(d) or {}).get("mtf_predicted")
+            if ab is not None and len(ab) == f.size:
+                if not shown_ab:  # one legend entry for the four (each in its direction's colour)
+                    ax.plot([], [], ls=_AB_LS, color="0.3", lw=0.9, label="predicted as built")
+                ax.plot(f, np.asarray(ab, float), ls=_AB_LS, color=sty["color"], lw=0.9, alpha=0.8)
+                shown_ab = True
+            std = _per_group((st.get("mtf_std_measured") or {}).get(d), f.size)
+            r.errorbar(f, meas - pred, yerr=np.nan_to_num(std), ls=sty["ls"], marker=sty["marker"], ms=3,
+                       color=sty["color"], lw=1, elinewidth=0.8, capsize=0)  # fmt: skip
+            shown = f <= x_max
+            res_all.append((meas - pred)[shown])
+            sig_all.append(std[shown])
         lo, hi = 0.05, 0.5
         r.fill_between([lo, hi], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g} (checked)")
         r.axhline(0, color="gray", lw=0.8)
+        if st.get("pass") is False and st.get("error") is not None:
+            lab = f"FAIL: largest difference {st['error']:+.3f} ({st.get('worst_direction')})"
+            _fail_mark(ax, st.get("worst_f_cy_per_px"), st.get("measured_at_worst"), lab)
+            _fail_mark(r, st.get("worst_f_cy_per_px"), st["error"])
         for a in (ax, r):
             a.axvline(0.5, color="gray", lw=1)
         _mark(ax, 0.5, "Nyquist", 0.45)
-        ax.set_xlim(0, min(0.8, float(np.nanmax(f)) if f.size else 0.8))
+        ax.set_xlim(0, x_max)
         ax.set_ylim(-0.05, 1.08)
         ax.set_ylabel("MTF")
         ax.set_title(f"Siemens star {st['id']}: MTF per direction")
-        ax.legend(ncol=2, loc="upper right")
-        r.set_ylim(-max(3 * (tol or 0.05), 0.1), max(3 * (tol or 0.05), 0.1))
+        extra, extra_labels = ax.get_legend_handles_labels()  # the model, the as-built lines, the failing point
+        ax.legend([*handles.values(), *extra], [*handles, *extra_labels], ncol=2, loc="upper right")
+        _residual_limits(r, np.concatenate(res_all or [np.zeros(0)]), np.concatenate(sig_all or [np.zeros(0)]), tol)
         r.set_xlabel("frequency along the direction (cy/px)")
         r.set_ylabel("meas. - pred.")
         r.legend(loc="lower left")
@@ -276,6 +331,9 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         cmp_ = f <= lim
         ax.plot(f, col, "-", color=PRED, lw=1.4, label="predicted CTF (Coltman)")
         ax.plot(f, pap, ":", color="tab:blue", lw=1.4, label="predicted, the paper's method")
+        ab = _per_group((b.get("as_built") or {}).get("ctf_coltman_predicted"), f.size)[order]
+        if np.isfinite(ab).any():
+            ax.plot(f, ab, ls=_AB_LS, color=AS_BUILT, lw=1.4, label="predicted as built (Coltman)")
         std = _per_group(b.get("ctf_std_measured"), f.size)[order]
         raw = _per_group(b.get("ctf_raw_measured"), f.size)[order]
         if np.isfinite(raw).any() and not np.allclose(raw, meas, equal_nan=True):
@@ -298,6 +356,14 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
             ha="right",
         )
         _mark(ax, 0.5, "Nyquist", 0.4)
+        groups = _per_group(b.get("group") or list(range(f.size)), f.size)[order]
+        for fi, yi, g in zip(f, meas, groups, strict=True):  # each group by its index in the target's design
+            if np.isfinite(yi) and np.isfinite(g):
+                ax.annotate(f"g{int(g)}", (fi, yi), xytext=(0, 9), textcoords="offset points", ha="center",
+                            color="0.3")  # fmt: skip
+        bad = cmp_ & np.isfinite(meas) & (np.abs(meas - col) > (tol if tol is not None else np.inf))
+        if bad.any():
+            _fail_mark(ax, f[bad], meas[bad], "FAIL: group outside the tolerance")
         ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
         ax.set_ylim(0, 1.15)
         ax.set_ylabel("CTF (bar modulation)")
@@ -309,6 +375,9 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
                        mfc="none", ms=6, capsize=3)  # fmt: skip
         r.fill_between([0, lim], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g}")
         r.axhline(0, color="gray", lw=0.8)
+        if bad.any():
+            _fail_mark(r, f[bad], (meas - col)[bad])
+        _residual_limits(r, meas - col, std, tol)
         r.set_xlabel("bar frequency = 1 / period (cy/px)")
         r.set_ylabel("meas. - Coltman")
         r.legend(loc="lower left")
@@ -325,6 +394,12 @@ def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None
         ax.plot(lw, meas, color=MEAS, lw=1.4, label="measured contrast across the stripes")
         ax.plot(lw, pred, color=PRED, ls="--", lw=1.4, label="predicted (the same scan, noise-free predicted image)")
         ax.plot(lw, w["ctf_coltman_predicted"], color="gray", ls=":", lw=1, label="Coltman CTF (infinite square wave)")
+        pab, rab = w.get("contrast_predicted_as_built"), w.get("resolution_predicted_as_built_m")
+        if pab is not None and np.isfinite(np.asarray(pab, float)).any():
+            lab = "predicted as built" + ("" if rab is None else f", resolution {rab * 100:.1f} cm")
+            ax.plot(lw, pab, color=AS_BUILT, ls=_AB_LS, lw=1.4, label=lab)
+            if rab is not None:
+                ax.plot([rab], [thr], "D", color=AS_BUILT, mfc="none", ms=8)
         ax.axhline(thr, color="tab:orange", lw=1.2, label=f"threshold {thr:.0%}")
         for a in (ax, r):
             if rp is not None and np.isfinite(rp) and tol_rel:
@@ -337,6 +412,8 @@ def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None
         if rp is not None and np.isfinite(rp):
             lab = f"predicted {rp * 100:.1f} cm" + (f", band ±{tol_rel:.0%}" if tol_rel else "")
             ax.plot([rp], [thr], "D", color=PRED, mfc="none", ms=8, label=lab)
+        if w.get("passed") is False and res is not None:
+            _fail_mark(ax, res, thr, "FAIL: resolution outside the band")
         _mark(ax, w["gsd_m"], f"GSD {w['gsd_m'] * 100:.0f} cm", 0.45)
         ax.set_xlim(float(np.max(lw)), float(np.min(lw)))
         ax.set_ylim(0, 1.05)
@@ -344,6 +421,8 @@ def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None
         ax.set_title(f"Hyperbolic wedge {w['id']} ({w.get('axis', '')}): the paper's contrast scan")
         ax.legend(loc="upper right")
         r.plot(lw, meas - pred, color=MEAS, lw=1)
+        if pab is not None and np.isfinite(np.asarray(pab, float)).any():
+            r.plot(lw, np.asarray(meas, float) - np.asarray(pab, float), color=AS_BUILT, ls=_AB_LS, lw=1)
         r.axhline(0, color="gray", lw=0.8)
         r.set_xlabel("line width (m); the scan runs from the wide end (left)")
         r.set_ylabel("meas. - pred.")

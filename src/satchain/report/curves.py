@@ -136,9 +136,19 @@ def _edge_curves(ctx, res: dict) -> list[dict]:
                 "mtf10": (crossing(f, mm, 0.1), crossing(f, mp, 0.1)),
                 "nyquist": (e.get("mtf_at_nyquist_measured"), e.get("mtf_at_nyquist_predicted")),
                 "sigma": e.get("mtf_at_nyquist_sigma", m.get("mtf_at_nyquist_sigma")),
+                "passed": e.get("pass"),
+                **_edge_as_built(e, f.size),
             }
         )
     return out
+
+
+def _edge_as_built(e: dict, n: int) -> dict:
+    """The prediction for the camera as built along the edge (a run with ``[as_built]``), else nothing."""
+    ab = (e.get("as_built") or {}).get("mtf_predicted")
+    if ab is None or len(ab) != n:
+        return {}
+    return {"mtf_predicted_as_built": np.array([np.nan if v is None else v for v in ab], float)}
 
 
 def _wedge_curves(ctx, res: dict) -> list[dict]:
@@ -171,9 +181,23 @@ def _wedge_curves(ctx, res: dict) -> list[dict]:
                 "resolution_m": w.get("resolution_m"),
                 "resolution_predicted_m": w.get("resolution_predicted_m"),
                 "gsd_m": gsd,
+                "passed": w.get("pass"),
+                **_wedge_as_built(w, lw.size),
             }
         )
     return out
+
+
+def _wedge_as_built(w: dict, n: int) -> dict:
+    """The wedge's scan and resolution predicted for the camera as built (a run with ``[as_built]``)."""
+    ab = w.get("as_built") or {}
+    c = ab.get("contrast_predicted")
+    if c is None or len(c) != n:
+        return {}
+    return {
+        "contrast_predicted_as_built": np.array([np.nan if v is None else v for v in c], float),
+        "resolution_predicted_as_built_m": ab.get("resolution_predicted_m"),
+    }
 
 
 def build_curves(ctx, *, edges: list[dict] | None = None) -> dict[str, Any]:
@@ -288,14 +312,18 @@ def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
 
 
 def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
-    rows = [[] for _ in range(11)]
+    rows = [[] for _ in range(14)]
     for br in bars:
         f = list(br.get("f_cy_per_px", []))
         lim = br.get("compared_up_to_cy_per_px", 0.2)
         n = len(f)
+        groups = br.get("group") if len(br.get("group") or []) == n else list(range(n))
+        floor = br.get("at_noise_floor") if len(br.get("at_noise_floor") or []) == n else _rep(None, n)
+        ab = (br.get("as_built") or {}).get("ctf_coltman_predicted")
         vals = (
             _rep(br["id"], n),
             _rep(br.get("direction"), n),
+            [str(g) for g in groups],
             f,
             br.get("ctf_raw_measured") or _rep(None, n),
             br.get("ctf_measured", _rep(None, n)),
@@ -305,6 +333,8 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             br.get("ctf_fourier_synthesis_predicted", _rep(None, n)),
             br.get("mtf_from_ctf_measured", _rep(None, n)),
             ["yes" if fi <= lim else "no" for fi in f],
+            ["" if v is None else ("yes" if v else "no") for v in floor],
+            ab if ab is not None and len(ab) == n else _rep(None, n),
         )
         for c, v in zip(rows, vals, strict=True):
             c.extend(v)
@@ -312,6 +342,7 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
         [
             "bars_id",
             "direction",
+            "group",
             "f_cy_per_px",
             "ctf_raw_measured",
             "ctf_measured",
@@ -321,11 +352,15 @@ def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
             "ctf_paper_method_predicted",
             "mtf_from_ctf_measured",
             "compared",
+            "at_noise_floor",
+            "ctf_coltman_predicted_as_built",
         ],
         rows,
-        "bar targets: CTF per bar group; ctf_raw_measured = the group's fitted modulation, ctf_measured = raw + "
+        "bar targets: CTF per bar group (group = its index in the target's design, as in results.json and the "
+        "report); ctf_raw_measured = the group's fitted modulation, ctf_measured = raw + "
         "ctf_correction_square_wave (the model-corrected square-wave CTF that is compared); compared = whether "
-        "the group enters the pass/fail check",
+        "the group enters the pass/fail check; at_noise_floor = its modulation is not above the noise (CTF ~0, "
+        "measured); ctf_coltman_predicted_as_built = the prediction for the camera as built (a run with [as_built])",
     )
 
 

@@ -128,14 +128,16 @@ def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
     meas = ctx.measured or {}
     by_id = {m["id"]: m for _, m in measured_entries(meas)}
     origin = tuple(meas.get("origin_m") or (0.0, 0.0))
+    geo = getattr(ctx, "image_affine", None)  # a pushbroom image's map from truth metres to its pixels
     for t in thumbs:
         w, h = t["box_m"][2] - t["box_m"][0], t["box_m"][3] - t["box_m"][1]
         t["wide"] = w > 2.5 * h
         t["tw"] = min(1100 if t["wide"] else 360, 420 * w / h)
-        svg = overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.image_gsd_m),
-                          origin_m=origin, compared_up_to_cy_per_px=lim, display_px=t["tw"])  # fmt: skip
-        for p in t["panels"]:
-            p["overlay"] = svg
+        svg = {frame: overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.image_gsd_m),
+                                  origin_m=origin, compared_up_to_cy_per_px=lim, display_px=t["tw"], to_image=geo,
+                                  frame=frame) for frame in ("ground", "image")}  # fmt: skip
+        for p in t["panels"]:  # the detector panel is the image's pixels: its overlay in the image's frame
+            p["overlay"] = svg["image" if p.get("title") == "detector" else "ground"]
     return thumbs
 
 
@@ -151,6 +153,10 @@ def _bar_rows(b: dict) -> list[dict]:
 
     raw, meas, corr, std, pred = (col(k) for k in ("ctf_raw_measured", "ctf_measured", "ctf_correction",
                                                      "ctf_std_measured", "ctf_coltman_predicted"))  # fmt: skip
+    groups = b.get("group") if len(b.get("group") or []) == n else list(range(n))  # the design's numbers
+    floor = col("at_noise_floor")
+    ab = (b.get("as_built") or {}).get("ctf_coltman_predicted") or []
+    ab = ab if len(ab) == n else [None] * n
     rows = []
     for j in range(n):
         d = tables._diff(meas[j], pred[j])
@@ -161,7 +167,9 @@ def _bar_rows(b: dict) -> list[dict]:
             "std": tables.fmt(s, 3), "pred": tables.fmt(pred[j]), "diff": tables.fmt(d, 3, signed=True),
             "z": tables.fmt(d / s, 1, signed=True) if d is not None and s else "–",
             "compared": f[j] <= lim + 1e-12,
-            "flags": [x for x in b.get("flags") or [] if x.startswith(f"group {j}:")],
+            "flags": [x for x in b.get("flags") or [] if x.startswith(f"group {groups[j]}:")],
+            "group": groups[j], "floor": floor[j] is True,
+            "ab": tables.fmt(None if tables._num(ab[j]) is None else round(float(ab[j]), 6)),  # a null: 0, not 7e-17
         })  # fmt: skip
     return rows
 
@@ -186,6 +194,13 @@ def _bar_limit(res: dict) -> float:
 
     bars = res.get(BARS.key) or []
     return float(bars[0].get("compared_up_to_cy_per_px") or BAR_COMPARE_MAX_CY_PER_PX) if bars else 0.4
+
+
+def _snr_rel_sigma() -> float:
+    """The SNR's 1-sigma (relative) the NIIRS check assumes when the SNR measurement gives none."""
+    from satchain.check_sigma import SNR_REL_SIGMA
+
+    return float(SNR_REL_SIGMA)
 
 
 def _fit_rows(system) -> list[dict]:
@@ -239,6 +254,8 @@ def write_report(
         total_s=sum(timings.values()),
         sections=SECTIONS,
         verdict=tables.verdict(res),
+        failed=tables.failed_checks(res),
+        snr_rel_sigma=_snr_rel_sigma(),
         key=tables.key_figures(res, ctx.budget),
         rows=tables.summary_rows(res),
         paper=tables.paper_rows(res),

@@ -19,6 +19,7 @@ __all__ = [
     "PAPER_CITATION",
     "camera_rows",
     "derived_rows",
+    "failed_checks",
     "fmt",
     "key_figures",
     "measurement_flags",
@@ -107,16 +108,16 @@ def key_figures(res: dict, budget: dict) -> list[dict]:
     rad = res.get("radiometry") or {}
 
     def edge_mean(d):
-        return _mean(e.get("mtf_at_nyquist_measured") for e in edges if e.get("direction") == d)
+        return _edge_mean_text(edges, d)
 
     return [
         {"label": "GSD", "predicted": fmt(res.get("gsd_m"), 3, unit="m"), "measured": "(geometry)"},
         {
             "label": "MTF at Nyquist, across-track",
             "predicted": fmt(mtf_n.get("act")),
-            "measured": fmt(edge_mean("ACT")),
+            "measured": edge_mean("ACT"),
         },
-        {"label": "MTF at Nyquist, along-track", "predicted": fmt(mtf_n.get("alt")), "measured": fmt(edge_mean("ALT"))},
+        {"label": "MTF at Nyquist, along-track", "predicted": fmt(mtf_n.get("alt")), "measured": edge_mean("ALT")},
         {"label": "scene SNR (albedo 0.2)", "predicted": fmt(rad.get("snr"), 1), "measured": "–"},
         {
             "label": "contrast SNR (GIQE)",
@@ -130,6 +131,35 @@ def key_figures(res: dict, budget: dict) -> list[dict]:
             "measured": fmt(niirs.get("giqe5_measured"), 2),
         },
     ]
+
+
+def _edge_mean_text(edges: list, direction: str) -> str:
+    """The measured MTF at Nyquist along ``direction``: one edge's value with its id, or the mean of several
+    labelled as such, each edge's value beside it."""
+    vals = [(e.get("id"), _num(e.get("mtf_at_nyquist_measured"))) for e in edges if e.get("direction") == direction]
+    vals = [(i, v) for i, v in vals if v is not None]
+    if not vals:
+        return "–"
+    if len(vals) == 1:
+        return f"{fmt(vals[0][1])} (edge {vals[0][0]})"
+    each = ", ".join(f"{i} {fmt(v)}" for i, v in vals)
+    return f"{fmt(float(np.mean([v for _, v in vals])))} (mean of {len(vals)} edges: {each})"
+
+
+def failed_checks(res: dict) -> list[dict]:
+    """The failed checks, for the page's first screen: the row's figure, its z (and z against the camera as built
+    when the run has one) and the section that shows it."""
+    out = []
+    for s in res.get("summary", []):
+        if s.get("pass") is not False:
+            continue
+        z, zb = _num(s.get("z")), _num(s.get("z_as_built"))
+        detail = [f"z {fmt(z, 1, signed=True)}"] if z is not None else []
+        if zb is not None:
+            detail.append(f"z as built {fmt(zb, 1, signed=True)}")
+        out.append({"figure": str(s.get("figure")), "detail": ", ".join(detail),
+                    "anchor": _ANCHORS.get(str(s.get("kind")), "summary")})  # fmt: skip
+    return out
 
 
 def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=True):
@@ -148,6 +178,10 @@ def _row(quantity, target, meas, pred, diff, tol, p, digits=3, unit="", signed=T
         "note": "",
         "anchor": "",
         "n_flags": 0,
+        "ab_predicted": "–",
+        "ab_difference": "–",
+        "ab_z": "–",
+        "ab_status": "n/a",
     }
 
 
@@ -188,10 +222,32 @@ def _with_sigma(row: dict, s: dict | None, flags: dict) -> dict:
         note=str(s.get("note") or ""),
         anchor=_ANCHORS.get(str(s.get("kind")), ""),
         n_flags=len(flags.get(s.get("id"), ())) if s.get("kind") != "edge_angle" else 0,
+        **_as_built_cells(s),
     )
     if s.get("pass") is None and s.get("reason"):  # n/a: why the image does not support the check
         row["target"] += f" (n/a: {s['reason']})"
     return row
+
+
+def _as_built_cells(s: dict) -> dict:
+    """The row's check against the camera as built (results.json's ``*_as_built``), in the row's own units: the
+    prediction, the difference (for bars the largest |difference|, for the wedge measured - predicted in cm) and
+    z; nothing for a run simulated as designed."""
+    if "predicted_as_built" not in s:
+        return {}
+    kind = str(s.get("kind"))
+    units = {"wedge_resolution": (100, 1, "cm"), "edge_angle": (1, 3, "°"), "niirs": (1, 2, "")}
+    scale, digits, unit = units.get(kind, (1, 3, ""))
+    p, err, z = _num(s.get("predicted_as_built")), _num(s.get("error_as_built")), _num(s.get("z_as_built"))
+    if kind == "wedge_resolution":  # its error is relative: the difference in cm, as the design's column
+        m = _num(s.get("measured"))
+        err = None if m is None or p is None else m - p
+    return {
+        "ab_predicted": "–" if kind == "bar_ctf" else fmt(None if p is None else p * scale, digits, unit=unit),
+        "ab_difference": fmt(None if err is None else err * scale, digits, unit=unit, signed=kind != "bar_ctf"),
+        "ab_z": fmt(z, 1, signed=True) if z is not None else "–",
+        "ab_status": _status(s.get("pass_as_built")),
+    }
 
 
 def _mtf_rows(res: dict, tol: dict) -> list[dict]:
