@@ -116,10 +116,12 @@ def test_a_scale_that_is_not_finite_and_positive_is_refused_by_name(tmp_path, op
 
 
 # ----------------------------------------------------------------------------- item 5: contradicting pixel size
-def test_a_pixel_size_that_contradicts_the_files_transform_is_refused(tmp_path):
+@pytest.mark.parametrize("focal_plane", [False, True])  # with --focal-plane the raster is read without its CRS
+def test_a_pixel_size_that_contradicts_the_files_transform_is_refused(tmp_path, focal_plane):
     src = _write(tmp_path / "in.tif", _edge())
     out = tmp_path / "out.tif"
-    r = _sim(src, "--preset", "ankarasat3", "--scene-pixel-m", "0.5", "-o", out)
+    fp = ["--focal-plane", tmp_path / "fp.tif"] if focal_plane else []
+    r = _sim(src, "--preset", "ankarasat3", "--scene-pixel-m", "0.5", *fp, "-o", out)
     assert r.exit_code == 2, r.output
     line = " ".join(r.output.split())
     assert "--scene-pixel-m" in line and "0.5" in line and "0.07" in line

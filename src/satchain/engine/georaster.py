@@ -191,8 +191,7 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
                               f"{r.count} data band{'s' * (r.count > 1)})")  # fmt: skip
         meta = _gdal_meta(r)
         _check_grid(r, path, scene_pixel_m, name)
-        own = r.pixel_m[0] if r.pixel_m is not None else meta.get("pixel_m")
-        own = own if isinstance(own, float) else None  # the transform's, or satchain's tags of a local TIFF
+        own = _own_pixel_m(r, meta)
         if scene_pixel_m is None and r.pixel_m is None and own is not None:
             pixel_m = own
         elif scene_pixel_m is None:
@@ -216,6 +215,24 @@ def check_scales(scene_pixel_m: float | None, input_scale: float | None, name: C
         check_range(name("scene_pixel_m"), scene_pixel_m, 0.0, 1e6, lo_open=True)
     if input_scale is not None:
         check_positive(name("input_scale"), input_scale)
+
+
+def _own_pixel_m(r, meta: Mapping[str, Any]) -> float | None:
+    """The pixel size a raster states: its transform's, or satchain's tags of a local TIFF; None without one."""
+    own = r.pixel_m[0] if r.pixel_m is not None else meta.get("pixel_m")
+    return own if isinstance(own, float) else None
+
+
+def check_pixel_m(path: str | os.PathLike, scene_pixel_m: float | None, name: Callable[[str], str]) -> None:
+    """Refuse a ``scene_pixel_m`` that contradicts the pixel size the raster ``path`` states (see
+    :func:`_given_pixel_m`), for the paths that read it without its georeference (``--focal-plane``)."""
+    from satchain._imagemeta import _gdal_meta
+    from satchain.raster import open_raster
+
+    if scene_pixel_m is None:
+        return
+    with open_raster(path) as r:
+        _given_pixel_m(float(scene_pixel_m), _own_pixel_m(r, _gdal_meta(r)), Path(path), name)
 
 
 def _given_pixel_m(given: float, own: float | None, path: Path, name: Callable[[str], str]) -> float:
