@@ -13,7 +13,7 @@ import json
 import numpy as np
 import pytest
 from _render_tdi import motion_factors, render_tdi_edge
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from satchain.measure.edge import measure_edge
@@ -67,6 +67,7 @@ def test_jitter_band_50_800_hz():
     f_hz=st.floats(80.0, 160.0), n=st.sampled_from([400, 800]), amp=st.sampled_from([0.5, 1.0, 2.0]),
     phase=st.floats(0.0, 2 * np.pi),
 )  # fmt: skip
+@example(f_hz=80.0, n=400, amp=2.0, phase=0.0)  # refused before the check followed each line
 def test_slow_act_oscillation_long_rois_flagged_and_both_mtfs(f_hz, n, amp, phase):
     """80-160 Hz on 400-800-line ROIs: 0.10-0.61 of the true blur with no flag before."""
     path = {"amp_px": [amp], "freq_hz": [f_hz], "phase_rad": [phase]}

@@ -24,6 +24,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import solveh_banded
 
+from satchain.measure._common import median
+from satchain.measure._edge_locate import _Poly
+
 __all__ = ["align_lines", "smooth_positions"]
 
 _POS_FLOOR_PX = 2e-3  # noise-free positions are exact to about this (the line profile's spline error)
@@ -82,12 +85,14 @@ def align_lines(pos: np.ndarray, sigma: np.ndarray, deg: int):
     m = int(np.count_nonzero(ok))
     if m < max(8, deg + 6):
         return None, None, float("nan"), False, float("nan")
-    t = np.arange(pos.size, dtype=float)
-    tc = (t - t[ok].mean()) / max(float(np.ptp(t[ok])), 1.0)
-    s2 = float(np.median(sigma[ok & np.isfinite(sigma)] ** 2)) if np.any(ok & np.isfinite(sigma)) else 0.0
+    fits = _Poly(np.arange(pos.size, dtype=float), max(deg, 1))
+    w = ok.astype(float)
+    y = np.where(ok, pos, 0.0)
+    s_ok = ok & np.isfinite(sigma)
+    s2 = float(median(sigma[s_ok] ** 2)) if s_ok.any() else 0.0
     noise = float(np.sqrt(s2 + _POS_FLOOR_PX**2))
-    poly = np.polyval(np.polyfit(tc[ok], pos[ok], deg), tc)
-    line = np.polyval(np.polyfit(tc[ok], pos[ok], 1), tc)
+    line = fits.value(fits.fit(y, 1, w))
+    poly = line if deg == 1 else fits.value(fits.fit(y, deg, w))
     dof = m - deg - 1
     chi2 = float(np.sum((pos[ok] - poly[ok]) ** 2)) / noise**2
     smooth = smooth_positions(pos, noise)[0] if chi2 > dof + _CHI_SIGMAS * np.sqrt(2.0 * dof) else None
