@@ -217,7 +217,12 @@ def _progress(description: str):
 def scene(
     layout: Annotated[str, typer.Option("--layout", help="'paper' or a scene file (.toml/.json)")] = "paper",
     pixel_m: Annotated[
-        float | None, typer.Option("--pixel-m", help="ground pixel size, m (default: the layout's)")
+        float | None,
+        typer.Option(
+            "--pixel-m",
+            help="ground pixel size, m (default: the layout's); objects smaller than "
+            "the GSD need about GSD/28 for 1e-3 of their image's peak",
+        ),
     ] = None,
     window: Annotated[str | None, typer.Option("--window", help="X0,Y0,W,H in pixels (X0 = column)")] = None,
     out: Annotated[
@@ -293,7 +298,12 @@ def simulate(
         typer.Argument(metavar="INPUT", help="'paper', a scene file, or an image (TIFF/PNG/NPY); one or more"),
     ],
     scene_pixel_m: Annotated[
-        float | None, typer.Option("--scene-pixel-m", help="ground pixel size of INPUT, m")
+        float | None,
+        typer.Option(
+            "--scene-pixel-m",
+            help="ground pixel size of INPUT, m; a scene's objects smaller than "
+            "the GSD need about GSD/28 for 1e-3 of their image's peak",
+        ),
     ] = None,
     preset: PresetOpt = None,
     system: SystemOpt = None,

@@ -157,8 +157,6 @@ def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, 
     return predicted, comparison
 
 
-def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
-    """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
 def _with_as_built(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult, measured: Measurements,
                    comparison: Comparison) -> Comparison:  # fmt: skip
     """``comparison`` (against the design) with the prediction for the camera as built beside each row and
@@ -172,6 +170,8 @@ def _with_as_built(config: RunConfig, budget: BudgetResult, truth, sim: Simulati
     return with_as_built(comparison, compare(measured, _predict(config, built, truth, sim), config.tolerances))
 
 
+def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
+    """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
     in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it)."""
     from satchain.image_geometry import run_geometry
     from satchain.prediction import predict

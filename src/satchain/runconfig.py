@@ -51,7 +51,13 @@ class SystemRef(_Frozen):
 
 class SceneConfig(_Frozen):
     layout: str = Field(default="paper", description="'paper' or a scene file (.toml/.json)")
-    pixel_m: float = Field(default=0.035, gt=0, le=100, description="ground-truth pixel size, m (the paper's 3.5 cm)")
+    pixel_m: float = Field(
+        default=0.035,
+        gt=0,
+        le=100,
+        description="ground-truth pixel size, m (the paper's 3.5 cm, GSD/14); objects smaller than the GSD need "
+        "about GSD/28 for 1e-3 of their image's peak",
+    )
     overview_pixel_m: float = Field(default=0.25, gt=0, le=100, description="pixel size of the Figure 1 overview")
 
 

@@ -216,7 +216,7 @@ def simulate_file(
     if band is not None:
         raise ConfigError(f"{name('band')} {band!r}: applies to a GDAL raster input (one of "
                           f"{', '.join(GDAL_SUFFIXES)}) without {name('focal_plane')}")  # fmt: skip
-    src, _ = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
+    src, scene = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
     sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None, seed)
     if min(src.shape_px) < MIN_INPUT_PX:
         raise ConfigError(
@@ -224,6 +224,11 @@ def simulate_file(
             f"{src.shape_px[1]} px; a ground truth needs at least {MIN_INPUT_PX} px a side: check "
             f"{name('scene_pixel_m')}"
         )
+    if scene is not None:  # a layout rendered at src.pixel_m: items finer than the raster resolves are named
+        from satchain.scene.layout import check_scene_pixel
+
+        given = "the layout's pixel_m" if scene_pixel_m is None else name("scene_pixel_m")
+        check_scene_pixel(scene, src.pixel_m, name=given)
     out.parent.mkdir(parents=True, exist_ok=True)
     meta = {"system": system.name, "seed": int(seed), "noise": bool(noise), "gsd_act_m": system.gsd_act_m,
             "gsd_alt_m": system.gsd_alt_m, "input": str(input_), "input_pixel_m": src.pixel_m}  # fmt: skip

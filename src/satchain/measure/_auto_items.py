@@ -84,7 +84,6 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "rer": r.rer,
         "overshoot": r.overshoot,
         "n_lines": r.n_lines,
-        "fit_degree": r.fit_degree,  # the edge polynomial's degree: its slope at the mean line is angle_deg
         "warnings": warnings,
         "f_cy_per_px": r.f_cy_per_px,
         "f_cy_per_m_ground": r.f_cy_per_m_ground,
@@ -227,8 +226,8 @@ def bars_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
     levels = (float(it["dark"]), float(it["bright"])) if calibrated else None
     direction = "ACT" if orientation == "act" else "ALT"
     r = _measure_kept(ctx, it, keep, rois, (direction, levels), skipped)
-    groups = [it["groups"][k] for k in keep]
     r = replace(r, flags=tuple(renumber(r.flags, keep)))  # every group named by its index in the target's design
+    groups = [it["groups"][k] for k in keep]
     periods_px = [_period_px(frame, g, orientation) for g in groups]
     summary = {
         "id": it["id"],
@@ -315,13 +314,13 @@ def _measure_kept(ctx: AutoContext, it: dict, keep: list, rois: list, opts: tupl
             del keep[j], rois[j]
 
 
-def _group_rows(r, keep: list, groups: list, periods_px: list, rois: list) -> list[dict]:
 def _design(msg, keep: list) -> str:
     """A refusal of :func:`measure_bars` with its groups named by their index in the target's design (``keep``:
     the design index of each group it was given)."""
     return re.sub(r"(group_rois|periods_px)\[(\d+)\]", lambda m: f"{m.group(1)}[{keep[int(m.group(2))]}]", str(msg))
 
 
+def _group_rows(r, keep: list, groups: list, periods_px: list, rois: list) -> list[dict]:
     """One summary row per measured group."""
     return [
         {

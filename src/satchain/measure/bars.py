@@ -63,7 +63,7 @@ from satchain.measure._barfit import plateau as _plateau
 from satchain.measure._bargroups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
 from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin, masked_as_nan
+from satchain.measure._common import ResultMixin
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_from_ctf_samples"]
@@ -236,7 +236,6 @@ def measure_bars(
     Parameters
     ----------
     image : array_like, 2-D
-        The image; a group whose region holds NaN (nodata) or a numpy masked array's masked pixels is refused.
     periods_px : sequence of float
         Period (bright + dark bar) of each group, px (>= 2).
     group_rois : sequence of (x0, y0, x1, y1)
@@ -276,8 +275,7 @@ def measure_bars(
     (0.5, 1.3)
     """
     periods = _check_args(periods_px, group_rois, direction, bars_per_group)
-    fs = resolve_full_scale(image, full_scale)
-    groups = measure_groups(masked_as_nan("image", image), periods, group_rois, direction, fs)  # masked: nodata
+    groups = measure_groups(image, periods, group_rois, direction, resolve_full_scale(image, full_scale))
     kept = [i for i in range(periods.size) if i not in groups.refused]
     t = _target_ctf(groups, kept, periods, levels, bars_per_group)
     for j, msg in t.deferred_refused.items():  # refused against the target's MTF model
@@ -360,12 +358,12 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
     mod = np.array([ft.modulation for ft in fits])
     mod_std = np.array([ft.modulation_std for ft in fits])
     plateau = np.zeros(len(fits), dtype=bool)
-    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
-        found, _ = _plateau(prof, fit, float(p), noise=_rows_noise(noises[i]))
     floor = [j for j, i in enumerate(kept) if i in groups.floor]  # at the noise floor: the fit's modulation as is
-        if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
+    for i, (prof, fit, p) in enumerate(zip(profiles, fits, periods, strict=True)):
         if i in floor:
             continue
+        found, _ = _plateau(prof, fit, float(p), noise=_rows_noise(noises[i]))
+        if found is not None:  # flat bar tops: the samples are the peak and trough (no series truncation)
             mod[i], mod_std[i] = found
             plateau[i] = True
             flags = [f for f in flags if not (f.startswith(f"group {i}: ") and "alias" in f)]
@@ -374,10 +372,10 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
         corr, corr_std, flags = finite_group_correction(
             model, fits, profiles, periods, c_large, int(bars_per_group), joint, plateau, flags
         )
-    elif bars_per_group is not None:
-        flags.append(
         corr[floor], corr_std[floor] = 0.0, 0.0  # no bars seen to render: nothing to correct
         flags = [f for f in flags if not _correction_flag_of(f, floor)]
+    elif bars_per_group is not None:
+        flags.append(
             f"fewer than 3 groups with a measurable fundamental: each CTF is that of its finite {bars_per_group}-bar "
             "group as sampled, not corrected to the square-wave (Coltman) CTF; for a long-tailed PSF (diffraction) "
             "or a sharp system they can differ by a few %"
@@ -407,8 +405,6 @@ def _target_ctf(groups: Groups, kept, periods_all, levels, bars_per_group) -> _T
     )
 
 
-def _rows_noise(noise) -> float | None:
-    """The rows' noise of a profile (None: a single row, no noise estimate: the fit residual is used)."""
 def _correction_flag_of(flag: str, groups) -> bool:
     """A square-wave correction's flag (applied, or not for the region) of one of ``groups``."""
     starts = any(flag.startswith(f"group {j}: CTF corrected") or flag.startswith(f"group {j}: its region")
@@ -416,6 +412,8 @@ def _correction_flag_of(flag: str, groups) -> bool:
     return bool(starts)
 
 
+def _rows_noise(noise) -> float | None:
+    """The rows' noise of a profile (None: a single row, no noise estimate: the fit residual is used)."""
     return None if noise is None else float(noise)
 
 

@@ -70,6 +70,14 @@ class Item:
         for rings, refl in self.layers(pixel_m):
             paint_polygon(image, rings, refl, window, pixel_m)
 
+    @property
+    def smallest_feature_m(self) -> float | None:
+        """The item's smallest dimension (m) that a scene raster must resolve, or None where it has none: a
+        slanted edge (a step has no width) and a Siemens star (its spokes narrow to nothing by design; the star
+        is measured only out to ``f_max``). Objects: the narrower side of their footprint; bar targets: the
+        narrowest bar; wedges: the narrowest line (see :func:`satchain.scene.layout.check_scene_pixel`)."""
+        return None
+
     def truth(self) -> dict[str, Any]:
         """``{"kind", "id", "bbox_m", **params}``."""
         return {"kind": self.kind, "id": self.id, "bbox_m": list(self.bbox_m()), **self.params()}

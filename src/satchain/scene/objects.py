@@ -50,6 +50,15 @@ class _Placed(Item):
     def _place(self, rings_local) -> list[np.ndarray]:
         return [place(r, self.origin_m, self.rotation_deg) for r in rings_local]
 
+    @property
+    def smallest_feature_m(self) -> float:
+        """The narrower side of the object's footprint in its own frame (a car's width, a road's paved width)."""
+        pts = np.concatenate([r for rings, _ in self.layers(0.01) for r in rings]) - np.asarray(self.origin_m)
+        a = math.radians(self.rotation_deg)
+        u = pts[:, 0] * math.cos(a) + pts[:, 1] * math.sin(a)
+        v = -pts[:, 0] * math.sin(a) + pts[:, 1] * math.cos(a)
+        return float(min(np.ptp(u), np.ptp(v)))
+
     def _check_placement(self, name: str):
         object.__setattr__(self, "origin_m", check_point(f"{name}.origin_m", self.origin_m))
         check_range(f"{name}.rotation_deg", self.rotation_deg, -360.0, 360.0)

@@ -17,7 +17,7 @@ import numpy as np
 from satchain._validate import check_positive
 from satchain.errors import ConfigError
 from satchain.io import atomic_path, write_png, write_tiff_tiles
-from satchain.scene.layout import Scene, load_layout
+from satchain.scene.layout import Scene, check_scene_pixel, load_layout
 from satchain.scene.shapes import Window, check_window
 
 __all__ = ["parse_cli_window", "render_scene_to_file"]
@@ -82,6 +82,7 @@ def render_scene_to_file(
     """
     scene = layout if isinstance(layout, Scene) else load_layout(layout)
     p = scene.pixel_m if pixel_m is None else check_positive("pixel_m", pixel_m)
+    check_scene_pixel(scene, p, name="pixel_m")
     window = (0, 0, *scene.shape_px(p)) if window is None else check_window(window)
     if tile_px % 16 or tile_px < 16:
         raise ConfigError(f"tile_px = {tile_px}: must be a positive multiple of 16")

@@ -159,6 +159,11 @@ class BarTarget(Item):
         check_reflectance("bar_target.bright", self.bright)
         check_reflectance("bar_target.dark", self.dark)
 
+    @property
+    def smallest_feature_m(self) -> float:
+        """The narrowest bar's width (half the shortest period), m."""
+        return min(self.periods_m) / 2
+
     def groups(self) -> list[dict[str, Any]]:
         """Per period: plate and bar rectangles ``[xmin, ymin, xmax, ymax]`` (m)."""
         gap = max(self.periods_m) if self.gap_m is None else self.gap_m
@@ -249,6 +254,11 @@ class HyperbolicWedge(Item):
             raise ConfigError(f"hyperbolic_wedge.n_stripes = {self.n_stripes!r}: must be an integer >= 1")
         check_reflectance("hyperbolic_wedge.bright", self.bright)
         check_reflectance("hyperbolic_wedge.dark", self.dark)
+
+    @property
+    def smallest_feature_m(self) -> float:
+        """The narrowest line's width (at the narrow end), m."""
+        return float(self.line_width_end_m)
 
     @property
     def x0_m(self) -> float:
