@@ -280,7 +280,6 @@ def measure_edge(
     flags += esf_flags
     esf_n, contrast, grad, g_flags, model = _normalise(x, esf_raw, counts, sigma, len(rows))
     flags += g_flags
-    check_model(work, project(work, np.arange(work.shape[0]), coef)[0], x, esf_n, model, sigma, okw)
     f_top = oversampled_f_max(f_max, axis, os_ / 4.0)
     f, mtf, mtf_sig, half_w = _mtf(x, esf_n, counts, sigma / contrast, (f_top, w, noise_target, debias), flags)
     flags += _curvature_flags(work, (rows, own, ridge), (os_, sigma, half_w), f, mtf, forced=deg is not None, valid=okw)
@@ -293,7 +292,10 @@ def measure_edge(
         located = ((own, rows, [], ridge), shift)
         return _moved_curve(work, okw, located, (os_, sigma, contrast), (f_top, noise_target, debias), (axis, f_max))
 
-    aligned, imaged, los = _los_curves(lines, (transposed, roi), own, moved if line is None else None, flags)
+    aligned, imaged, los, shift = _los_curves(lines, (transposed, roi), own, moved if line is None else None, flags)
+    # the model's check on every pixel, along the edge as located (each line's own where it wobbles)
+    shift = shift if deg is None else None
+    check_model(work, project(work, np.arange(work.shape[0]), coef, shift)[0], x, esf_n, model, sigma, okw)
     if aligned is not None and deg is None:  # (a forced degree keeps its own fit as the headline)
         x, esf_n, (f, mtf, mtf_sig), half_w = aligned
     mtf_al = mtf if aligned is None else _on_grid(f, aligned[2])[0]
@@ -324,14 +326,15 @@ def _moved_curve(work, valid, moved, stats, opts, axis_opts):
 def _los_curves(lines, where, own, moved, flags):
     """The line-of-sight motion in the lines' edge positions (:func:`align_lines`): ``(aligned curve or None
     (the located polynomial's is kept), as-imaged (f, mtf, sigma) or None (the same as the aligned), los motion
-    px rms)``, flag ``line_of_sight_motion`` where the positions depart from the polynomial beyond their noise.
-    ``own`` is the located edge polynomial, ``moved``: :func:`_moved_curve` of per-line offsets from it (None:
-    the ESF is projected on a given line, kept)."""
+    px rms, the aligned per-line offsets from ``own`` or None)``, flag ``line_of_sight_motion`` where the
+    positions depart from the polynomial beyond their noise.  ``own`` is the located edge polynomial, ``moved``:
+    :func:`_moved_curve` of per-line offsets from it (None: the ESF is projected on a given line, kept)."""
     transposed, roi = where
     pos = lines[1] - line_numbers(1, not transposed, roi)[0]
     at_aligned, at_imaged, los, significant, noise = align_lines(pos, lines[2], len(own) - 1)
     base = np.polyval(own, np.arange(pos.size, dtype=float))
-    aligned = None if moved is None or at_aligned is None else moved(at_aligned - base)
+    shift = None if moved is None or at_aligned is None else at_aligned - base
+    aligned = None if shift is None else moved(shift)
     imaged = None if moved is None or at_imaged is None else moved(at_imaged - base)
     if significant:
         flags.append(
@@ -343,7 +346,7 @@ def _los_curves(lines, where, own, moved, flags):
                 "lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged",
             )
         )
-    return aligned, (None if imaged is None else imaged[2]), los
+    return aligned, (None if imaged is None else imaged[2]), los, (None if aligned is None else shift)
 
 
 def _on_grid(f_ref, curve):
