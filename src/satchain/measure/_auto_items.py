@@ -84,6 +84,7 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "rer": r.rer,
         "overshoot": r.overshoot,
         "n_lines": r.n_lines,
+        "fit_degree": r.fit_degree,  # the edge polynomial's degree: its slope at the mean line is angle_deg
         "warnings": warnings,
         "f_cy_per_px": r.f_cy_per_px,
         "f_cy_per_m_ground": r.f_cy_per_m_ground,

@@ -63,7 +63,7 @@ from satchain.measure._barfit import plateau as _plateau
 from satchain.measure._bargroups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
 from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
 from satchain.measure._clipping import resolve_full_scale
-from satchain.measure._common import ResultMixin
+from satchain.measure._common import ResultMixin, masked_as_nan
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_from_ctf_samples"]
@@ -236,6 +236,7 @@ def measure_bars(
     Parameters
     ----------
     image : array_like, 2-D
+        The image; a group whose region holds NaN (nodata) or a numpy masked array's masked pixels is refused.
     periods_px : sequence of float
         Period (bright + dark bar) of each group, px (>= 2).
     group_rois : sequence of (x0, y0, x1, y1)
@@ -275,7 +276,8 @@ def measure_bars(
     (0.5, 1.3)
     """
     periods = _check_args(periods_px, group_rois, direction, bars_per_group)
-    groups = measure_groups(image, periods, group_rois, direction, resolve_full_scale(image, full_scale))
+    fs = resolve_full_scale(image, full_scale)
+    groups = measure_groups(masked_as_nan("image", image), periods, group_rois, direction, fs)  # masked: nodata
     kept = [i for i in range(periods.size) if i not in groups.refused]
     t = _target_ctf(groups, kept, periods, levels, bars_per_group)
     for j, msg in t.deferred_refused.items():  # refused against the target's MTF model
