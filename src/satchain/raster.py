@@ -286,17 +286,13 @@ def _read_failure(path: Path, driver: str, what: str, exc: BaseException) -> Sat
     return SatchainIOError(f"image = {str(path)!r}: cannot read {what}: {why} (GDAL: {gdal})")
 
 
-def _damage(path: Path, driver: str) -> str | None:
-    """What is wrong with a file whose data GDAL could not read, where the file shows it; None where it does not."""
+def _damage(path: Path, driver: str, depth: int = 0) -> str | None:
+    """What is wrong with a file whose data GDAL could not read, where the file shows it (a VRT: its sources,
+    missing or damaged); None where it does not."""
     try:
         size = path.stat().st_size
         if driver == "VRT":
-            missing = _vrt_missing_sources(path)
-            if not missing:
-                return None
-            names = ", ".join(repr(str(m)) for m in missing[:3]) + (" ..." if len(missing) > 3 else "")
-            verb = "is" if len(missing) == 1 else "are"
-            return f"the VRT's source file{'s' * (len(missing) > 1)} {names} {verb} missing (no such file)"
+            return _vrt_damage(path, depth)
         need = None
         if driver in ("GTiff", "COG"):
             need = _tiff_data_end(path)
@@ -311,19 +307,35 @@ def _damage(path: Path, driver: str) -> str | None:
     )
 
 
-def _vrt_missing_sources(path: Path) -> list[Path]:
-    """The source files a VRT names that do not exist (relative names resolved as GDAL does)."""
+def _vrt_damage(path: Path, depth: int) -> str | None:
+    """A VRT's source files that are missing, else the first one that is damaged (truncated), else None."""
+    sources = _vrt_sources(path)
+    missing = [s for s in sources if not s.exists()]
+    if missing:
+        names = ", ".join(repr(str(m)) for m in missing[:3]) + (" ..." if len(missing) > 3 else "")
+        verb = "is" if len(missing) == 1 else "are"
+        return f"the VRT's source file{'s' * (len(missing) > 1)} {names} {verb} missing (no such file)"
+    drivers = {".tif": "GTiff", ".tiff": "GTiff", ".jp2": "JP2", ".j2k": "JP2", ".vrt": "VRT"}
+    for src in sources if depth < 4 else []:
+        why = _damage(src, drivers.get(src.suffix.lower(), ""), depth + 1)
+        if why is not None:
+            return f"the VRT's source file {str(src)!r}: {why}"
+    return None
+
+
+def _vrt_sources(path: Path) -> list[Path]:
+    """The local source files a VRT names, once each (relative names resolved as GDAL does)."""
     import xml.etree.ElementTree as ET
 
-    missing = []
+    sources = []
     for el in ET.parse(path).getroot().iter("SourceFilename"):
         name = (el.text or "").strip()
         if not name or name.startswith("/vsi") or "://" in name:
             continue
         src = path.parent / name if el.get("relativeToVRT", "0") == "1" else Path(name)
-        if not src.exists() and src not in missing:
-            missing.append(src)
-    return missing
+        if src not in sources:
+            sources.append(src)
+    return sources
 
 
 def _tiff_data_end(path: Path) -> int:
