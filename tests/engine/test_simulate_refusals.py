@@ -207,3 +207,12 @@ def test_a_folder_given_as_a_file_is_called_a_folder_not_missing(tmp_path, where
     assert r.exit_code == 2, r.output
     line = " ".join(r.output.split())
     assert folder.name in line and "folder" in line and "no such file" not in line and "not found" not in line
+
+
+@pytest.mark.parametrize("value", [0.0, float("nan"), -1.0])
+def test_simulate_image_refuses_an_input_scale_that_is_not_finite_and_positive(tmp_path, value):
+    system = satchain.load_preset("ankarasat3")
+    src = _write(tmp_path / "in.tif", _edge())
+    for source in (src, _edge()[0]):
+        with pytest.raises(ConfigError, match="input_scale"):
+            satchain.simulate_image(source, system, pixel_m=PX, input_scale=value)

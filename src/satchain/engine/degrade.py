@@ -159,6 +159,7 @@ def simulate_image(
 
     check_choice("units", units, OUTPUT_UNITS)
     if isinstance(source, (str, os.PathLike)):
+        g.check_scales(pixel_m, input_scale, lambda k: {"scene_pixel_m": "pixel_m"}.get(k, k))
         plan = g._plan_input(os.fspath(source), band, pixel_m, lambda k: k)
         idx = [band] if band is not None else list(range(1, plan.count + 1))
         srcs, t, px, crs = [g._band_source(plan, b, input_scale) for b in idx], plan.transform, plan.pixel_m, plan.crs
