@@ -164,3 +164,12 @@ def test_jitter_at_the_ends_of_the_line_time_range_gives_the_motion_without_a_wa
     assert r.peaks[0].amplitude_px == pytest.approx(0.5, abs=0.02)
     with pytest.raises(ConfigError, match=r"line_time_s = 1e-300: must be in \[1e-09, 1000\] s"):
         measure_jitter(image, line_time_s=1e-300)
+
+
+def test_a_star_centre_too_near_the_edge_is_named_not_a_radius_nobody_gave():
+    from satchain.measure.star import measure_star
+
+    with pytest.raises(InputError, match=r"center = \(2, 60\): 2 px from the region's edge: the star must extend"):
+        measure_star(_star(), cycles=16, center=(2, 60))
+    with pytest.raises(InputError, match=r"radius_px = 5: the star must extend"):  # a radius given is named
+        measure_star(_star(), cycles=16, center=(60, 60), radius_px=5)

@@ -212,10 +212,14 @@ def _geometry(data, n, center, radius_px, f_max):
     return xc, yc, r_out, max(n / (2 * np.pi * f_max), 2.0)
 
 
-def _check_extent(n, r_in, r_out, annulus_px, f_max) -> None:
+def _check_extent(n, r_in, r_out, annulus_px, f_max, centre=None) -> None:
+    """Refuse an outer radius too small for the annuli; ``centre``: a given centre that set it (named instead)."""
     if not r_out > r_in + 3 * annulus_px:
+        what = f"radius_px = {r_out:g}"
+        if centre is not None:
+            what = f"center = ({centre[0]:g}, {centre[1]:g}): {r_out:g} px from the region's edge"
         raise InputError(
-            f"radius_px = {r_out:g}: the star must extend beyond {r_in + 3 * annulus_px:g} px "
+            f"{what}: the star must extend beyond {r_in + 3 * annulus_px:g} px "
             f"(the radius where {n} cycles reach f_max = {f_max:g} cy/px)"
         )
 
@@ -342,7 +346,7 @@ def _centre_and_radii(data, n, center, radius_px, annulus_px, f_max, refine_cent
     """The centre used, the inner and outer radius (checked against the centre found), the centre's 1-sigma and
     how it was obtained."""
     xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max)
-    _check_extent(n, r_in, r_out, annulus_px, f_max)
+    _check_extent(n, r_in, r_out, annulus_px, f_max, (xc, yc) if center is not None and radius_px is None else None)
     (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
     ny, nx = data.shape
     r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
