@@ -119,6 +119,7 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
     from affine import Affine
 
     from satchain.measure.auto import truth_origin_m
+    from satchain.scene.targets import SlantedEdge
     from satchain.tf.pushbroom import PushbroomTerms, window_means
 
     terms = PushbroomTerms(system)
@@ -137,7 +138,7 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
         dx, dy = dx - tp.drift_px[0] * mid, dy - tp.drift_px[1] * mid
     edges = {}
     for it in truth.get("items", []):
-        if it.get("kind") == "slanted_edge" and "edge_point_m" in it and "edge_direction" in it:
+        if it.get("kind") == SlantedEdge.kind and "edge_point_m" in it and "edge_direction" in it:
             edges[str(it["id"])] = (tuple(map(float, it["edge_point_m"])), tuple(map(float, it["edge_direction"])))
     return ImageGeometry(to_image, (float(drift[0]), float(drift[1])), np.asarray(dx), np.asarray(dy), edges)
 

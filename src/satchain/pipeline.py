@@ -270,6 +270,13 @@ class ReportInputs:
         return self.result.scene.truth_dict
 
     @cached_property
+    def image_affine(self):
+        """The simulated image's map from truth metres to its pixels when pushbroom terms shear, scale or turn
+        it (the one the measurement used), else None: the report draws its overlays through it."""
+        sim = self.result.simulation
+        return _image_affine(sim.system or self.system, self.truth, sim.image.shape)
+
+    @cached_property
     def measured(self) -> dict[str, Any]:
         """The measurements as results.json's ``measured`` holds them (built once per view: the report's pages
         and figures read them many times)."""

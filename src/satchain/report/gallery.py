@@ -15,7 +15,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Rectangle
+from matplotlib.patches import Polygon, Rectangle
 
 from satchain.io import PNG_COMPRESS_LEVEL
 from satchain.report._save import save_figure
@@ -70,14 +70,41 @@ def plot_image_with_rois(ctx, path: Path) -> None:
 
 
 def image_rois_args(ctx) -> tuple:
-    """The plain data :func:`draw_image_with_rois` needs (a job for a helper process)."""
+    """The plain data :func:`draw_image_with_rois` needs (a job for a helper process). Under a pushbroom image
+    map (``ctx.image_affine``: shear, along-track scale, yaw) each item carries ``outline_m``, its box's corners
+    where the image has them (image metres: pixel ``(col, row)`` spans ``[col, col + 1] x gsd``)."""
     rois = {m["id"]: m["roi_px"] for _, m in measured_entries(ctx.measured) if m.get("roi_px") is not None}
-    return _to_reflectance(ctx), float(ctx.image_gsd_m), rois, ctx.truth["items"]
+    gsd, geo = float(ctx.image_gsd_m), getattr(ctx, "image_affine", None)
+    items = ctx.truth["items"]
+    if geo is not None:
+        a, b, c, d, e, f = tuple(geo)[:6]
+
+        def image_m(x, y):
+            return ((a * x + b * y + c + 0.5) * gsd, (d * x + e * y + f + 0.5) * gsd)
+
+        items = [dict(it, outline_m=[image_m(x, y) for x, y in _corners_m(it["bbox_m"])]) for it in items]
+    return _to_reflectance(ctx), gsd, rois, items
+
+
+def _corners_m(box) -> list[tuple[float, float]]:
+    x0, y0, x1, y1 = box
+    return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+
+
+def _item_shape(it: dict, **kw) -> tuple[float, float, object]:
+    """An item's box where the image has it (``outline_m``, else ``bbox_m``): its top-left (m) and its patch."""
+    outline = it.get("outline_m")
+    if outline:
+        x0, y0 = min(p[0] for p in outline), min(p[1] for p in outline)
+        return x0, y0, Polygon(outline, closed=True, fill=False, **kw)
+    x0, y0, x1, y1 = it["bbox_m"]
+    return x0, y0, Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, **kw)
 
 
 def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[dict], path: Path) -> None:
     """:func:`plot_image_with_rois` from plain data: the image in reflectance, its GSD, the regions measured
-    (pixel boxes by id) and the truth's items."""
+    (pixel boxes by id) and the truth's items (drawn at their ``outline_m`` when they have one, the image's own
+    geometry, else at their box)."""
     h, w = img.shape
     scale = min(820.0 / w, 1150.0 / h, 3.0)
     width_in = w * scale / 100 + 1.0
@@ -89,11 +116,11 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
         box = ax.add_artist
         seen = set()
         for it in items:
-            x0, y0, x1, y1 = it["bbox_m"]
+            x0, y0 = _item_shape(it)[:2]
             kind = it["kind"]
             if kind in REPORT_KINDS:
                 c = REPORT_KINDS[kind].colour
-                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=c, lw=1, ls=":"))
+                box(_item_shape(it, ec=c, lw=1, ls=":")[2])
                 if it["id"] in rois:
                     rx0, ry0, rx1, ry1 = rois[it["id"]]
                     box(
@@ -112,7 +139,7 @@ def draw_image_with_rois(img: np.ndarray, gsd: float, rois: dict, items: list[di
             else:
                 lab = kind if kind not in seen else None
                 seen.add(kind)
-                box(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=_OBJECT_COLOUR, lw=0.7, label=lab))
+                box(_item_shape(it, ec=_OBJECT_COLOUR, lw=0.7, label=lab)[2])
         ax.set_xlabel("x, across-track (m)")
         ax.set_ylabel("y, along-track (m)")
         ax.set_title(f"Simulated image, GSD {gsd * 100:.0f} cm")

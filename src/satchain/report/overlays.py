@@ -11,6 +11,14 @@ panels and scales with the click-to-zoom. What is drawn, per kind:
   measured but not compared, or not measured;
 * hyperbolic wedge: the scan line (the middle of the stripes, from the wide end) and the line width where the
   measured contrast crossed the threshold.
+
+Under a pushbroom image geometry (Earth rotation's shear, an along-track scale, a yaw: ``to_image``, the run's
+:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine` from truth metres to image pixels) the detector panel
+is the image's pixels, not the ground's: its overlay is drawn in the image's frame (``frame="image"``: pixel
+``(col, row)`` spans ``origin + [col, col + 1] x gsd``), every ground feature mapped through ``to_image`` (a
+box becomes a parallelogram, a circle an ellipse); the ground-truth and focal-plane panels' overlay stays in
+truth metres, the measured regions mapped back. The fitted edge is drawn through the measured per-line edge
+positions (the measurement's own polynomial), so it lies on the edge as imaged in either frame.
 """
 
 from __future__ import annotations
@@ -19,7 +27,15 @@ import math
 from dataclasses import dataclass
 from html import escape
 
-__all__ = ["OverlayView", "bars_overlay", "edge_overlay", "overlay_svg", "star_overlay", "wedge_overlay"]
+__all__ = [
+    "OverlayView",
+    "bars_overlay",
+    "edge_line_points",
+    "edge_overlay",
+    "overlay_svg",
+    "star_overlay",
+    "wedge_overlay",
+]
 
 _LINE = 'vector-effect="non-scaling-stroke" fill="none"'
 _COMPARED, _NOT_COMPARED, _NOT_MEASURED = "#ff8c00", "#3fa0ff", "#c0c0c0"
@@ -29,13 +45,39 @@ _CHAR_EM = 0.6
 
 @dataclass(frozen=True)
 class OverlayView:
-    """How an overlay is drawn: the image's ground pixel and top-left corner (m), the text size (m), and the
-    highest bar-group frequency compared with the prediction (cy/px)."""
+    """How an overlay is drawn: the image's ground pixel and top-left corner (m), the text size (m), the
+    highest bar-group frequency compared with the prediction (cy/px), the image map ``to_image`` (truth metres
+    -> image ``(col, row)``, pixel centres at integers, as ``(a, b, c, d, e, f)``; None: the plain grid) and the
+    panel's ``frame`` (``"ground"``: truth metres; ``"image"``: the detector's pixels, see the module docstring)."""
 
     gsd_m: float
     origin_m: tuple[float, float]
     size: float
     compared_up_to_cy_per_px: float = 0.4
+    to_image: tuple | None = None
+    frame: str = "ground"
+
+    @property
+    def mapped(self) -> bool:
+        """Whether ground and image frames differ by more than the grid (boxes are drawn as polygons)."""
+        return self.to_image is not None
+
+    def ground(self, x: float, y: float) -> tuple[float, float]:
+        """A truth point (m) in this panel's coordinates."""
+        if self.to_image is None or self.frame != "image":
+            return float(x), float(y)
+        a, b, c, d, e, f = self.to_image
+        return self.pixel(a * x + b * y + c + 0.5, d * x + e * y + f + 0.5)
+
+    def pixel(self, u: float, v: float) -> tuple[float, float]:
+        """An image point in pixel-edge coordinates (pixel ``k`` spans ``[k, k + 1]``) in this panel's
+        coordinates."""
+        if self.to_image is None or self.frame == "image":
+            return self.origin_m[0] + u * self.gsd_m, self.origin_m[1] + v * self.gsd_m
+        a, b, c, d, e, f = self.to_image
+        det = a * e - b * d
+        du, dv = u - 0.5 - c, v - 0.5 - f
+        return (e * du - b * dv) / det, (a * dv - d * du) / det
 
 
 def _text(x: float, y: float, s: str, size: float, colour: str, anchor: str = "start", rotate: bool = False) -> str:
@@ -63,28 +105,80 @@ def _roi_m(m: dict, gsd: float, origin) -> tuple[float, float, float, float] | N
     return ox + r[0] * gsd, oy + r[1] * gsd, ox + r[2] * gsd, oy + r[3] * gsd
 
 
+def _polygon(pts, colour: str, dash: str = "", closed: bool = True) -> str:
+    d = f' stroke-dasharray="{dash}"' if dash else ""
+    tag = "polygon" if closed else "polyline"
+    xy = " ".join(f"{x:.3f},{y:.3f}" for x, y in pts)
+    return f'<{tag} points="{xy}" stroke="{colour}" stroke-width="1.5" {_LINE}{d}/>'
+
+
+def _corners(box) -> list[tuple[float, float]]:
+    x0, y0, x1, y1 = box
+    return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+
+
+def _extent(pts) -> tuple[float, float, float, float]:
+    xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def _pixel_box(v: OverlayView, roi, colour: str, dash: str = "") -> tuple[str, tuple]:
+    """A measured region (pixel box ``(x0, y0, x1, y1)``, half-open) in the panel: its shape and extent."""
+    pts = [v.pixel(u, w) for u, w in _corners(roi)]
+    box = _extent(pts)
+    return (_polygon(pts, colour, dash) if v.mapped and v.frame != "image" else _rect(box, colour, dash)), box
+
+
+def _ground_box(v: OverlayView, bbox_m, colour: str, dash: str = "") -> tuple[str, tuple]:
+    """A ground box (m) in the panel: its shape (a parallelogram in a mapped image's frame) and extent."""
+    pts = [v.ground(x, y) for x, y in _corners(bbox_m)]
+    box = _extent(pts)
+    return (_polygon(pts, colour, dash) if v.mapped and v.frame == "image" else _rect(box, colour, dash)), box
+
+
 def edge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
     """Slanted edge: the measured region and the fitted edge line."""
-    gsd, origin, size = v.gsd_m, v.origin_m, v.size
+    size = v.size
     out = []
-    roi = _roi_m(m, gsd, origin)
-    if roi:
-        out.append(_rect(roi, "#ff4040"))
+    roi = None
+    if m.get("roi_px"):
+        shape, roi = _pixel_box(v, m["roi_px"], "#ff4040")
+        out.append(shape)
+    a = m.get("angle_deg")
+    pts = edge_line_points(it, m, v)
+    if a is None or not pts:
+        return out
+    out.append(_polygon(pts, "#ffe000", closed=False))
+    x0, y0 = (roi[0], roi[1]) if roi else _ground_box(v, it["bbox_m"], "")[1][:2]
+    out.append(_text(x0 + 0.5 * size, y0 + 1.3 * size, f"edge fit {float(a):.3f}°", size, "#ffe000"))
+    return out
+
+
+def edge_line_points(it: dict, m: dict, v: OverlayView, n: int = 24) -> list[tuple[float, float]]:
+    """The fitted edge in the panel: the measurement's polynomial (``fit_degree``) through its per-line edge
+    positions over the lines it measured; without them, the measured angle through the truth's edge point."""
+    import numpy as np
+
+    lines, pos = m.get("lines"), m.get("edge_position_px")
+    if lines and pos and len(lines) == len(pos):
+        x = np.asarray(lines, float)
+        y = np.asarray([np.nan if p is None else p for p in pos], float)
+        ok = np.isfinite(y)
+        deg = int(min(max(int(m.get("fit_degree") or 1), 1), 3))
+        if np.count_nonzero(ok) > deg + 1:
+            x, y = x[ok], y[ok]
+            t = np.linspace(x.min(), x.max(), n)
+            c = np.polyval(np.polyfit(x - x.mean(), y, deg), t - x.mean())
+            act = str(m.get("direction") or it.get("measures")).upper() == "ACT"
+            return [v.pixel(p + 0.5, q + 0.5) if act else v.pixel(q + 0.5, p + 0.5) for q, p in zip(t, c, strict=True)]
     a = m.get("angle_deg")
     if a is None or "edge_point_m" not in it:
-        return out
+        return []
     t = math.radians(float(a))
     d = (math.sin(t), math.cos(t)) if str(it.get("measures")).lower() == "act" else (math.cos(t), math.sin(t))
     cx, cy = it["edge_point_m"]
-    half = 0.5 * (roi[3] - roi[1] if roi else it.get("size_m", 10.0))
-    out.append(
-        f'<line x1="{cx - half * d[0]:.3f}" y1="{cy - half * d[1]:.3f}" x2="{cx + half * d[0]:.3f}" '
-        f'y2="{cy + half * d[1]:.3f}" stroke="#ffe000" stroke-width="1.5" {_LINE}/>'
-    )
-    x0 = roi[0] if roi else it["bbox_m"][0]
-    out.append(_text(x0 + 0.5 * size, (roi[1] if roi else it["bbox_m"][1]) + 1.3 * size,
-                     f"edge fit {float(a):.3f}°", size, "#ffe000"))  # fmt: skip
-    return out
+    half = 0.5 * float(it.get("size_m", 10.0))
+    return [v.ground(cx - half * d[0], cy - half * d[1]), v.ground(cx + half * d[0], cy + half * d[1])]
 
 
 def _circle(cx: float, cy: float, r: float, colour: str, dash: str = "") -> str:
@@ -95,6 +189,8 @@ def _circle(cx: float, cy: float, r: float, colour: str, dash: str = "") -> str:
 def star_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
     """Siemens star: the measured annulus and the Nyquist radius."""
     gsd, size = v.gsd_m, v.size
+    if v.mapped:
+        return _star_mapped(it, m, v)
     cx, cy = it["center_m"]
     out = []
     radii = m.get("radius_px")
@@ -105,6 +201,27 @@ def star_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
     r_nyq = float(it["cycles"]) * gsd / math.pi
     out.append(_circle(cx, cy, r_nyq, "#ff4040", "4 3"))
     out.append(_text(cx + r_nyq + 0.3 * size, cy, f"Nyquist (r = {r_nyq:.1f} m)", size, "#ff4040"))
+    return out
+
+
+def _star_mapped(it: dict, m: dict, v: OverlayView) -> list[str]:
+    """:func:`star_overlay` under an image map: the annulus is a pair of circles in the image (pixels, about the
+    measured centre), the Nyquist radius a circle on the ground; each an ellipse in the other frame."""
+    size, k = v.size, 72
+    ring = [(math.cos(2 * math.pi * j / k), math.sin(2 * math.pi * j / k)) for j in range(k)]
+    cx, cy = it["center_m"]
+    out = []
+    radii, centre = m.get("radius_px"), m.get("center_xy_px")
+    if radii and centre:
+        u, w = float(centre[0]) + 0.5, float(centre[1]) + 0.5
+        for r in radii:
+            out.append(_polygon([v.pixel(u + float(r) * c, w + float(r) * s) for c, s in ring], "#40c0ff"))
+        tx, ty = v.pixel(u, w - float(radii[1]))
+        out.append(_text(tx, ty + 1.3 * size, "measured annulus", size, "#40c0ff", "middle"))
+    r_nyq = float(it["cycles"]) * v.gsd_m / math.pi
+    out.append(_polygon([v.ground(cx + r_nyq * c, cy + r_nyq * s) for c, s in ring], "#ff4040", "4 3"))
+    tx, ty = v.ground(cx + r_nyq, cy)
+    out.append(_text(tx + 0.3 * size, ty, f"Nyquist (r = {r_nyq:.1f} m)", size, "#ff4040"))
     return out
 
 
@@ -122,8 +239,8 @@ def bars_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
             colour, word = _COMPARED, "compared"
         else:
             colour, word = _NOT_COMPARED, "not compared"
-        x0, y0, x1, y1 = g["bbox_m"]
-        out.append(_rect(g["bbox_m"], colour, "" if word == "compared" else "3 2"))
+        shape, (x0, y0, x1, y1) = _ground_box(v, g["bbox_m"], colour, "" if word == "compared" else "3 2")
+        out.append(shape)
         p_text = f"{period * 100:.0f} cm" if period < 1 else f"{period:g} m"
         p_size = min(size, (x1 - x0) / (_CHAR_EM * len(p_text)))  # shrunk to fit the group's width
         out.append(_text(0.5 * (x0 + x1), y0 + 1.1 * p_size, p_text, p_size, colour, "middle"))
@@ -143,7 +260,7 @@ def wedge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
         return []
 
     def xy(s: float, t: float) -> tuple[float, float]:
-        return (ox + s, oy + t) if orient == "horizontal" else (ox + t, oy + s)
+        return v.ground(ox + s, oy + t) if orient == "horizontal" else v.ground(ox + t, oy + s)
 
     pts = []
     for k in range(41):
@@ -170,10 +287,13 @@ def wedge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
 
 
 def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_m=(0.0, 0.0),
-                compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0) -> str:  # fmt: skip
+                compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0, to_image=None,
+                frame: str = "ground") -> str:  # fmt: skip
     """The overlay of truth item ``it`` (with its measurement ``measured``, or None) over a thumbnail of
     ``box_m``, as an ``<svg>`` element string ('' for kinds without one). Text is about 12 CSS px when the
-    thumbnail is shown ``display_px`` wide."""
+    thumbnail is shown ``display_px`` wide. ``to_image`` (the image map, truth metres -> pixels; an
+    ``affine.Affine`` or 6 numbers) and ``frame`` (``"ground"`` or ``"image"``, the detector panel): see the
+    module docstring."""
     x0, y0, x1, y1 = (float(v) for v in box_m)
     size = 12.0 * (x1 - x0) / max(display_px, 1.0)
     from satchain.report.kinds import REPORT_KINDS  # the registry names this module's overlays
@@ -181,7 +301,8 @@ def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_
     entry = REPORT_KINDS.get(str(it.get("kind")))
     if entry is None:
         return ""
-    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px))
+    geo = None if to_image is None else tuple(float(c) for c in tuple(to_image)[:6])
+    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px), geo, frame)
     body = entry.overlay(it, measured or {}, view)
     return (
         f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
