@@ -586,10 +586,7 @@ def simulate(
     seed: int = 0,
     progress: Progress | None = None,
 ) -> np.ndarray:
-    """Simulate the satellite image of ``ground_truth`` (an array with ``pixel_m``, a scene, or a source).
-
-    An array holds reflectance (any real dtype, its values as they stand), every pixel valid: NaN, inf and a
-    numpy masked array's masked pixels are refused (:func:`satchain.simulate_image` takes them as no data).
+    """The image of ``ground_truth``: an array of reflectance with ``pixel_m`` (no NaN, no mask), a scene, or a source.
 
     Examples
     --------
