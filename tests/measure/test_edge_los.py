@@ -16,10 +16,12 @@ from _render_tdi import motion_factors, render_tdi_edge
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from satchain import load_preset
 from satchain.measure.edge import measure_edge
-from satchain.tf.pushbroom import oscillation_otf
+from satchain.tf.pushbroom import PushbroomTerms, oscillation_otf
 
-DT, N = 7.04e-5, 16  # line time (s) and TDI stages: the window T = N dt
+SYSTEM = load_preset("ankarasat3")
+DT, N = SYSTEM.line_time_s, SYSTEM.detector.tdi_stages  # line time (s) and TDI stages: the window T = N dt
 ANGLE = 5.0
 NU = 0.5 * np.cos(np.radians(ANGLE))  # Nyquist along the normal, seen along the row (the motion's axis)
 TOL = 0.03  # at Nyquist, noise-free
@@ -51,6 +53,11 @@ def test_oscillation_non_whole_cycles_aligned_and_as_imaged(cycles, phase_deg):
     _check(r, static, 100, path)
     budget = static.mtf_at_nyquist * float(oscillation_otf(NU, amplitude_px=1.0, cycles_per_window=cycles))
     assert abs(r.mtf_at_nyquist - budget) < TOL  # the budget's per-row term
+    osc = {"axis": "act", "amplitude_px": 1.0, "frequency_hz": cycles / (N * DT), "phase_deg": phase_deg}
+    terms = PushbroomTerms(SYSTEM.replace({"motion.oscillation": [osc]}))
+    assert abs(abs(terms.per_row_otf(NU, "act")[0]) * static.mtf_at_nyquist - r.mtf_aligned[100]) < TOL
+    imaged = terms.as_imaged_otf(NU, "act", first_line=0, n_lines=100)[0] * static.mtf_at_nyquist
+    assert abs(r.mtf_as_imaged_at_nyquist - imaged) < TOL  # the budget's prediction as imaged, over the ROI
 
 
 def test_jitter_band_50_800_hz():
@@ -73,6 +80,10 @@ def test_slow_act_oscillation_long_rois_flagged_and_both_mtfs(f_hz, n, amp, phas
     path = {"amp_px": [amp], "freq_hz": [f_hz], "phase_rad": [phase]}
     r, static = _pair(n, path)
     _check(r, static, n, path)
+    osc = {"axis": "act", "amplitude_px": amp, "frequency_hz": f_hz, "phase_deg": float(np.degrees(phase))}
+    terms = PushbroomTerms(SYSTEM.replace({"motion.oscillation": [osc]}))
+    imaged = terms.as_imaged_otf(NU, "act", first_line=0, n_lines=n)[0] * static.mtf_at_nyquist
+    assert abs(r.mtf_as_imaged_at_nyquist - imaged) < TOL
 
 
 def test_straight_noisy_edge_no_flag_and_one_mtf():
