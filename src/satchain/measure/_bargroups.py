@@ -2,8 +2,14 @@
 the refusal of a group alone (issue 18: a target was refused whole because one 2 px group was unusable).
 
 In a target of two or more groups a group that is not bars at its period (too short, another period dominating,
-no significant modulation, a profile no periodic model fits and the target's MTF model does not render) is
-refused alone, with its reason; the others are measured.  A lone group is refused as before.
+a profile no periodic model fits and the target's MTF model does not render) is refused alone, with its reason;
+the others are measured.  A lone group is refused as before.
+
+A group whose modulation does not stand :data:`SIGNIFICANT_SIGMAS` above the noise, in a target of two or more
+groups, is measured at the noise floor (issue 29): flagged ``at_noise_floor``, its CTF ~0 with its 1-sigma is a
+result (a blur whose MTF vanishes at its frequency, as a smear's sinc null), kept out of the joint MTF model and
+not corrected; refused only when another period stands out in its region or its profile is not noise about a
+level, and the call is refused when no group of the target stands above the noise (no bars are seen).
 """
 
 from __future__ import annotations

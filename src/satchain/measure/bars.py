@@ -14,7 +14,10 @@ centre, ``|sum_k A_k| / a`` (Coltman's definition), divided by the large-area co
 Validation.  A group must cover 1.5 periods, its profile's dominant period must be the claimed one, the
 periodic model must explain the profile, and the fitted modulation must stand above the noise; otherwise
 the group is refused: alone in a target of two or more groups (``BarsResult.refused`` and a flag give the
-reason, its CTF and MTF are NaN, the other groups are measured), the call for a lone group.  Without
+reason, its CTF and MTF are NaN, the other groups are measured), the call for a lone group.  In a target of
+two or more groups a modulation that does not stand above the noise is a measurement at the noise floor
+(flagged ``at_noise_floor``: CTF ~0 with its 1-sigma, uncorrected), unless another period stands out in the
+region or the profile is not noise about a level (``_bargroups``).  Without
 ``levels`` the large-area levels are the plateaus of the widest group (its samples near bar and gap
 centres), only if they are flat at every grid phase (else refused: the CTF would be inflated, the old
 default's 7.8 %; a long-tailed PSF holds even flat-looking tops below the levels, see
@@ -260,9 +263,9 @@ def measure_bars(
     Raises
     ------
     InputError
-        A region with no bars at its period (another period dominates, the modulation is not above the
-        noise, or the profile is not periodic: a single bar or edge), default levels that cannot be
-        trusted, or a CTF above 1.2.
+        A region with no bars at its period (another period dominates, the modulation of a lone group is not
+        above the noise, or the profile is not periodic: a single bar or edge), a target with no group above
+        the noise, default levels that cannot be trusted, or a CTF above 1.2.
 
     Examples
     --------
