@@ -215,3 +215,16 @@ def test_failing_points_are_marked_and_residual_axes_hold_every_residual(run, mo
     assert n_fail == int(np.sum((f <= 0.4) & (np.abs(m - c) > 0.06)))
     labels = [t.get_text() for t in fig.axes[0].texts]
     assert {"g1", "g2", "g3", "g4"} <= set(labels)  # each group by its design number
+
+
+def test_the_edges_overview_marks_the_failing_edge(run, monkeypatch, tmp_path):
+    from satchain.report import run_figures
+
+    _, res, _, _ = run
+    figs = []
+    monkeypatch.setattr(run_figures, "save_figure", lambda fig, path, **kw: figs.append(fig))
+    run_figures.plot_edges_overview(res["slanted_edges"], tmp_path / "e.png")
+    (marks,) = _fail_points(figs[0].axes[0])
+    failed = [e for e in res["slanted_edges"] if e["pass"] is False]
+    assert [e["id"] for e in failed] == ["edge_alt"]
+    assert list(marks.get_ydata()) == pytest.approx([failed[0]["mtf_at_nyquist_measured"]])

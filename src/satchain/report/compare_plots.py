@@ -20,6 +20,7 @@ from satchain.report._style import grid_axes, pin_titles
 
 __all__ = [
     "PRINT_WIDTH_IN",
+    "mark_failed",
     "RC",
     "rc_for",
     "with_rc",
@@ -67,7 +68,7 @@ AS_BUILT, FAIL = "tab:purple", "#d40000"
 _AB_LS = (0, (6, 2, 1.5, 2))  # dash-dot: the as-built prediction
 
 
-def _fail_mark(ax, x, y, label: str | None = None) -> None:
+def mark_failed(ax, x, y, label: str | None = None) -> None:
     """A failing point: a large red cross behind the measured marker (distinct from every measured marker, which
     stays visible on it), with its label."""
     x, y = np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(y, float))
@@ -215,7 +216,7 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         nm, npred = c["nyquist"]
         failed = c.get("passed") is False and nm is not None and npred is not None
         if failed:
-            _fail_mark(ax, 0.5, nm, "FAIL: outside the tolerance at Nyquist")
+            mark_failed(ax, 0.5, nm, "FAIL: outside the tolerance at Nyquist")
         for (fm, fp), lvl, mk, name in (
             (c["mtf50"], 0.5, "o", "MTF50"),
             (c["mtf10"], 0.1, "s", "MTF10"),
@@ -238,7 +239,7 @@ def plot_edge_comparison(c: dict, path: Path, *, tol: float | None) -> None:
         if np.isfinite(mab).any():
             r.plot(f[ok], (mm - mab)[ok], color=AS_BUILT, ls=_AB_LS, lw=1, label="meas. - as built")
         if failed:
-            _fail_mark(r, 0.5, nm - npred)
+            mark_failed(r, 0.5, nm - npred)
         _band(r, tol, label="tol. at Nyquist")
         r.axvline(0.5, color="gray", lw=1)
         r.set_xlabel("frequency along the edge normal (cy/px)")
@@ -289,8 +290,8 @@ def plot_star_comparison(st: dict, path: Path, *, tol: float | None) -> None:
         r.axhline(0, color="gray", lw=0.8)
         if st.get("pass") is False and st.get("error") is not None:
             lab = f"FAIL: largest difference {st['error']:+.3f} ({st.get('worst_direction')})"
-            _fail_mark(ax, st.get("worst_f_cy_per_px"), st.get("measured_at_worst"), lab)
-            _fail_mark(r, st.get("worst_f_cy_per_px"), st["error"])
+            mark_failed(ax, st.get("worst_f_cy_per_px"), st.get("measured_at_worst"), lab)
+            mark_failed(r, st.get("worst_f_cy_per_px"), st["error"])
         for a in (ax, r):
             a.axvline(0.5, color="gray", lw=1)
         _mark(ax, 0.5, "Nyquist", 0.45)
@@ -363,7 +364,7 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
                             color="0.3")  # fmt: skip
         bad = cmp_ & np.isfinite(meas) & (np.abs(meas - col) > (tol if tol is not None else np.inf))
         if bad.any():
-            _fail_mark(ax, f[bad], meas[bad], "FAIL: group outside the tolerance")
+            mark_failed(ax, f[bad], meas[bad], "FAIL: group outside the tolerance")
         ax.set_xlim(0, max(0.55, float(f.max()) * 1.05))
         ax.set_ylim(0, 1.15)
         ax.set_ylabel("CTF (bar modulation)")
@@ -376,7 +377,7 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         r.fill_between([0, lim], -(tol or 0), tol or 0, color=TOL, alpha=0.15, label=f"tolerance ±{tol:g}")
         r.axhline(0, color="gray", lw=0.8)
         if bad.any():
-            _fail_mark(r, f[bad], (meas - col)[bad])
+            mark_failed(r, f[bad], (meas - col)[bad])
         _residual_limits(r, meas - col, std, tol)
         r.set_xlabel("bar frequency = 1 / period (cy/px)")
         r.set_ylabel("meas. - Coltman")
@@ -413,7 +414,7 @@ def plot_wedge_comparison(w: dict, path: Path, *, tol_rel: float | None) -> None
             lab = f"predicted {rp * 100:.1f} cm" + (f", band ±{tol_rel:.0%}" if tol_rel else "")
             ax.plot([rp], [thr], "D", color=PRED, mfc="none", ms=8, label=lab)
         if w.get("passed") is False and res is not None:
-            _fail_mark(ax, res, thr, "FAIL: resolution outside the band")
+            mark_failed(ax, res, thr, "FAIL: resolution outside the band")
         _mark(ax, w["gsd_m"], f"GSD {w['gsd_m'] * 100:.0f} cm", 0.45)
         ax.set_xlim(float(np.max(lw)), float(np.min(lw)))
         ax.set_ylim(0, 1.05)

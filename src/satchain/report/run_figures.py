@@ -122,6 +122,10 @@ def plot_edges_overview(edges: list[dict], path: Path) -> None:
             c = f"C{i}"
             ax.plot(e["f_cy_per_px"], e["mtf_measured"], "-", color=c, label=f"{e['id']} measured")
             ax.plot(e["f_cy_per_px"], e["mtf_predicted"], "--", color=c, label=f"{e['id']} predicted")
+        failed = [e for e in edges if e.get("pass") is False]
+        if failed:  # each failing edge's measured MTF at Nyquist
+            cp.mark_failed(ax, [0.5] * len(failed), [e.get("mtf_at_nyquist_measured") for e in failed],
+                          "FAIL at Nyquist: " + ", ".join(str(e["id"]) for e in failed))  # fmt: skip
         ax.axvline(0.5, color="gray", lw=1)
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 1.05)
