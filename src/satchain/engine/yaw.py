@@ -29,6 +29,8 @@ from satchain.errors import ConfigError
 
 __all__ = [
     "check_band",
+    "grid_origin_m",
+    "image_affine",
     "rotate_frame",
     "rotate_into",
     "rotated_frame",
@@ -131,11 +133,12 @@ def rotated_frame(sim, coarse: np.ndarray) -> np.ndarray:
     if sim._yaw_cache is not None and sim._yaw_cache[0] is coarse:
         return sim._yaw_cache[1]
     check_band(sim.f_cut * sim.D, sim.f_stop * sim.D, sim.yaw_deg)
+    from satchain.tf.pushbroom import yaw_pivot_m
+
     (ey, ex), (ly, lx) = sim.frame_ext, sim.frame_shape
-    pivot = []
-    for s, e in zip((sim.ys, sim.xs), (ey, ex), strict=True):  # the output grid's centre, in frame samples
-        centre_in = s.phase_px + s.n_output * s.k / 2.0  # input-grid coordinate
-        pivot.append(centre_in / sim.D - 0.5 + e)
+    a = sim.input_pixel_m
+    x_m, y_m = yaw_pivot_m(sim.output_shape, (sim.xs.k * a, sim.ys.k * a), grid_origin_m(sim))  # image_affine's
+    pivot = [y_m / a / sim.D - 0.5 + ey, x_m / a / sim.D - 0.5 + ex]  # in frame samples
     store = getattr(sim, "yaw_store", None)
     out = np.empty((ly, lx), dtype=np.float32) if store is None else store((ly, lx))
     sim._yaw_cache = None  # a failed rotation leaves no stale frame
@@ -143,6 +146,22 @@ def rotated_frame(sim, coarse: np.ndarray) -> np.ndarray:
                 sim.yaw_deg, (pivot[0], pivot[1]), workers=sim.params.workers)  # fmt: skip
     sim._yaw_cache = (coarse, out)
     return out
+
+
+def grid_origin_m(sim) -> tuple[float, float]:
+    """The detector grid's corner on the ground truth of simulator ``sim``, ``(x, y)`` m (its
+    ``SimParams.phase_px`` in metres)."""
+    return sim.xs.phase_px * sim.input_pixel_m, sim.ys.phase_px * sim.input_pixel_m
+
+
+def image_affine(sim):
+    """The image's mean map from ground-truth metres to its pixels (``affine.Affine``, pixel centres at integers)
+    for simulator ``sim``: :meth:`satchain.tf.pushbroom.PushbroomTerms.image_affine` of its grid (shape, corner
+    :func:`grid_origin_m`), whose yaw pivot (:func:`satchain.tf.pushbroom.yaw_pivot_m`) is the one
+    :func:`rotated_frame` turns the ground about."""
+    from satchain.tf.pushbroom import PushbroomTerms
+
+    return PushbroomTerms(sim.system).image_affine(sim.output_shape, origin_m=grid_origin_m(sim))
 
 
 def rotated_window(sim, coarse: np.ndarray, start: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
