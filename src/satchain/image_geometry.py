@@ -38,6 +38,7 @@ class ImageGeometry:
     dx_px: np.ndarray = field(repr=False)
     dy_px: np.ndarray = field(repr=False)
     edges: dict = field(default_factory=dict, repr=False)
+    terms: object = field(default=None, repr=False, compare=False)  # the PushbroomTerms (an edge as imaged)
 
     @property
     def moves(self) -> bool:
@@ -140,7 +141,7 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
     for it in truth.get("items", []):
         if it.get("kind") == SlantedEdge.kind and "edge_point_m" in it and "edge_direction" in it:
             edges[str(it["id"])] = (tuple(map(float, it["edge_point_m"])), tuple(map(float, it["edge_direction"])))
-    return ImageGeometry(to_image, (float(drift[0]), float(drift[1])), np.asarray(dx), np.asarray(dy), edges)
+    return ImageGeometry(to_image, (float(drift[0]), float(drift[1])), np.asarray(dx), np.asarray(dy), edges, terms)
 
 
 def geometry_table(system) -> list[dict]:

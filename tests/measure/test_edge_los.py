@@ -95,3 +95,32 @@ def test_straight_noisy_edge_no_flag_and_one_mtf():
     assert r.los_motion_rms_px < 0.01
     d = json.loads(json.dumps(r.to_dict()))
     assert {"mtf_aligned", "mtf_as_imaged", "mtf_as_imaged_at_nyquist", "los_motion_rms_px"} <= set(d)
+
+
+def test_run_comparison_like_with_like():
+    """The run's edge check: the headline (each line located) against the budget's per-row terms, and the MTF as
+    imaged against the prediction over the region's rows, in the check's details and its note."""
+    from types import SimpleNamespace
+
+    from affine import Affine
+
+    from satchain.comparison.edge import edge_checks
+    from satchain.image_geometry import ImageGeometry
+    from satchain.prediction import EdgePrediction, Predictions
+
+    cycles, n = 0.3, 100
+    path = {"amp_px": [1.0], "freq_hz": [cycles / (N * DT)], "phase_rad": [np.pi / 2]}
+    r, static = _pair(n, path)
+    osc = {"axis": "act", "amplitude_px": 1.0, "frequency_hz": cycles / (N * DT), "phase_deg": 90.0}
+    terms = PushbroomTerms(SYSTEM.replace({"motion.oscillation": [osc]}))
+    per_row = abs(terms.per_row_otf(0.5, "act")[0]) * static.mtf_at_nyquist
+    geo = ImageGeometry(Affine.identity(), (0.0, 0.0), np.sin(np.arange(n) / 9.0), np.zeros(n), {}, terms)
+    edge = EdgePrediction("e1", (1.0, 0.0), per_row, lambda f: np.full(np.shape(f), per_row))
+    pred = Predictions(mtf_along={}, edges={"e1": edge}, wedges={}, geometry=geo)
+    entry = r.to_dict() | {"id": "e1", "roi_px": [0, 0, 50, n], "angle_deg_truth": ANGLE}
+    details, rows = edge_checks([entry], pred, SimpleNamespace(edge_mtf_at_nyquist=0.03, edge_angle_deg=0.1))
+    d = details[0].to_dict()
+    assert abs(d["mtf_at_nyquist_error"]) < TOL and d["pass"]
+    assert abs(d["mtf_as_imaged_at_nyquist_measured"] - d["mtf_as_imaged_at_nyquist_predicted"]) < TOL
+    assert d["mtf_as_imaged_at_nyquist_predicted"] < per_row - 0.02  # the rows' displacements fold in
+    assert "as imaged" in rows[0].note and d["los_motion_rms_px"] > 0.1

@@ -50,6 +50,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 "mtf_sigma": e.get("mtf_sigma"),
                 "flags": list(e.get("flags") or []),
                 **({"angle_deg_expected": a_ref} if geometric else {}),
+                **_as_imaged(e, p, pred),
             }
         )
         why = None if meas is not None else "the edge gave no MTF at Nyquist"
@@ -58,7 +59,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
             CheckRow(
                 f"edge {e['id']} MTF@Nyquist ({e['direction']})", "edge_mtf_at_nyquist", e["id"], meas,
                 p.mtf_at_nyquist, err, tol.edge_mtf_at_nyquist, f"±{tol.edge_mtf_at_nyquist}",
-                within(err, tol.edge_mtf_at_nyquist), why, *sig,
+                within(err, tol.edge_mtf_at_nyquist), why, *sig, note=_as_imaged_note(details[-1]),
             )
         )  # fmt: skip
         why = None if a_err is not None else "no measured or true angle"
@@ -86,6 +87,39 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
             )
         )  # fmt: skip
     return [EdgeCheck.from_dict(d) for d in details], rows
+
+
+def _as_imaged(e: dict, p, pred: Predictions) -> dict:
+    """An edge on a pushbroom image whose rows the line of sight displaces: its MTF at Nyquist as imaged (the
+    rows' displacements folded in, ISO 12233) measured, and predicted over its region's rows
+    (:meth:`satchain.tf.pushbroom.PushbroomTerms.as_imaged_otf` over the budget's per-row terms, on each axis of
+    the normal), with the motion the measurement removed; {} without such a geometry."""
+    geo = getattr(pred, "geometry", None)
+    terms, roi = getattr(geo, "terms", None), e.get("roi_px")
+    meas = finite(e.get("mtf_as_imaged_at_nyquist"))
+    if terms is None or roi is None or meas is None or not geo.moves:
+        return {}
+    out = {"mtf_as_imaged_at_nyquist_measured": meas, "los_motion_rms_px": finite(e.get("los_motion_rms_px"))}
+    ratio, span = 1.0, {"first_line": int(roi[1]), "n_lines": int(roi[3]) - int(roi[1])}
+    for axis, comp in zip(("act", "alt"), np.abs(np.asarray(p.normal, float)), strict=True):
+        if comp > 1e-6:  # lines in time (an ACT edge's rows): about the straight edge; else about the mean
+            per = abs(terms.per_row_otf(0.5 * comp, axis)[0])
+            img = terms.as_imaged_otf(0.5 * comp, axis, **span, about_line=e["direction"] == "ACT")[0]
+            ratio = ratio * img / per if per > 1e-3 else float("nan")
+    return out | {"mtf_as_imaged_at_nyquist_predicted": finite(p.mtf_at_nyquist * ratio)}
+
+
+def _as_imaged_note(d: dict) -> str | None:
+    """The MTF row's note for an edge whose lines the line of sight moves (flag ``line_of_sight_motion``)."""
+    if "line_of_sight_motion" not in d["flags"] or d.get("mtf_as_imaged_at_nyquist_measured") is None:
+        return None
+    pred = d.get("mtf_as_imaged_at_nyquist_predicted")
+    return (
+        f"measured with each line located ({d.get('los_motion_rms_px') or 0:.3f} px rms of line-of-sight motion "
+        "removed) vs the budget's per-row motion terms; as imaged (ISO 12233, the lines' displacements folded in): "
+        f"measured {d['mtf_as_imaged_at_nyquist_measured']:.3f}"
+        + ("" if pred is None else f", predicted over the region's rows {pred:.3f}")
+    )
 
 
 def _angle_through_rows(e: dict, pred: Predictions) -> float | None:

@@ -153,12 +153,19 @@ class EdgeCheck(_Detail):
     mtf_sigma: list | None = None
     flags: list | None = None
     angle_deg_expected: float | None = None  # the truth through the image geometry (written only when given)
+    # a pushbroom edge whose lines the line of sight displaces: the MTF at Nyquist as imaged (the displacements
+    # folded in, ISO 12233) measured and predicted over its rows, and the motion the measurement removed
+    mtf_as_imaged_at_nyquist_measured: float | None = None
+    mtf_as_imaged_at_nyquist_predicted: float | None = None
+    los_motion_rms_px: float | None = None
     as_built: dict | None = None  # the prediction for the camera as built (written only for such a run)
 
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
-        if d["angle_deg_expected"] is None:
-            del d["angle_deg_expected"]
+        for k in ("angle_deg_expected", "mtf_as_imaged_at_nyquist_measured", "mtf_as_imaged_at_nyquist_predicted",
+                  "los_motion_rms_px"):  # fmt: skip
+            if d[k] is None:
+                del d[k]
         return d
 
 

@@ -91,6 +91,8 @@ def edge_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         "mtf": r.mtf,
         "lines": r.lines,  # each image line across the edge and where it crosses it (line-of-sight motion)
         "edge_position_px": r.edge_position_px,
+        "mtf_as_imaged_at_nyquist": r.mtf_as_imaged_at_nyquist,  # the lines' displacements folded in (ISO)
+        "los_motion_rms_px": r.los_motion_rms_px,  # the line-of-sight motion each line's location removed
     }
     if frame.affine is not None:  # the truth's direction through the image geometry: the angle the image shows
         a, b, d, e = frame.linear
