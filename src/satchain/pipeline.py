@@ -72,10 +72,12 @@ def _check_square(s, what: str) -> None:
 
 def _stage_scene(config: RunConfig, progress: Progress) -> SceneResult:
     from satchain.scene import load_layout
+    from satchain.scene.layout import check_scene_pixel
     from satchain.scene.truth import read_truth
 
     sc = config.scene
     scene = load_layout(config.layout_source())
+    check_scene_pixel(scene, sc.pixel_m, name="scene.pixel_m")
     result = SceneResult(scene, read_truth(scene.truth(pixel_m=sc.pixel_m)), sc.pixel_m)
     progress("scene", 1, 1)
     return result
