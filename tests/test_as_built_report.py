@@ -228,3 +228,16 @@ def test_the_edges_overview_marks_the_failing_edge(run, monkeypatch, tmp_path):
     failed = [e for e in res["slanted_edges"] if e["pass"] is False]
     assert [e["id"] for e in failed] == ["edge_alt"]
     assert list(marks.get_ydata()) == pytest.approx([failed[0]["mtf_at_nyquist_measured"]])
+
+
+def test_the_terminal_table_gives_the_as_built_prediction_and_z(run):
+    from satchain import cli
+    from satchain.comparison import row_texts
+
+    result, res, _, _ = run
+    with cli.console.capture() as cap:
+        cli._print_run(result)
+    assert "z as built" in cap.get()
+    edge = next(r for r in result.comparison.rows if r.kind == "edge_mtf_at_nyquist" and r.id == "edge_alt")
+    s = _summary(res, "edge_mtf_at_nyquist", "edge_alt")
+    assert row_texts(edge)["z as built"] == f"{s['z_as_built']:+.2f}"

@@ -407,6 +407,8 @@ def _print_run(result) -> None:
     na = f", {n_na} n/a" if n_na else ""
     t = Table(title=f"{result.system.name}: measured vs predicted ({c.n_checked - c.n_failed}/{c.n_checked} pass{na})")
     cols = ("measured", "predicted", "error", "sigma", "z", "tolerance")
+    if any(r.as_built is not None for r in c.rows):  # simulated as built: its prediction and z beside the design's
+        cols = (*cols[:5], "predicted as built", "z as built", cols[5])
     t.add_column("figure of merit", justify="left")
     for col in (*cols, "result"):
         t.add_column(col, justify="right")

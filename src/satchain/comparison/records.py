@@ -383,4 +383,6 @@ def row_texts(r: CheckRow) -> dict[str, str]:
         "z": "-" if r.z is None else f"{r.z:+.2f}",
         "tolerance": r.tolerance_text,
         "result": verdict,
+        "predicted as built": num((r.as_built or {}).get("predicted")),
+        "z as built": "-" if (r.as_built or {}).get("z") is None else f"{r.as_built['z']:+.2f}",
     }
