@@ -47,3 +47,22 @@ def test_the_engine_turns_the_ground_about_image_affines_pivot(phase_px):
         if phase_px != (0.0, 0.0):
             pc, pr = plain * spot
             assert np.hypot(mc - pc, mr - pr) > 0.3  # a map without the grid's offset misses it
+
+
+def test_the_focal_plane_is_turned_as_the_image_is():
+    """The focal-plane image under yaw steering is of the ground turned about the pivot (``B'(q) = B(P + M (q -
+    P))``, README "Yaw steering"): each spot where that map puts it (it stayed on the unturned ground, 1 m
+    away, before)."""
+    sim = Simulator(YAW, input_pixel_m=PX, input_shape=(N, N))
+    coarse = sim.decimate(ArraySource(_spots(), pixel_m=PX))
+    fp = sim.focal_plane(coarse, grid="input")
+    g = np.radians(PushbroomTerms(YAW).geometry()["rotation_deg"])
+    m = np.array([[np.cos(g), np.sin(g)], [-np.sin(g), np.cos(g)]])
+    rows, cols = sim.output_shape
+    pivot = np.array([cols * YAW.gsd_act_m / 2, rows * YAW.gsd_alt_m / 2])
+    for spot in SPOTS_M:
+        q = pivot + np.linalg.solve(m, np.asarray(spot) - pivot)  # metres on the turned ground
+        col, row = q / PX - 0.5  # input pixel centres
+        mc, mr = _centroid(fp, col, row, half=40)
+        assert np.hypot(mc - col, mr - row) < 0.1  # input pixels (7 mm)
+        assert np.hypot(*(np.asarray(spot) - q)) > 0.7

@@ -159,7 +159,9 @@ def test_a_motion_above_the_line_rate_nyquist_is_reported_folded_with_its_alias(
     p = r.peaks[0]
     assert p.frequency_hz == pytest.approx(130.0, abs=0.05) and p.amplitude_px == pytest.approx(0.5, abs=0.01)
     assert p.aliases_hz[0] == pytest.approx(f_true, abs=0.05)
-    assert "aliasing" in r.flags and r.nyquist_hz == pytest.approx(500.0)
+    # 130 Hz is far from the Nyquist fold: nothing in the lines tells it from a 130 Hz motion (aliases_hz lists
+    # 870 Hz), so no flag says it is folded (issue 29: the flag was set on every result, even at 5 Hz)
+    assert "aliasing" not in r.flags and r.nyquist_hz == pytest.approx(500.0)
 
 
 # ----------------------------------------------------------------------------------------------- no false peak
@@ -233,3 +235,16 @@ def test_cli_json_table_and_outputs(tmp_path):
     run = CliRunner().invoke(app, ["measure", "edge", str(path), "--json"])
     e = json.loads(run.stdout)
     assert len(e["lines"]) == len(e["edge_position_px"]) == len(e["edge_position_sigma_px"]) == 400
+
+
+def test_aliasing_flag_only_near_or_above_the_line_rate_nyquist():
+    """5 Hz: a clean, well-resolved slow motion, no ``aliasing``; a motion 0.3 / record above Nyquist folds to
+    within the resolution below it: flagged (issue 29, item 11)."""
+    n = 500
+    img, _ = _render(n, 3.0, amp=[0.5], freq=[5.0], phase=[0.4], noise=0.003)
+    r = measure_jitter(img, line_time_s=DT)
+    assert r.peaks[0].frequency_hz == pytest.approx(5.0, abs=0.05) and "aliasing" not in r.flags
+    f_true = 0.5 / DT + 0.3 / (n * DT)  # 500.6 Hz at a 1 kHz line rate: appears at 499.4 Hz
+    img, _ = _render(n, 3.0, amp=[0.5], freq=[f_true], phase=[0.4], noise=0.003)
+    r = measure_jitter(img, line_time_s=DT)
+    assert r.peaks[0].frequency_hz == pytest.approx(1.0 / DT - f_true, abs=0.2) and "aliasing" in r.flags

@@ -492,7 +492,7 @@ class Simulator:
 
     def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
         """The focal-plane irradiance image (the paper's Figure 4b, in input units): the ground truth filtered
-        by the system OTF without the detector aperture.
+        by the system OTF without the detector aperture (under yaw steering the ground turned, as the image sees it).
 
         ``grid="input"``: on the input grid, pixel (i, j) at input pixel (i, j) -- exact, because the image is
         band-limited below the coarse grid's Nyquist frequency, so zero-padding its spectrum interpolates it
@@ -503,12 +503,11 @@ class Simulator:
 
         check_choice("grid", grid, ("input", "coarse"))
         D, w = self.D, self.params.workers
-        ny, nx = coarse.shape
-        f = sfft.rfft2(coarse, workers=w)
+        (ny, nx), (cy, cx) = coarse.shape, self.coarse_ext  # under a yaw: the frame turned as the image's (engine.yaw)
+        f = sfft.rfft2(self._frame_window(coarse, (-cy, -cx), (ny, nx)) if self.yaw_deg else coarse, workers=w)
         fy = np.fft.fftfreq(ny)[:, None] / D  # cycles per input pixel
         fx = np.fft.rfftfreq(nx)[None, :] / D
         f *= self.otf(fx * self.to_cy_per_mm[1], fy * self.to_cy_per_mm[0], exclude=("detector",))
-        cy, cx = self.coarse_ext
         if grid == "coarse" or D == 1:
             out = sfft.irfft2(f, s=(ny, nx), workers=w)
             return out[cy : ny - cy, cx : nx - cx]

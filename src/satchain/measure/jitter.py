@@ -330,7 +330,7 @@ def _result(posn, model, spec, meta) -> JitterResult:
     f_ph = np.array([h * abs(np.tan(np.radians(angle))) / dt for h in range(1, 11)])  # a staircase: up to 10
     f_ph = np.abs(f_ph - np.round(f_ph * dt) / dt)
     peaks = () if fit is None else tuple(_peak(fit, i, faps[i], (dt, span, f_ph)) for i in range(len(faps)))
-    flags = list(flags) + _result_flags(peaks, (res_rms, noise, n), np.sqrt(2 * z_thr * rss / n), dt)
+    flags = list(flags) + _result_flags(peaks, (res_rms, noise, n), np.sqrt(2 * z_thr * rss / n), (dt, span))
     return JitterResult(
         line_time_s=dt,
         nyquist_hz=0.5 / dt,
@@ -369,18 +369,26 @@ def _line_to_line(lines, det, sig):
     return float(np.sqrt(np.mean(dd**2))), float(np.sqrt(np.mean(noise2)))
 
 
-def _result_flags(peaks, stats, limit: float, dt: float) -> list:
-    """``no_peak``, ``aliasing``, ``unexplained_motion`` and the peaks' own flags, with their sentences."""
+def _result_flags(peaks, stats, limit: float, timing) -> list:
+    """``no_peak``, ``aliasing``, ``unexplained_motion`` and the peaks' own flags, with their sentences;
+    ``timing = (line time, record span)``.  ``aliasing`` only for a peak that could be an alias: fitted above the
+    line-rate Nyquist ``1 / (2 dt)`` or within the record's frequency resolution ``1 / span`` below it, where a
+    motion just above Nyquist folds to (any other peak's aliases_hz still list the frequencies that fold onto
+    it, which the lines cannot tell apart)."""
     res_rms, noise, n = stats
+    dt, span = timing
+    nyq = 0.5 / dt
     out = []
     if not peaks:
         out.append(("no_peak", f"no periodic motion above the detection limit {limit:.3g} px"))
-    else:
+    near = [p.frequency_hz for p in peaks if p.frequency_hz > nyq - 1.0 / (span + dt)]
+    if near:
         out.append(
             (
                 "aliasing",
-                f"frequencies are measured up to the line-rate Nyquist {0.5 / dt:.6g} Hz: a motion at f above it "
-                f"appears at |f - n / line_time| (each peak's aliases_hz)",
+                f"peak(s) at {', '.join(f'{f:.6g}' for f in near)} Hz lie within the record's resolution "
+                f"{1.0 / (span + dt):.3g} Hz of the line-rate Nyquist {nyq:.6g} Hz (or above it): the motion may "
+                f"be above Nyquist, folded (its aliases_hz)",
             )
         )
     if noise > 0 and res_rms**2 > noise**2 * (1.0 + 5.0 * np.sqrt(2.0 / n)) and res_rms > 1e-3:
