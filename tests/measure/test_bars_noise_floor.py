@@ -80,3 +80,13 @@ def test_a_region_holding_another_period_is_still_refused():
     r = measure_bars(img, periods_px=(12.0, 6.0, 4.0), group_rois=rois, levels=(40.0, 160.0))
     assert [i for i, _ in r.refused] == [1]
     assert not any("at_noise_floor" in f for f in r.flags)
+
+
+def test_measure_auto_names_a_refusal_by_the_groups_design_number():
+    """measure_bars numbers the groups it is given; measure auto gives it the design's groups from the first one
+    inside Nyquist: a refusal's ``group_rois[j]`` / ``periods_px[j]`` is renamed to the design's index."""
+    from satchain.measure._auto_items import _design
+
+    keep = [1, 3, 4]  # group 0 beyond Nyquist, group 2 refused earlier
+    msg = "group_rois[1]: no bars; periods_px[2] = 2.5: ..."
+    assert _design(msg, keep) == "group_rois[3]: no bars; periods_px[4] = 2.5: ..."
