@@ -101,12 +101,16 @@ class _SystemOTF:
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
         m = self._mtf
-        return m._otf(np.asarray(fx_cy_per_px) * m._to_mm, np.asarray(fy_cy_per_px) * m._to_mm, exclude=m._exclude)
+        fy = np.asarray(fy_cy_per_px) * (m._to_mm / m.alt_scale)  # on the image's axes, as _SystemMTF
+        return m._otf(np.asarray(fx_cy_per_px) * m._to_mm, fy, exclude=m._exclude)
 
 
 class _SystemMTF:
     """A SystemOTF as a callable of cy/px (square pixels of pitch sqrt(px py)), with its cutoff in cy/px;
-    the components named in ``exclude`` are left out."""
+    the components named in ``exclude`` are left out.  Frequencies are on the **image's** axes: where pushbroom
+    terms space the image rows ``alt_scale`` detector pixels apart on the ground (a line-rate error ``e``:
+    ``1 + e``; Earth rotation; :meth:`~satchain.tf.pushbroom.PushbroomTerms.geometry`), ``fy`` cycles per image
+    row are ``fy / alt_scale`` cycles per detector pixel (the budget's own tables stay on the detector's axis)."""
 
     def __init__(self, otf: Any, exclude: tuple[str, ...] = ()):
         from satchain import units
@@ -117,9 +121,12 @@ class _SystemMTF:
         self.pitch_m = math.sqrt(d.pitch_x_m * d.pitch_y_m)
         self._to_mm = float(units.cy_per_px_to_cy_per_mm(1.0, pitch_m=self.pitch_m))
         self.cutoff = float(units.cy_per_mm_to_cy_per_px(otf.cutoff_cy_per_mm, pitch_m=self.pitch_m))
+        pb = getattr(otf, "pushbroom", None)
+        geo = pb.geometry() if pb is not None and pb.active else None
+        self.alt_scale = 1.0 if geo is None else float(geo["alt_scale"])  # image rows apart, in detector px
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
-        fx, fy = np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * self._to_mm
+        fx, fy = np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * (self._to_mm / self.alt_scale)
         return np.abs(self._otf(fx, fy, exclude=self._exclude))
 
 
@@ -219,8 +226,11 @@ def predict_from_mtf(
     warnings: tuple[str, ...] = (),
     otf2d: MTF2D | None = None,
     noise_sigma: Callable[[np.ndarray], np.ndarray] | None = None,
+    image_steps_m: tuple[float, float] | None = None,
 ) -> Predictions:
-    """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres).
+    """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres; ``image_steps_m``: the
+    image's ground steps along its columns and rows when its geometry scales them, e.g. a pushbroom image's
+    along-track scale: a wedge's line widths in metres are predicted on the step across its stripes).
 
     ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as :func:`satchain.quality.predict_quality`
     gives them); without it the NIIRS figures are NaN. ``otf2d`` is the complex OTF (cy/px) that forms the
@@ -240,7 +250,7 @@ def predict_from_mtf(
         m = AxisMTF(mtf2d, (nx, ny))
         edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
     otf = mtf2d if otf2d is None else otf2d
-    wedges = _predict_wedges(otf, truth, gsd_m, wedge_threshold, noise_sigma)
+    wedges = _predict_wedges(otf, truth, gsd_m, wedge_threshold, noise_sigma, image_steps_m)
     q = quality or {}
     return Predictions(
         mtf_along=along,
@@ -274,17 +284,19 @@ def sensor_noise_reflectance(sensor: Any) -> Callable[[np.ndarray], np.ndarray] 
     return sigma
 
 
-def _predict_wedges(
-    otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float, noise: Callable | None = None
-) -> dict:
+def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float,
+                    noise: Callable | None = None, steps_m: tuple[float, float] | None = None) -> dict:  # fmt: skip
     """Wedge id -> WedgePrediction (resolution None, with the reason, when the predicted image has no wedge
-    the scan can measure)."""
+    the scan can measure); each on the image's ground step across its stripes (``steps_m``: ACT, ALT)."""
     out = {}
     truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
     background = float(truth.get("background", 0.2))
     for it in truth.get("items", []):
         if it.get("kind") != HyperbolicWedge.kind:
             continue
+        axis = WEDGE_AXES[str(it["orientation"]).lower()]
+        if steps_m is not None:
+            gsd_m = {"ACT": steps_m[0], "ALT": steps_m[1]}.get(axis, float(np.sqrt(steps_m[0] * steps_m[1])))
         try:
             out[str(it["id"])] = predict_wedge(
                 otf2d,
@@ -296,7 +308,6 @@ def _predict_wedges(
                 noise_sigma=noise,
             )
         except InputError as exc:
-            axis = WEDGE_AXES[str(it["orientation"]).lower()]
             out[str(it["id"])] = WedgePrediction(str(it["id"]), axis, None, gsd_m, threshold=threshold, reason=str(exc))
     return out
 
@@ -326,8 +337,10 @@ def predict(
     quality: Mapping[str, float] | None = None,
     sensor: Any = None,
     wedge_threshold: float = 0.15,
+    image_steps_m: tuple[float, float] | None = None,
 ) -> Predictions:
-    """Predict every figure a run compares, for the targets of ``truth``.
+    """Predict every figure a run compares, for the targets of ``truth`` (``image_steps_m``: see
+    :func:`predict_from_mtf`).
 
     Parameters
     ----------
@@ -365,4 +378,5 @@ def predict(
         warnings=saturation_warnings(sensor, truth),
         otf2d=_SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names)),
         noise_sigma=sensor_noise_reflectance(sensor),
+        image_steps_m=image_steps_m,
     )
