@@ -147,7 +147,7 @@ def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name:
         elif scene_pixel_m is None:
             pixel_m = r.require_pixel_m(name("scene_pixel_m"))[0]
         else:
-            pixel_m = _given_pixel_m(float(scene_pixel_m), own, path, name)
+            pixel_m = _given_pixel_m(float(scene_pixel_m), _georeferenced_pixel_m(r), path, name)
         transform = r.transform
         if not r.georeferenced:  # local metric grid, origin (0, 0), north up (as satchain's own TIFFs)
             from affine import Affine
@@ -174,15 +174,20 @@ def _own_pixel_m(r, meta: Mapping[str, Any]) -> float | None:
 
 
 def check_pixel_m(path: str | os.PathLike, scene_pixel_m: float | None, name: Callable[[str], str]) -> None:
-    """Refuse a ``scene_pixel_m`` that contradicts the pixel size the raster ``path`` states (see
-    :func:`_given_pixel_m`), for the paths that read it without its georeference (``--focal-plane``)."""
-    from satchain._imagemeta import _gdal_meta
+    """Refuse a ``scene_pixel_m`` that contradicts the pixel size the georeference of the raster ``path``
+    states (see :func:`_given_pixel_m`), for the paths that read it without it (``--focal-plane``)."""
     from satchain.raster import open_raster
 
     if scene_pixel_m is None:
         return
     with open_raster(path) as r:
-        _given_pixel_m(float(scene_pixel_m), _own_pixel_m(r, _gdal_meta(r)), Path(path), name)
+        _given_pixel_m(float(scene_pixel_m), _georeferenced_pixel_m(r), Path(path), name)
+
+
+def _georeferenced_pixel_m(r) -> float | None:
+    """The pixel size a raster's georeference states (a projected CRS's transform), which the output keeps;
+    None without one (satchain's tags of a local TIFF are a default that ``scene_pixel_m`` may replace)."""
+    return r.pixel_m[0] if r.pixel_m is not None and r.georeferenced else None
 
 
 def _given_pixel_m(given: float, own: float | None, path: Path, name: Callable[[str], str]) -> float:
