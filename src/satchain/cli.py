@@ -103,8 +103,10 @@ def _print_budget(res: dict[str, Any]) -> None:
     for d in ("alt", "act"):
         name = "ALT (along-track, f_y)" if d == "alt" else "ACT (across-track, f_x)"
         comps = list(res["mtf"][d])
-        t = Table(title=f"MTF and CTF budget, {name}")
-        for c in ["f cy/mm", "f cy/px", "f cy/m gnd", *comps, "CTF Coltman", "CTF paper"]:
+        # the detector pixel's axis (an image with a line-rate error or Earth rotation has its rows alt_scale px
+        # apart: motion_geometry; `run` predicts on the image's axis); motion terms are signed expected OTFs
+        t = Table(title=f"MTF and CTF budget, {name}; f on the detector pixel's axis, motion terms signed")
+        for c in ["f cy/mm", "f cy/det px", "f cy/m gnd", *comps, "CTF Coltman", "CTF paper"]:
             t.add_column(c, justify="right")
         cols = [
             res["frequencies_cy_per_mm"],

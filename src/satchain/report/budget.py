@@ -75,6 +75,12 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
 
     out["radiometry"] = radiometric_budget(system).to_dict()
     out["quality"] = predict_quality(system, otf=otf).to_dict()
+    out["frequency_axis"] = (
+        "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
+        "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
+        "apart on the ground, and `run` predicts on the image's axis (f_y / alt_scale); the pushbroom motion "
+        "terms are their signed expected OTF"
+    )
     out["ctf_notes"] = (
         "coltman: the square-wave (bar) response by Coltman's series (physical, -> 1 at low frequency, "
         "4/pi*MTF near cutoff); fourier_synthesis: the reference paper's method (10 odd harmonics, modulation of "

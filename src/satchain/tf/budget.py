@@ -185,8 +185,11 @@ class SystemOTF:
 class MTFBudget:
     """Component-by-component MTF along the ALT (f_y) and ACT (f_x) axes.
 
-    ``alt`` and ``act`` map each component name, and ``"system"``, to its MTF (modulus of the OTF) at
-    ``f_cy_per_mm``.
+    ``alt`` and ``act`` map each component name, and ``"system"``, to its transfer at ``f_cy_per_mm`` (on the
+    detector's pixel axis): the MTF (modulus of the OTF), except the pushbroom motion terms
+    (:mod:`satchain.tf.pushbroom`: ``oscillation_*``, ``jitter_psd_*``, ``tdi_drift``), given as their **signed**
+    expected OTF where it is real (past its first zero an oscillation's is negative: -0.237 is a contrast
+    reversal, not 0.237; a line-of-sight log's, complex, stays its modulus).  ``"system"`` is the system MTF.
     """
 
     f_cy_per_mm: np.ndarray
@@ -231,13 +234,25 @@ def mtf_budget(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None
         raise ConfigError(f"f_cy_per_mm: must be >= 0, got minimum {f.min()!r}")
     otf = SystemOTF(system) if otf is None else otf
     out: dict[str, dict[str, np.ndarray]] = {}
+    pb = getattr(otf, "pushbroom", None)
+    motion = set() if pb is None else set(pb.components())  # the terms whose expected OTF is printed signed
     for d in DIRECTIONS:
         comps = otf.components(*_cut(d, f))
-        mtfs = {k: np.abs(v) for k, v in comps.items()}
+        mtfs = {k: _signed(v) if k in motion else np.abs(v) for k, v in comps.items()}
         mtfs["system"] = np.abs(np.prod(np.stack(list(comps.values())), axis=0))
         out[d] = mtfs
     ny = {"alt": system.nyquist_alt_cy_per_mm, "act": system.nyquist_act_cy_per_mm}
     return MTFBudget(f_cy_per_mm=f, alt=out["alt"], act=out["act"], nyquist_cy_per_mm=ny)
+
+
+def _signed(otf: np.ndarray) -> np.ndarray:
+    """The OTF as a real array: its real part where it is real (to 1e-9 of its largest value), else |OTF|."""
+    o = np.asarray(otf)
+    if not np.iscomplexobj(o):
+        return o.astype(float, copy=False)
+    if np.max(np.abs(o.imag), initial=0.0) <= 1e-9 * max(float(np.max(np.abs(o), initial=0.0)), 1e-300):
+        return o.real.copy()
+    return np.abs(o)
 
 
 def mtf_at_nyquist(system: ImagingSystem, *, otf: SystemOTF | None = None) -> dict[str, float]:
