@@ -76,6 +76,9 @@ def _edge_tables(r, name: str, p: float | None, note: str | None = None) -> None
         ("ESF sample spacing (px)", r.bin_width_px),
         ("quality flags", ", ".join(r.flags) if r.flags else "none"),
     ]
+    if "line_of_sight_motion" in r.flags:  # the headline has each line located; the edge as imaged beside it
+        rows.insert(3, ("MTF at Nyquist as imaged (ISO, lines folded)", f"{r.mtf_as_imaged_at_nyquist:.4f}"))
+        rows.insert(4, ("line-of-sight motion removed (px rms)", r.los_motion_rms_px))
     if p and r.mtf50_cy_per_px is not None:
         rows.insert(4, ("MTF50 (cy/m ground)", r.mtf50_cy_per_px / p))
     rows.insert(0, ("frequency axis", axis_words(r.frequency_axis, r.frequency_scale, r.angle_deg)))

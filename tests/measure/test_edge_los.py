@@ -124,3 +124,19 @@ def test_run_comparison_like_with_like():
     assert abs(d["mtf_as_imaged_at_nyquist_measured"] - d["mtf_as_imaged_at_nyquist_predicted"]) < TOL
     assert d["mtf_as_imaged_at_nyquist_predicted"] < per_row - 0.02  # the rows' displacements fold in
     assert "as imaged" in rows[0].note and d["los_motion_rms_px"] > 0.1
+
+
+def test_cli_json_and_table_give_both_mtfs(tmp_path):
+    from typer.testing import CliRunner
+
+    from satchain.cli_measure import measure_app
+
+    path = {"amp_px": [1.0], "freq_hz": [0.5 / (N * DT)], "phase_rad": [0.0]}
+    img = render_tdi_edge(100, 50, angle_deg=ANGLE, x0=18.3, line_time_s=DT, stages=N, blur_px=0.35, **path)
+    np.save(tmp_path / "wavy.npy", img)
+    runner = CliRunner()
+    d = json.loads(runner.invoke(measure_app, ["edge", str(tmp_path / "wavy.npy"), "--json"]).stdout)
+    assert "line_of_sight_motion" in d["flags"] and d["los_motion_rms_px"] > 0.1
+    assert len(d["mtf_as_imaged"]) == len(d["mtf_aligned"]) == len(d["mtf"])
+    out = runner.invoke(measure_app, ["edge", str(tmp_path / "wavy.npy")]).stdout
+    assert "as imaged" in out and "line_of_sight_motion" in out

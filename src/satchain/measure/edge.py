@@ -117,6 +117,14 @@ class EdgeResult(ResultMixin):
     excluded or clipped pixel), with its 1-sigma ``edge_position_sigma_px``
     (:mod:`satchain.measure._edge_lines`): line-of-sight motion from a long straight edge
     (:func:`satchain.measure.jitter.measure_jitter`).
+    ``mtf_aligned`` is the MTF with each line located (:mod:`satchain.measure._edge_align`): the same curve as
+    ``mtf`` unless ``fit_degree`` is forced; where the lines' positions wobble beyond their noise (flag
+    ``line_of_sight_motion``) ``mtf``, ``mtf_at_nyquist``, the ESF, LSF, RER and overshoot are measured so, the
+    budget's per-row motion terms' counterpart.  ``mtf_as_imaged`` (``mtf_as_imaged_sigma``,
+    ``mtf_as_imaged_at_nyquist``) is the edge as imaged, ISO 12233's straight fit with the lines'
+    displacements folded into the ESF (the same curve as ``mtf`` for a straight edge without motion; NaN
+    beyond its own band), and ``los_motion_rms_px`` the rms departure of the located lines from that straight
+    line (px).
     """
 
     f_cy_per_px: np.ndarray
