@@ -41,6 +41,13 @@ class ImageGeometry:
     terms: object = field(default=None, repr=False, compare=False)  # the PushbroomTerms (an edge as imaged)
 
     @property
+    def steps_m(self) -> tuple[float, float]:
+        """The ground metres along x of one column step and along y of one row step (what an axis-aligned
+        measurement converts its pixels with; the ALT one carries the along-track scale)."""
+        a, _, _, _, e, _ = tuple(~self.to_image)[:6]
+        return abs(a), abs(e)
+
+    @property
     def moves(self) -> bool:
         """Whether the rows are displaced besides the mean map (oscillations, jitter, a line-of-sight log)."""
         return bool(np.ptp(self.dx_px) > 1e-6 or np.ptp(self.dy_px) > 1e-6)  # (the drifts' rounding left out)
@@ -165,6 +172,8 @@ def geometry_table(system) -> list[dict]:
         ("shear (ACT per line)", g["shear_act_px_per_line"], "px"),
         ("shear angle", g["shear_deg"], "deg"),
         ("along-track scale", g["alt_scale"], "ALT ground step / GSD"),
+        ("image ground step ACT (the GSD)", system.gsd_act_m, "m"),
+        ("image ground step ALT (GSD x along-track scale)", system.gsd_alt_m * g["alt_scale"], "m"),
         ("image rotation (yaw)", g["rotation_deg"], "deg"),
         ("TDI drift over the window, ACT", g["tdi_drift_px"]["act"], "px"),
         ("TDI drift over the window, ALT", g["tdi_drift_px"]["alt"], "px"),

@@ -174,10 +174,13 @@ def _with_as_built(config: RunConfig, budget: BudgetResult, truth, sim: Simulati
 
 def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
     """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
-    in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it)."""
+    in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it, the
+    wedges' widths in metres on the image's own ground steps, an along-track scale included)."""
     from satchain.image_geometry import run_geometry
     from satchain.prediction import predict
 
+    truth_d = truth if isinstance(truth, dict) else truth.to_dict()
+    geo = run_geometry(sim.system or budget.system, truth_d, sim.simulator, sim.image.shape)
     p = predict(
         budget.system,
         truth,
@@ -185,9 +188,8 @@ def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResu
         quality=budget.budget["quality"],
         sensor=sim.sensor,
         wedge_threshold=config.measurement.wedge_threshold,
+        image_grid_m=None if geo is None else (geo.steps_m, (~geo.to_image) * (-0.5, -0.5)),
     )
-    truth_d = truth if isinstance(truth, dict) else truth.to_dict()
-    geo = run_geometry(sim.system or budget.system, truth_d, sim.simulator, sim.image.shape)
     return p if geo is None else dataclasses.replace(p, geometry=geo)
 
 

@@ -32,7 +32,7 @@ from satchain._argcheck import checked
 from satchain.errors import InputError
 from satchain.scene.targets import HyperbolicWedge, SlantedEdge
 from satchain.star_prediction import StarPrediction, predict_stars
-from satchain.wedge_prediction import WEDGE_AXES, WedgePrediction, predict_wedge
+from satchain.wedge_prediction import PLACEMENTS_PX, WEDGE_AXES, WedgePrediction, predict_wedge
 
 if TYPE_CHECKING:
     from satchain.scene.truth import Truth
@@ -226,11 +226,12 @@ def predict_from_mtf(
     warnings: tuple[str, ...] = (),
     otf2d: MTF2D | None = None,
     noise_sigma: Callable[[np.ndarray], np.ndarray] | None = None,
-    image_steps_m: tuple[float, float] | None = None,
+    image_grid_m: tuple | None = None,
 ) -> Predictions:
-    """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres; ``image_steps_m``: the
-    image's ground steps along its columns and rows when its geometry scales them, e.g. a pushbroom image's
-    along-track scale: a wedge's line widths in metres are predicted on the step across its stripes).
+    """Predictions from a 2-D MTF in cy/px (square ground pixels of ``gsd_m`` metres; ``image_grid_m = ((step_x,
+    step_y), (x0, y0))``: the image's ground steps along its columns and rows and its pixel (0, 0)'s corner when
+    its geometry scales them, e.g. a pushbroom image's along-track scale: a wedge is then predicted on that grid,
+    its OTF on the image's axes).
 
     ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as :func:`satchain.quality.predict_quality`
     gives them); without it the NIIRS figures are NaN. ``otf2d`` is the complex OTF (cy/px) that forms the
@@ -250,7 +251,7 @@ def predict_from_mtf(
         m = AxisMTF(mtf2d, (nx, ny))
         edges[str(it["id"])] = EdgePrediction(str(it["id"]), (m.ux, m.uy), float(m(NYQUIST_CY_PER_PX)), m)
     otf = mtf2d if otf2d is None else otf2d
-    wedges = _predict_wedges(otf, truth, gsd_m, wedge_threshold, noise_sigma, image_steps_m)
+    wedges = _predict_wedges(otf, truth, gsd_m, wedge_threshold, noise_sigma, image_grid_m)
     q = quality or {}
     return Predictions(
         mtf_along=along,
@@ -284,10 +285,24 @@ def sensor_noise_reflectance(sensor: Any) -> Callable[[np.ndarray], np.ndarray] 
     return sigma
 
 
+class _OnImageAxis:
+    """An OTF of detector cy/px on an image whose ground steps are ``(sx, sy)`` detector pixels (a pushbroom
+    image's along-track scale): a frequency of ``f`` cycles per image pixel is ``f / s`` per detector pixel."""
+
+    def __init__(self, otf2d: MTF2D, sx: float, sy: float):
+        self._otf, self._s = otf2d, (float(sx), float(sy))
+        if getattr(otf2d, "cutoff", None) is not None:
+            self.cutoff = float(otf2d.cutoff) * max(self._s)
+
+    def __call__(self, fx, fy) -> np.ndarray:
+        return self._otf(np.asarray(fx) / self._s[0], np.asarray(fy) / self._s[1])
+
+
 def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, threshold: float,
-                    noise: Callable | None = None, steps_m: tuple[float, float] | None = None) -> dict:  # fmt: skip
+                    noise: Callable | None = None, grid_m: tuple | None = None) -> dict:  # fmt: skip
     """Wedge id -> WedgePrediction (resolution None, with the reason, when the predicted image has no wedge
-    the scan can measure); each on the image's ground step across its stripes (``steps_m``: ACT, ALT)."""
+    the scan can measure); with ``grid_m`` (:func:`predict_from_mtf`) each on the image's grid: square pixels
+    of its ground step across the stripes, placed as the image's rows and columns, the OTF on its axes."""
     out = {}
     truth_px = float(truth.get("pixel_m") or gsd_m / 10.0)
     background = float(truth.get("background", 0.2))
@@ -295,13 +310,16 @@ def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, thresh
         if it.get("kind") != HyperbolicWedge.kind:
             continue
         axis = WEDGE_AXES[str(it["orientation"]).lower()]
-        if steps_m is not None:
-            gsd_m = {"ACT": steps_m[0], "ALT": steps_m[1]}.get(axis, float(np.sqrt(steps_m[0] * steps_m[1])))
+        step = None if grid_m is None else {"ACT": grid_m[0][0], "ALT": grid_m[0][1]}.get(axis)
+        own = (0.0, 0.0) if step is None else tuple(float(np.mod(c / step, 1.0)) for c in grid_m[1])
         try:
             out[str(it["id"])] = predict_wedge(
-                otf2d,
+                otf2d if step is None else _OnImageAxis(otf2d, step / gsd_m, step / gsd_m),
                 it,
-                gsd_m=gsd_m,
+                gsd_m=gsd_m if step is None else step,
+                placements_px=tuple(
+                    (float(np.mod(a + own[0], 1.0)), float(np.mod(b + own[1], 1.0))) for a, b in PLACEMENTS_PX
+                ),
                 truth_pixel_m=truth_px,
                 background=background,
                 threshold=threshold,
@@ -337,9 +355,9 @@ def predict(
     quality: Mapping[str, float] | None = None,
     sensor: Any = None,
     wedge_threshold: float = 0.15,
-    image_steps_m: tuple[float, float] | None = None,
+    image_grid_m: tuple | None = None,
 ) -> Predictions:
-    """Predict every figure a run compares, for the targets of ``truth`` (``image_steps_m``: see
+    """Predict every figure a run compares, for the targets of ``truth`` (``image_grid_m``: see
     :func:`predict_from_mtf`).
 
     Parameters
@@ -378,5 +396,5 @@ def predict(
         warnings=saturation_warnings(sensor, truth),
         otf2d=_SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in names)),
         noise_sigma=sensor_noise_reflectance(sensor),
-        image_steps_m=image_steps_m,
+        image_grid_m=image_grid_m,
     )

@@ -228,11 +228,11 @@ def _star_mapped(it: dict, m: dict, v: OverlayView) -> list[str]:
 def bars_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
     """Bar target: each group's box with its period and whether it is compared, measured or not."""
     gsd, lim, size = v.gsd_m, v.compared_up_to_cy_per_px, v.size
-    measured = {round(float(g.get("period_m", 0)), 9) for g in (m.get("groups") or [])}
+    measured = {round(float(g.get("period_m", 0)), 9): g.get("period_px") for g in (m.get("groups") or [])}
     out = []
     for g in it.get("groups", []):
         period = float(g["period_m"])
-        f = gsd / period
+        f = 1.0 / float(measured.get(round(period, 9)) or period / gsd)  # on the image's axis (its ground step)
         if round(period, 9) not in measured:
             colour, word = _NOT_MEASURED, "not measured"
         elif f <= lim + 1e-12:
