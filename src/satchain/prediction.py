@@ -286,8 +286,9 @@ def sensor_noise_reflectance(sensor: Any) -> Callable[[np.ndarray], np.ndarray] 
 
 
 class _OnImageAxis:
-    """An OTF of detector cy/px on an image whose ground steps are ``(sx, sy)`` detector pixels (a pushbroom
-    image's along-track scale): a frequency of ``f`` cycles per image pixel is ``f / s`` per detector pixel."""
+    """An OTF of the image's cy/px (its columns and rows) on a render grid whose square pixels are ``(sx, sy)``
+    image pixels (a wedge predicted on the ground step across its stripes): ``f`` cycles per render pixel are
+    ``f / s`` per image pixel."""
 
     def __init__(self, otf2d: MTF2D, sx: float, sy: float):
         self._otf, self._s = otf2d, (float(sx), float(sy))
@@ -314,7 +315,7 @@ def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, thresh
         own = (0.0, 0.0) if step is None else tuple(float(np.mod(c / step, 1.0)) for c in grid_m[1])
         try:
             out[str(it["id"])] = predict_wedge(
-                otf2d if step is None else _OnImageAxis(otf2d, step / gsd_m, step / gsd_m),
+                otf2d if step is None else _OnImageAxis(otf2d, step / grid_m[0][0], step / grid_m[0][1]),
                 it,
                 gsd_m=gsd_m if step is None else step,
                 placements_px=tuple(
