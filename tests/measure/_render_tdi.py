@@ -17,7 +17,7 @@ window mean (``per_row``: every row located) and about one straight line through
 from __future__ import annotations
 
 import numpy as np
-from _render_jitter import render_wobbly_edge
+from _render_jitter import _g, render_wobbly_edge
 
 _NODES = 24
 
@@ -66,3 +66,19 @@ def motion_factors(f_normal, angle_deg, **path):
         e = np.exp(2j * np.pi * nu[:, None, None] * (x - ref[:, None])[None])
         out.append(np.abs(np.mean(e @ w, axis=1)))
     return out[0], out[1]
+
+
+def render_tdi_alt_edge(n_rows, n_cols, *, angle_deg, amp_px, freq_hz, phase_rad, line_time_s, stages, blur_px=0.35):
+    """A near-horizontal (ALT) edge whose rows the path moves along y while they integrate (each row's pixels
+    integrated over their height; the tilt inside a pixel left out): (image, each row's window-mean shift)."""
+    s_k, w_k = _time_nodes(stages * line_time_s)
+    i = np.arange(n_rows)[:, None]
+    ye = n_rows / 2 + 0.3 + np.arange(n_cols)[None, :] * np.tan(np.radians(angle_deg))
+    img, shift = 0.0, 0.0
+    for s, w in zip(s_k, w_k, strict=True):
+        o = sum(a * np.sin(2 * np.pi * f * (i * line_time_s + s) + p)
+                for a, f, p in zip(amp_px, freq_hz, phase_rad, strict=True))  # fmt: skip
+        e = ye - o
+        img = img + w * blur_px * (_g((i + 0.5 - e) / blur_px) - _g((i - 0.5 - e) / blur_px))
+        shift = shift + w * o[:, 0]
+    return 0.2 + 0.6 * img, shift

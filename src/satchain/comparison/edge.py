@@ -48,7 +48,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 "mtf_predicted": p.mtf(f).tolist(),
                 "mtf_at_nyquist_sigma": finite(e.get("mtf_at_nyquist_sigma", e.get("mtf_at_nyquist_std"))),
                 "mtf_sigma": e.get("mtf_sigma"),
-                "flags": list(e.get("flags") or []),
+                "flags": list(e.get("flags") or []) + _alt_rows_moved(e, pred),
                 **({"angle_deg_expected": a_ref} if geometric else {}),
                 **_as_imaged(e, p, pred),
             }
@@ -109,8 +109,27 @@ def _as_imaged(e: dict, p, pred: Predictions) -> dict:
     return out | {"mtf_as_imaged_at_nyquist_predicted": finite(p.mtf_at_nyquist * ratio)}
 
 
+def _alt_rows_moved(e: dict, pred: Predictions) -> list[str]:
+    """``["alt_line_of_sight_motion"]`` for an ALT edge whose region's rows the line of sight displaces along its
+    normal by more than 0.03 px rms (:attr:`ImageGeometry.dy_px`): each of its lines (a column) crosses many
+    rows, so the rows' displacements warp the ESF's axis (a local along-track scale) where no line can show them."""
+    geo, roi = getattr(pred, "geometry", None), e.get("roi_px")
+    if geo is None or roi is None or e.get("direction") != "ALT":
+        return []
+    dy = np.asarray(geo.dy_px, float)[max(int(roi[1]), 0) : int(roi[3])]
+    return ["alt_line_of_sight_motion"] if dy.size > 1 and float(np.std(dy)) > 0.03 else []
+
+
 def _as_imaged_note(d: dict) -> str | None:
-    """The MTF row's note for an edge whose lines the line of sight moves (flag ``line_of_sight_motion``)."""
+    """The MTF row's note for an edge whose lines the line of sight moves (flag ``line_of_sight_motion``), or an
+    ALT edge whose rows it displaces (``alt_line_of_sight_motion``)."""
+    if "alt_line_of_sight_motion" in d["flags"]:
+        return (
+            "an ALT edge whose rows the line of sight displaces along its normal: the displacements warp the ESF's "
+            "axis (a local along-track scale and the rows' own blur at their phase) where no line of the edge can "
+            "show them; the measured MTF is as imaged, the prediction the budget's per-row terms (not like with "
+            "like: measure the motion on a near-vertical edge)"
+        )
     if "line_of_sight_motion" not in d["flags"] or d.get("mtf_as_imaged_at_nyquist_measured") is None:
         return None
     pred = d.get("mtf_as_imaged_at_nyquist_predicted")
