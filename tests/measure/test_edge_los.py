@@ -165,3 +165,12 @@ def test_run_flags_an_alt_edge_whose_rows_move():
     entry = r.to_dict() | {"id": "e2", "roi_px": [0, 0, 100, 60], "angle_deg_truth": ANGLE}
     details, rows = edge_checks([entry], pred, SimpleNamespace(edge_mtf_at_nyquist=0.03, edge_angle_deg=0.1))
     assert "alt_line_of_sight_motion" in details[0].flags and "not like with like" in rows[0].note
+
+
+@pytest.mark.parametrize(("f_hz", "n", "amp"), [(20.0, 800, 2.0), (40.0, 400, 1.0)])
+def test_slow_oscillation_a_cycle_or_two_over_the_roi(f_hz, n, amp):
+    """20 Hz over 800 lines (2 px: read 0.071 against 0.199, 'curved edge'), 40 Hz over 400 lines: the cubic
+    follows part of the motion; the lines located follow all of it."""
+    path = {"amp_px": [amp], "freq_hz": [f_hz], "phase_rad": [2.0]}
+    r, static = _pair(n, path)
+    _check(r, static, n, path)
