@@ -25,9 +25,10 @@ import numpy as np
 from scipy.linalg import solveh_banded
 
 from satchain.measure._common import median
+from satchain.measure._edge_lines import line_numbers
 from satchain.measure._edge_locate import _Poly
 
-__all__ = ["align_lines", "smooth_positions"]
+__all__ = ["align_lines", "los_curves", "on_grid", "smooth_positions"]
 
 _POS_FLOOR_PX = 2e-3  # noise-free positions are exact to about this (the line profile's spline error)
 _CHI_SIGMAS = 4.0  # the positions depart from the polynomial by more than their noise at this many sigma
@@ -101,3 +102,37 @@ def align_lines(pos: np.ndarray, sigma: np.ndarray, deg: int):
         return None, (None if deg == 1 else line), los, False, noise
     los = float(np.sqrt(np.mean((smooth[ok] - line[ok]) ** 2)))
     return smooth, line, los, True, noise
+
+
+def los_curves(lines, where, own, moved, flags):
+    """The line-of-sight motion in the lines' edge positions (:func:`align_lines`): ``(aligned curve or None
+    (the located polynomial's is kept), as-imaged (f, mtf, sigma) or None (the same as the aligned), los motion
+    px rms, the aligned per-line offsets from ``own`` or None)``, flag ``line_of_sight_motion`` where the
+    positions depart from the polynomial beyond their noise.  ``own`` is the located edge polynomial, ``moved``:
+    :func:`satchain.measure.edge._moved_curve` of per-line offsets from it (None: the ESF is projected on a
+    given line, kept)."""
+    transposed, roi = where
+    pos = lines[1] - line_numbers(1, not transposed, roi)[0]
+    at_aligned, at_imaged, los, significant, noise = align_lines(pos, lines[2], len(own) - 1)
+    base = np.polyval(own, np.arange(pos.size, dtype=float))
+    shift = None if moved is None or at_aligned is None else at_aligned - base
+    aligned = None if shift is None else moved(shift)
+    imaged = None if moved is None or at_imaged is None else moved(at_imaged - base)
+    if significant:
+        flags.append(
+            (
+                "line_of_sight_motion",
+                f"the lines' edge positions depart from one straight edge by {los:.3f} px rms, beyond their noise "
+                f"({noise:.3f} px; line-of-sight motion, or a wavy edge): the MTF is measured with each line "
+                "located (mtf_aligned; the headline mtf unless fit_degree is forced); the edge as imaged, the "
+                "lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged",
+            )
+        )
+    return aligned, (None if imaged is None else imaged[2]), los, (None if aligned is None else shift)
+
+
+def on_grid(f_ref, curve):
+    """A curve ``(f, mtf, sigma)`` on the frequencies ``f_ref`` (NaN beyond its own band)."""
+    f, mtf, sig = curve
+    out = [np.interp(f_ref, f, y, right=np.nan) for y in (mtf, sig)]
+    return out[0], out[1]

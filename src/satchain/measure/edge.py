@@ -60,7 +60,7 @@ from satchain.measure._common import (
     robust_sigma,
     unmask,
 )
-from satchain.measure._edge_align import align_lines
+from satchain.measure._edge_align import los_curves, on_grid
 from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
 from satchain.measure._edge_checks import (
     CRITICAL_TILTS_DEG,
@@ -300,14 +300,13 @@ def measure_edge(
         located = ((own, rows, [], ridge), shift)
         return _moved_curve(work, okw, located, (os_, sigma, contrast), (f_top, noise_target, debias), (axis, f_max))
 
-    aligned, imaged, los, shift = _los_curves(lines, (transposed, roi), own, moved if line is None else None, flags)
-    # the model's check on every pixel, along the edge as located (each line's own where it wobbles)
-    shift = shift if deg is None else None
+    aligned, imaged, los, shift = los_curves(lines, (transposed, roi), own, moved if line is None else None, flags)
+    shift = shift if deg is None else None  # the model's check along the edge as located (each line's own)
     check_model(work, project(work, np.arange(work.shape[0]), coef, shift)[0], x, esf_n, model, sigma, okw)
     if aligned is not None and deg is None:  # (a forced degree keeps its own fit as the headline)
         x, esf_n, (f, mtf, mtf_sig), half_w = aligned
-    mtf_al = mtf if aligned is None else _on_grid(f, aligned[2])[0]
-    imaged = (mtf, mtf_sig) if imaged is None else _on_grid(f, imaged)
+    mtf_al = mtf if aligned is None else on_grid(f, aligned[2])[0]
+    imaged = (mtf, mtf_sig) if imaged is None else on_grid(f, imaged)
     return _result(
         (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
         (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m), lines,
@@ -316,10 +315,9 @@ def measure_edge(
 
 
 def _moved_curve(work, valid, moved, stats, opts, axis_opts):
-    """``(x, esf, (f, mtf, 1-sigma), window half-width)`` of the ESF projected on the located edge moved line by
-    line (``moved = (locate_edge's result, per-line offsets)``), with the region's noise and contrast (``stats =
-    (oversampling, noise, contrast)``), ``opts = (f_max, noise target, debias)``, ``axis_opts = (frequency
-    axis, f_max)``; None where the moved edge leaves the ESF unmeasurable."""
+    """``(x, esf, (f, mtf, 1-sigma), window half-width)`` of the ESF on the located edge moved line by line
+    (``moved = (locate_edge's result, per-line offsets)``; ``stats = (oversampling, noise, contrast)``, ``opts
+    = (f_max, noise target, debias)``, ``axis_opts = (axis, f_max)``); None where it cannot be measured."""
     os_, sigma, contrast = stats
     f_top, noise_target, debias = opts
     try:
@@ -329,39 +327,6 @@ def _moved_curve(work, valid, moved, stats, opts, axis_opts):
     except InputError:
         return None
     return x, esf_n, on_axis(f, mtf, sig, slope, *axis_opts)[:3], half_w
-
-
-def _los_curves(lines, where, own, moved, flags):
-    """The line-of-sight motion in the lines' edge positions (:func:`align_lines`): ``(aligned curve or None
-    (the located polynomial's is kept), as-imaged (f, mtf, sigma) or None (the same as the aligned), los motion
-    px rms, the aligned per-line offsets from ``own`` or None)``, flag ``line_of_sight_motion`` where the
-    positions depart from the polynomial beyond their noise.  ``own`` is the located edge polynomial, ``moved``:
-    :func:`_moved_curve` of per-line offsets from it (None: the ESF is projected on a given line, kept)."""
-    transposed, roi = where
-    pos = lines[1] - line_numbers(1, not transposed, roi)[0]
-    at_aligned, at_imaged, los, significant, noise = align_lines(pos, lines[2], len(own) - 1)
-    base = np.polyval(own, np.arange(pos.size, dtype=float))
-    shift = None if moved is None or at_aligned is None else at_aligned - base
-    aligned = None if shift is None else moved(shift)
-    imaged = None if moved is None or at_imaged is None else moved(at_imaged - base)
-    if significant:
-        flags.append(
-            (
-                "line_of_sight_motion",
-                f"the lines' edge positions depart from one straight edge by {los:.3f} px rms, beyond their noise "
-                f"({noise:.3f} px; line-of-sight motion, or a wavy edge): the MTF is measured with each line "
-                "located (mtf_aligned; the headline mtf unless fit_degree is forced); the edge as imaged, the "
-                "lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged",
-            )
-        )
-    return aligned, (None if imaged is None else imaged[2]), los, (None if aligned is None else shift)
-
-
-def _on_grid(f_ref, curve):
-    """A curve ``(f, mtf, sigma)`` on the frequencies ``f_ref`` (NaN beyond its own band)."""
-    f, mtf, sig = curve
-    out = [np.interp(f_ref, f, y, right=np.nan) for y in (mtf, sig)]
-    return out[0], out[1]
 
 
 def _line_positions(work, coef, valid, clip, where, flags):
