@@ -119,13 +119,17 @@ def los_curves(lines, where, own, moved, flags):
     aligned = None if shift is None else moved(shift)
     imaged = None if moved is None or at_imaged is None else moved(at_imaged - base)
     if significant:
+        how = (
+            "the ESF is projected on the given edge line, the lines' displacements folded in"
+            if moved is None
+            else "the MTF is measured with each line located (mtf_aligned; the headline mtf unless fit_degree is "
+            "forced); the edge as imaged, the lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged"
+        )
         flags.append(
             (
                 "line_of_sight_motion",
                 f"the lines' edge positions depart from one straight edge by {los:.3f} px rms, beyond their noise "
-                f"({noise:.3f} px; line-of-sight motion, or a wavy edge): the MTF is measured with each line "
-                "located (mtf_aligned; the headline mtf unless fit_degree is forced); the edge as imaged, the "
-                "lines' displacements folded into the ESF (ISO 12233), is mtf_as_imaged",
+                f"({noise:.3f} px; line-of-sight motion, or a wavy edge): {how}",
             )
         )
     return aligned, (None if imaged is None else imaged[2]), los, (None if aligned is None else shift)
