@@ -138,6 +138,11 @@ def test_the_detector_overlays_lie_on_the_features_the_image_shows(run):
     assert off.max() < 1.5 * gsd  # the mean map back to the ground; the rows' +-1 px displacement stays in it
     boxes = _points(_overlay(html, "bars, detector"), "polygon")
     assert len(boxes) == 3
+    for alt, shapes in (("edge_act, detector", [line]), ("bars, detector", boxes)):  # inside the crop shown
+        x, y, w, h = (float(v) for v in re.search(r'viewBox="([^"]+)"', _overlay(html, alt)).group(1).split())
+        for pts in shapes:
+            assert (pts[:, 0] > x - gsd).all() and (pts[:, 0] < x + w + gsd).all(), alt
+            assert (pts[:, 1] > y - gsd).all() and (pts[:, 1] < y + h + gsd).all(), alt
     polys = [Path(b / gsd) for b in boxes]  # pixel-edge coordinates
     img = np.asarray(result.simulation.image, float)
     lo = np.floor(np.min([b.min(axis=0) for b in boxes], axis=0) / gsd).astype(int) - 15

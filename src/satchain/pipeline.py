@@ -188,7 +188,7 @@ def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResu
         quality=budget.budget["quality"],
         sensor=sim.sensor,
         wedge_threshold=config.measurement.wedge_threshold,
-        image_grid_m=None if geo is None else (geo.steps_m, (~geo.to_image) * (-0.5, -0.5)),
+        image_grid_m=None if geo is None else (geo.steps_m, (~geo.to_image) @ (-0.5, -0.5)),
     )
     return p if geo is None else dataclasses.replace(p, geometry=geo)
 

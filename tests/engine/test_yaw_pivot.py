@@ -41,11 +41,11 @@ def test_the_engine_turns_the_ground_about_image_affines_pivot(phase_px):
     plain = PushbroomTerms(YAW).image_affine(img.shape)  # the grid's offset left out
     assert abs(PushbroomTerms(YAW).geometry()["rotation_deg"]) > 3.5
     for spot in SPOTS_M:
-        col, row = mapped * spot
+        col, row = mapped @ spot
         mc, mr = _centroid(img, col, row)
         assert abs(mc - col) < 0.03 and abs(mr - row) < 0.03  # the PSF and the drift smear are symmetric
         if phase_px != (0.0, 0.0):
-            pc, pr = plain * spot
+            pc, pr = plain @ spot
             assert np.hypot(mc - pc, mr - pr) > 0.3  # a map without the grid's offset misses it
 
 

@@ -32,6 +32,8 @@ __all__ = [
     "image_extent",
     "image_rois_args",
     "item_thumbnail",
+    "mapped_box",
+    "panel_maps",
     "panel_window",
     "plot_image_with_rois",
     "target_thumbnails",
@@ -227,11 +229,49 @@ def image_extent(ctx) -> tuple[float, float]:
 
 def thumbnail_crops(ctx, boxes) -> list[tuple[np.ndarray, float, np.ndarray, float]]:
     """Per box (m): the focal-plane and detector crops with their pixel sizes (the detector in reflectance:
-    :func:`_to_reflectance`)."""
+    :func:`_to_reflectance`), each of the box where that panel has it (:func:`panel_maps`)."""
     fp_pixel = float(ctx.config.scene.pixel_m) * float(ctx.simulator.D)
     gsd = float(ctx.image_gsd_m)
     fp, det = np.asarray(ctx.focal_plane, float), _to_reflectance(ctx)
-    return [(_crop(fp, box, fp_pixel), fp_pixel, _crop(det, box, gsd), gsd) for box in boxes]
+    maps = panel_maps(ctx)
+    return [(_crop(fp, mapped_box(maps["focal plane"], box), fp_pixel), fp_pixel,
+             _crop(det, mapped_box(maps["detector"], box), gsd), gsd) for box in boxes]  # fmt: skip
+
+
+def panel_maps(ctx) -> dict:
+    """Each thumbnail panel's map from truth metres to its own coordinates (``affine.Affine``; None: the truth's
+    metres): ``"detector"``, the image's pixels times the GSD through the run's image map (``ctx.image_affine``:
+    a pushbroom image's shear, along-track scale or yaw); ``"focal plane"``, under a yaw the ground turned about
+    the yaw's pivot as the engine forms it; ``"ground truth"``: None."""
+    from affine import Affine
+
+    geo = getattr(ctx, "image_affine", None)
+    out = {"ground truth": None, "focal plane": None, "detector": None}
+    if geo is None:
+        return out
+    gsd = float(ctx.image_gsd_m)
+    out["detector"] = Affine.scale(gsd) @ Affine.translation(0.5, 0.5) @ geo
+    sim = getattr(ctx, "simulator", None)
+    if sim is not None and getattr(sim, "yaw_deg", 0.0):
+        from satchain.engine.yaw import grid_origin_m
+        from satchain.measure.auto import truth_origin_m
+        from satchain.tf.pushbroom import yaw_pivot_m
+
+        a = sim.input_pixel_m
+        ox, oy = truth_origin_m(ctx.truth)
+        px, py = yaw_pivot_m(sim.output_shape, (sim.xs.k * a, sim.ys.k * a), grid_origin_m(sim))
+        shift = Affine.translation(ox, oy)  # the truth's origin: the engine's grid starts there
+        out["focal plane"] = shift @ Affine.rotation(sim.yaw_deg, pivot=(px, py)) @ ~shift
+    return out
+
+
+def mapped_box(panel, box) -> tuple[float, float, float, float]:
+    """The extent, in a panel's coordinates (:func:`panel_maps`), of a box in truth metres."""
+    if panel is None:
+        return tuple(box)
+    pts = [panel @ p for p in _corners_m(box)]
+    xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+    return min(xs), min(ys), max(xs), max(ys)
 
 
 def thumbnail_calls(ctx) -> list[tuple]:

@@ -122,6 +122,7 @@ def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
 
 def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
     """The gallery's targets with their display width (CSS px) and each panel's region overlay."""
+    from satchain.report.gallery import mapped_box, panel_maps
     from satchain.report.overlays import overlay_svg
 
     items = {it["id"]: it for it in ctx.truth["items"]}
@@ -129,15 +130,16 @@ def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
     by_id = {m["id"]: m for _, m in measured_entries(meas)}
     origin = tuple(meas.get("origin_m") or (0.0, 0.0))
     geo = getattr(ctx, "image_affine", None)  # a pushbroom image's map from truth metres to its pixels
+    maps = panel_maps(ctx)
     for t in thumbs:
         w, h = t["box_m"][2] - t["box_m"][0], t["box_m"][3] - t["box_m"][1]
         t["wide"] = w > 2.5 * h
         t["tw"] = min(1100 if t["wide"] else 360, 420 * w / h)
-        svg = {frame: overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), t["box_m"], gsd_m=float(ctx.image_gsd_m),
-                                  origin_m=origin, compared_up_to_cy_per_px=lim, display_px=t["tw"], to_image=geo,
-                                  frame=frame) for frame in ("ground", "image")}  # fmt: skip
-        for p in t["panels"]:  # the detector panel is the image's pixels: its overlay in the image's frame
-            p["overlay"] = svg["image" if p.get("title") == "detector" else "ground"]
+        for p in t["panels"]:  # each panel's overlay in its own coordinates (the detector's: the image's pixels)
+            pm = maps.get(p.get("title"))
+            p["overlay"] = overlay_svg(items.get(t["id"], {}), by_id.get(t["id"]), mapped_box(pm, t["box_m"]),
+                                       gsd_m=float(ctx.image_gsd_m), origin_m=origin, compared_up_to_cy_per_px=lim,
+                                       display_px=t["tw"], to_image=geo, panel=pm)  # fmt: skip
     return thumbs
 
 

@@ -13,12 +13,13 @@ panels and scales with the click-to-zoom. What is drawn, per kind:
   measured contrast crossed the threshold.
 
 Under a pushbroom image geometry (Earth rotation's shear, an along-track scale, a yaw: ``to_image``, the run's
-:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine` from truth metres to image pixels) the detector panel
-is the image's pixels, not the ground's: its overlay is drawn in the image's frame (``frame="image"``: pixel
-``(col, row)`` spans ``origin + [col, col + 1] x gsd``), every ground feature mapped through ``to_image`` (a
-box becomes a parallelogram, a circle an ellipse); the ground-truth and focal-plane panels' overlay stays in
-truth metres, the measured regions mapped back. The fitted edge is drawn through the measured per-line edge
-positions (the measurement's own polynomial), so it lies on the edge as imaged in either frame.
+:meth:`~satchain.tf.pushbroom.PushbroomTerms.image_affine` from truth metres to image pixels) a panel need not
+show the ground as the truth has it: each panel has its own map ``panel`` from truth metres to its coordinates
+(:func:`satchain.report.gallery.panel_maps`: the detector's is the image's pixels, pixel ``(col, row)`` spanning
+``[col, col + 1] x gsd``; under a yaw the focal plane's is the turned ground; None: truth metres). Every ground
+feature goes through it (a box becomes a parallelogram, a circle an ellipse) and every measured region (image
+pixels) back through ``to_image`` and then through it. The fitted edge is drawn through the measured per-line
+edge positions (the measurement's own polynomial), so it lies on the edge as imaged in every panel.
 """
 
 from __future__ import annotations
@@ -48,36 +49,36 @@ class OverlayView:
     """How an overlay is drawn: the image's ground pixel and top-left corner (m), the text size (m), the
     highest bar-group frequency compared with the prediction (cy/px), the image map ``to_image`` (truth metres
     -> image ``(col, row)``, pixel centres at integers, as ``(a, b, c, d, e, f)``; None: the plain grid) and the
-    panel's ``frame`` (``"ground"``: truth metres; ``"image"``: the detector's pixels, see the module docstring)."""
+    ``panel``'s map from truth metres to its coordinates (6 numbers; None: truth metres; the module docstring)."""
 
     gsd_m: float
     origin_m: tuple[float, float]
     size: float
     compared_up_to_cy_per_px: float = 0.4
     to_image: tuple | None = None
-    frame: str = "ground"
+    panel: tuple | None = None
 
     @property
     def mapped(self) -> bool:
-        """Whether ground and image frames differ by more than the grid (boxes are drawn as polygons)."""
-        return self.to_image is not None
+        """Whether the panel is not the truth's metres (ground boxes are drawn as polygons)."""
+        return self.panel is not None
 
     def ground(self, x: float, y: float) -> tuple[float, float]:
         """A truth point (m) in this panel's coordinates."""
-        if self.to_image is None or self.frame != "image":
+        if self.panel is None:
             return float(x), float(y)
-        a, b, c, d, e, f = self.to_image
-        return self.pixel(a * x + b * y + c + 0.5, d * x + e * y + f + 0.5)
+        a, b, c, d, e, f = self.panel
+        return a * x + b * y + c, d * x + e * y + f
 
     def pixel(self, u: float, v: float) -> tuple[float, float]:
         """An image point in pixel-edge coordinates (pixel ``k`` spans ``[k, k + 1]``) in this panel's
         coordinates."""
-        if self.to_image is None or self.frame == "image":
-            return self.origin_m[0] + u * self.gsd_m, self.origin_m[1] + v * self.gsd_m
+        if self.to_image is None:
+            return self.ground(self.origin_m[0] + u * self.gsd_m, self.origin_m[1] + v * self.gsd_m)
         a, b, c, d, e, f = self.to_image
         det = a * e - b * d
         du, dv = u - 0.5 - c, v - 0.5 - f
-        return (e * du - b * dv) / det, (a * dv - d * du) / det
+        return self.ground((e * du - b * dv) / det, (a * dv - d * du) / det)
 
 
 def _text(x: float, y: float, s: str, size: float, colour: str, anchor: str = "start", rotate: bool = False) -> str:
@@ -126,14 +127,23 @@ def _pixel_box(v: OverlayView, roi, colour: str, dash: str = "") -> tuple[str, t
     """A measured region (pixel box ``(x0, y0, x1, y1)``, half-open) in the panel: its shape and extent."""
     pts = [v.pixel(u, w) for u, w in _corners(roi)]
     box = _extent(pts)
-    return (_polygon(pts, colour, dash) if v.mapped and v.frame != "image" else _rect(box, colour, dash)), box
+    straight = v.to_image is None or _is_image_frame(v)
+    return (_rect(box, colour, dash) if straight else _polygon(pts, colour, dash)), box
+
+
+def _is_image_frame(v: OverlayView) -> bool:
+    """Whether the panel is the image's own pixel grid (its regions are rectangles there)."""
+    if v.panel is None or v.to_image is None:
+        return v.panel is None and v.to_image is None
+    p0, p1, p2 = v.pixel(0.0, 0.0), v.pixel(1.0, 0.0), v.pixel(0.0, 1.0)
+    return abs(p1[1] - p0[1]) < 1e-9 * v.gsd_m and abs(p2[0] - p0[0]) < 1e-9 * v.gsd_m
 
 
 def _ground_box(v: OverlayView, bbox_m, colour: str, dash: str = "") -> tuple[str, tuple]:
     """A ground box (m) in the panel: its shape (a parallelogram in a mapped image's frame) and extent."""
     pts = [v.ground(x, y) for x, y in _corners(bbox_m)]
     box = _extent(pts)
-    return (_polygon(pts, colour, dash) if v.mapped and v.frame == "image" else _rect(box, colour, dash)), box
+    return (_polygon(pts, colour, dash) if v.mapped else _rect(box, colour, dash)), box
 
 
 def edge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
@@ -189,7 +199,7 @@ def _circle(cx: float, cy: float, r: float, colour: str, dash: str = "") -> str:
 def star_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
     """Siemens star: the measured annulus and the Nyquist radius."""
     gsd, size = v.gsd_m, v.size
-    if v.mapped:
+    if v.mapped or v.to_image is not None:
         return _star_mapped(it, m, v)
     cx, cy = it["center_m"]
     out = []
@@ -288,12 +298,12 @@ def wedge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
 
 def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_m=(0.0, 0.0),
                 compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0, to_image=None,
-                frame: str = "ground") -> str:  # fmt: skip
+                panel=None) -> str:  # fmt: skip
     """The overlay of truth item ``it`` (with its measurement ``measured``, or None) over a thumbnail of
-    ``box_m``, as an ``<svg>`` element string ('' for kinds without one). Text is about 12 CSS px when the
-    thumbnail is shown ``display_px`` wide. ``to_image`` (the image map, truth metres -> pixels; an
-    ``affine.Affine`` or 6 numbers) and ``frame`` (``"ground"`` or ``"image"``, the detector panel): see the
-    module docstring."""
+    ``box_m`` (in the panel's coordinates), as an ``<svg>`` element string ('' for kinds without one). Text is
+    about 12 CSS px when the thumbnail is shown ``display_px`` wide. ``to_image`` (the image map, truth metres ->
+    pixels) and ``panel`` (truth metres -> the panel's coordinates), each an ``affine.Affine`` or 6 numbers: see
+    the module docstring."""
     x0, y0, x1, y1 = (float(v) for v in box_m)
     size = 12.0 * (x1 - x0) / max(display_px, 1.0)
     from satchain.report.kinds import REPORT_KINDS  # the registry names this module's overlays
@@ -301,8 +311,8 @@ def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_
     entry = REPORT_KINDS.get(str(it.get("kind")))
     if entry is None:
         return ""
-    geo = None if to_image is None else tuple(float(c) for c in tuple(to_image)[:6])
-    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px), geo, frame)
+    geo, pan = (None if m is None else tuple(float(c) for c in tuple(m)[:6]) for m in (to_image, panel))
+    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px), geo, pan)
     body = entry.overlay(it, measured or {}, view)
     return (
         f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
