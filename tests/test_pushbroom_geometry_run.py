@@ -159,9 +159,17 @@ def test_the_detector_overlays_lie_on_the_features_the_image_shows(run):
     from satchain.pipeline import ReportInputs
     from satchain.report.gallery import image_rois_args
 
-    items = image_rois_args(ReportInputs(result, run[4], res))[3]
+    view = ReportInputs(result, run[4], res)
+    items = image_rois_args(view)[3]
     outline = Path(np.asarray(next(it for it in items if it["id"] == "bars")["outline_m"]) / gsd)
     assert (outline.contains_points(centres, radius=1.0) | outline.contains_points(centres, radius=-1.0)).all()
+    # Figure 4's detector panel is cut where the image has the target: it holds every bright bar pixel
+    from satchain.report.run_figures import target_chain_args
+
+    truth_bars = next(it for it in result.scene.truth_dict["items"] if it["id"] == "bars")
+    det, (x0, x1, y1, y0) = target_chain_args(view, truth_bars)[6]
+    c, r = centres[:, 0] - 0.5, centres[:, 1] - 0.5
+    assert ((c >= x0 / gsd) & (c < x1 / gsd) & (r >= y0 / gsd) & (r < y1 / gsd)).all()
 
 
 def test_a_wedge_across_the_track_is_predicted_in_the_images_own_metres(tmp_path, reduced_scene_toml):

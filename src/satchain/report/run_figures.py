@@ -71,11 +71,12 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
 def target_chain_args(ctx, item: dict) -> tuple:
     """The plain data :func:`draw_target_chain` needs (a job for a helper process): the scene (rendered there),
     the focal-plane and detector crops."""
-    from satchain.report.gallery import _scene
+    from satchain.report.gallery import _scene, mapped_box, panel_maps
 
     p, D, gsd = float(ctx.config.scene.pixel_m), int(ctx.simulator.D), float(ctx.image_gsd_m)
-    fp = _crop(ctx.focal_plane, item["bbox_m"], p * D)
-    det = _crop(ctx.image, item["bbox_m"], gsd)
+    maps = panel_maps(ctx)  # where each panel has the target (a pushbroom image's shear, scale or yaw)
+    fp = _crop(ctx.focal_plane, mapped_box(maps["focal plane"], item["bbox_m"]), p * D)
+    det = _crop(ctx.image, mapped_box(maps["detector"], item["bbox_m"]), gsd)
     return _scene(ctx), item, p, D, gsd, fp, det
 
 
