@@ -7,6 +7,11 @@ each annulus ``a + b cos(n th) + c sin(n th)`` is fitted by least squares.  The 
 neighbours ``n +- 1`` and raises ``J``.  This is an ordinary non-linear least-squares problem in the centre
 (the linear coefficients profiled out), so its covariance is ``2 s^2 H^-1`` with ``H`` the Hessian of ``J``
 and ``s^2 = J / (N - p)`` the residual variance.
+
+Star frame.  Every helper takes ``lin``, the linear map (2x2, unit determinant) from an image pixel step
+``(dcol, drow)`` to the star's own frame (a star imaged through a shear, an along-track scale or a rotation is an
+ellipse in the image and a circle there): radii and polar angles are computed in that frame about a centre given
+in image pixels (None: the identity, the image's own axes).
 """
 
 from __future__ import annotations
@@ -14,22 +19,34 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit", "symmetry_center", "coarse_center"]
+from satchain.errors import ConfigError
+
+__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit", "symmetry_center", "coarse_center", "polar", "star_map"]
 
 
-def _band(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, width: float):
+def polar(x, y, xc: float, yc: float, lin=None) -> tuple[np.ndarray, np.ndarray]:
+    """Radius and polar angle (rad, from the frame's +x towards its +y) of image pixels ``(x, y)`` about the image
+    point ``(xc, yc)``, in the star's frame: ``lin @ (x - xc, y - yc)`` (see the module docstring)."""
+    dx, dy = np.asarray(x, float) - xc, np.asarray(y, float) - yc
+    if lin is not None:
+        (a, b), (d, e) = lin
+        dx, dy = a * dx + b * dy, d * dx + e * dy
+    return np.hypot(dx, dy), np.arctan2(dy, dx)
+
+
+def _band(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, width: float, lin=None):
     """Pixels of the band ``r_lo <= r < r_hi`` about (xc, yc): x, y, values, annulus index, count."""
     ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
-    r = np.hypot(x - xc, y - yc)
+    r = polar(x, y, xc, yc, lin)[0]
     sel = (r >= r_lo) & (r < r_hi)
     k = ((r[sel] - r_lo) // width).astype(int)
     return x[sel].astype(float), y[sel].astype(float), data[sel], k, int(k.max()) + 1 if k.size else 0
 
 
-def _rss(c, x, y, v, k, nk: int, n: int) -> float:
+def _rss(c, x, y, v, k, nk: int, n: int, lin=None) -> float:
     """Residual sum of squares of the per-annulus fits a + b cos(n th) + c sin(n th) about centre c."""
-    th = np.arctan2(y - c[1], x - c[0])
+    th = polar(x, y, c[0], c[1], lin)[1]
     co, si = np.cos(n * th), np.sin(n * th)
     cols = (np.ones_like(co), co, si)
     g = np.empty((nk, 3, 3))
@@ -46,8 +63,8 @@ def _rss(c, x, y, v, k, nk: int, n: int) -> float:
 class _Cost:
     """``J(c)`` over a fixed band of pixels (a callable for the optimiser)."""
 
-    def __init__(self, x, y, v, k, nk: int, n: int):
-        self.args = (x, y, v, k, nk, n)
+    def __init__(self, x, y, v, k, nk: int, n: int, lin=None):
+        self.args = (x, y, v, k, nk, n, lin)
         self.size = v.size
 
     def __call__(self, c) -> float:
@@ -78,7 +95,7 @@ def symmetry_center(data: np.ndarray) -> tuple[float, float]:
 
 
 def fit_center(
-    data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float, width_px: float = 2.0
+    data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float, width_px: float = 2.0, lin=None
 ):
     """Sub-pixel star centre near ``start_xy``: grid search within ``search_px``, then Nelder-Mead.
 
@@ -88,10 +105,10 @@ def fit_center(
     cx, cy = float(start_xy[0]), float(start_xy[1])
     best = (cx, cy)
     for round_ in range(2):  # second round: annulus membership about the improved centre
-        x, y, v, k, nk = _band(data, best[0], best[1], r_lo, r_hi, width_px)
+        x, y, v, k, nk = _band(data, best[0], best[1], r_lo, r_hi, width_px, lin)
         if nk < 2:
             return cx, cy, None
-        cost = _Cost(x, y, v, k, nk, n)
+        cost = _Cost(x, y, v, k, nk, n, lin)
         if search_px > 0:
             offs = np.arange(-search_px, search_px + 1e-9, 0.5)
             grid = [(best[0] + dx, best[1] + dy) for dy in offs for dx in offs]
@@ -124,16 +141,16 @@ def fit_center(
     return best[0], best[1], cov
 
 
-def harmonic_spectrum(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, m_max: int):
+def harmonic_spectrum(data: np.ndarray, xc: float, yc: float, r_lo: float, r_hi: float, m_max: int, lin=None):
     """Amplitude of angular harmonics m = 1..m_max in the band (annulus means removed, 2-px annuli).
 
     Returns (m, amplitude, noise amplitude) where the noise amplitude is the 1-sigma of one harmonic's
     amplitude estimated from the harmonics' median power (most harmonics hold noise only).
     """
-    x, y, v, k, nk = _band(data, xc, yc, r_lo, r_hi, 2.0)
+    x, y, v, k, nk = _band(data, xc, yc, r_lo, r_hi, 2.0, lin)
     mean = np.bincount(k, v, nk) / np.maximum(np.bincount(k, None, nk), 1)
     d = v - mean[k]
-    th = np.arctan2(y - yc, x - xc)
+    th = polar(x, y, xc, yc, lin)[1]
     m = np.arange(1, m_max + 1)
     amp = np.empty(m.size)
     for i0 in range(0, m.size, 64):  # blocks keep the (pixels x harmonics) matrix small
@@ -178,7 +195,7 @@ def annulus_fit(theta: np.ndarray, values: np.ndarray, n: int, shapes=()):
     return float(beta[0]), amp, sb, s, grad
 
 
-def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float):
+def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, *, search_px: float, lin=None):
     """Centre maximising the coherent ``n``-th angular harmonic power ``|sum (v - mean) exp(-i n th)|^2`` of the
     pixels at radii ``r_lo + search_px .. r_hi - search_px`` about ``start_xy``, over a 1-px grid within
     ``search_px`` of it, then a 0.25-px grid around the best; returns ``(x, y, at_limit)`` with ``at_limit``
@@ -191,7 +208,7 @@ def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, 
     cx, cy = float(start_xy[0]), float(start_xy[1])
     ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
-    r = np.hypot(x - cx, y - cy)
+    r = polar(x, y, cx, cy, lin)[0]
     lo, hi = r_lo + search_px, r_hi - search_px
     if hi - lo < 4:
         lo, hi = r_lo, r_hi
@@ -202,7 +219,7 @@ def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, 
     v = data.ravel()[sel] - float(np.mean(data.ravel()[sel]))
 
     def power(c) -> float:
-        return float(np.abs(np.sum(v * np.exp(-1j * n * np.arctan2(ys - c[1], xs - c[0])))) ** 2)
+        return float(np.abs(np.sum(v * np.exp(-1j * n * polar(xs, ys, c[0], c[1], lin)[1]))) ** 2)
 
     best, at_limit = (cx, cy), False
     for step, half in ((1.0, float(np.floor(search_px))), (0.25, 1.0)):
@@ -213,3 +230,33 @@ def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, 
             at_limit = bool(max(abs(grid[k][0] - cx), abs(grid[k][1] - cy)) >= half - 1e-9 and half > 0)
         best = grid[k]
     return best[0], best[1], at_limit
+
+
+def star_map(image_affine, directions_deg: dict) -> tuple[tuple, dict, tuple[float, float]]:
+    """The star frame of a star imaged through ``image_affine`` (scene metres -> image ``(col, row)``: an
+    ``affine.Affine`` or ``(a, b, c, d, e, f)`` with ``col = a x + b y + c``, ``row = d x + e y + f``; its
+    linear part only): ``lin``, the pixel-step -> star-frame map scaled to unit determinant (star-frame units are
+    the image's mean pixel, ``sqrt |det|`` metres); per direction ``(beta, s)``: the star-frame polar angle
+    ``beta`` (rad) of the tangent whose grating has its image wave vector along the direction
+    (``directions_deg``: deg from +x, y downwards), and ``s``, image cy/px per star-frame cy/unit along it; the
+    half-extents (px) along x and y of the image ellipse of a unit circle of the star frame.
+
+    The wave vector of a grating ``k`` (cy per star unit) is ``lin^T k`` in the image (cy/px): along the image
+    direction ``u`` it is ``k`` parallel to ``lin^-T u``, and ``|lin^T k| = |k| / |lin^-T u|``.
+    """
+    try:
+        a, b, _, d, e, _ = (float(v) for v in tuple(image_affine)[:6])
+    except (TypeError, ValueError):
+        raise ConfigError(f"image_affine = {image_affine!r}: must be an affine.Affine or (a, b, c, d, e, f)") from None
+    det = a * e - b * d
+    if not (np.isfinite([a, b, d, e]).all() and abs(det) > 0):
+        raise ConfigError(f"image_affine = {image_affine!r}: its linear part must be finite and invertible")
+    to_px = np.array([[a, b], [d, e]]) / np.sqrt(abs(det))  # star-frame step -> pixel step (unit determinant)
+    lin = np.linalg.inv(to_px)
+    dirs = {}
+    for k, deg in directions_deg.items():
+        u = np.array([np.cos(np.deg2rad(deg)), np.sin(np.deg2rad(deg))])
+        w = to_px.T @ u  # lin^-T u
+        dirs[k] = (float(np.arctan2(w[1], w[0])), float(1.0 / np.hypot(*w)))
+    extent = (float(np.hypot(*to_px[0])), float(np.hypot(*to_px[1])))
+    return tuple(map(tuple, lin.tolist())), dirs, extent

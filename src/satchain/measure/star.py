@@ -38,7 +38,15 @@ from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, masked_as_nan
-from satchain.measure._starfit import annulus_fit, coarse_center, fit_center, harmonic_spectrum, symmetry_center
+from satchain.measure._starfit import (
+    annulus_fit,
+    coarse_center,
+    fit_center,
+    harmonic_spectrum,
+    polar,
+    star_map,
+    symmetry_center,
+)
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["StarResult", "measure_star", "STAR_DIRECTIONS"]
@@ -54,7 +62,9 @@ class StarResult(ResultMixin):
     ``mtf`` maps each of ``ACT, ALT, D45, D135`` to an array aligned with ``f_cy_per_px``; ``mtf_all`` uses
     every angle.  ``mtf_at_nyquist`` per direction is None where the star does not reach 0.5 cy/px.
     ``*_std`` are 1-sigma uncertainties (noise); ``center_xy_px`` is the centre used (estimated or refined
-    unless ``center_from == "given"``), ``center_std_px`` its 1-sigma in x and y; ``flags`` quality warnings.
+    unless ``center_from == "given"``), ``center_std_px`` its 1-sigma in x and y; ``flags`` quality warnings;
+    ``star_map`` the image-pixel-step -> star-frame map used (unit determinant; None: the image's own axes, a
+    circular star; see ``image_affine`` of :func:`measure_star`).
     """
 
     f_cy_per_px: np.ndarray
@@ -76,6 +86,7 @@ class StarResult(ResultMixin):
     noise_std: float = 0.0
     contrast_to_noise: float | None = None
     flags: tuple = ()
+    star_map: tuple | None = None
 
 
 #: Largest MTF value reported; anything above is refused (wrong input modulation or not a star).
@@ -122,31 +133,31 @@ def _extrapolated_modulation(f: np.ndarray, mod: np.ndarray, sig: np.ndarray | N
 CENTER_SEARCH_PX = 6.0
 
 
-def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
+def _locate(data, n, start, r_in, r_out, given: bool, refine: bool, sm=None):
     """Centre (x, y), its 1-sigma (sx, sy) or None, and how it was obtained.  Without a given centre the
     start is the centre of point symmetry; a given one is first searched within :data:`CENTER_SEARCH_PX` for
     the coherent ``n``-th harmonic (``coarse_center``); the claimed cycles are checked there, then refined."""
+    lin = None if sm is None else sm[0]
     if not refine:
-        _check_cycles(data, n, start[0], start[1], r_in, r_out)
+        _check_cycles(data, n, start[0], start[1], r_in, r_out, lin)
         return start, None, "given"
     given_xy = start
     if not given:
         start = symmetry_center(data)
-        ny, nx = data.shape
-        r_out = min(r_out, start[0], start[1], nx - 1 - start[0], ny - 1 - start[1])
+        r_out = min(r_out, _inside_radius(data.shape, start, sm))
         _check_extent(n, r_in, r_out, 1.0, n / (2 * np.pi * r_in))
     search = CENTER_SEARCH_PX if given else 1.5
     r_lo = max(r_in, n / (2 * np.pi * 0.35))
     if r_out - r_lo < 6:
         r_lo = r_in
-    cx, cy, at_limit = coarse_center(data, n, start, r_lo, r_out, search_px=search)
+    cx, cy, at_limit = coarse_center(data, n, start, r_lo, r_out, search_px=search, lin=lin)
     try:
-        _check_cycles(data, n, cx, cy, r_in, r_out)
+        _check_cycles(data, n, cx, cy, r_in, r_out, lin)
     except InputError:
         if given and at_limit:  # the harmonic peaks on the search border: the centre or the cycles?
-            _far_centre(data, n, given_xy, r_in)  # always raises
+            _far_centre(data, n, given_xy, r_in, sm)  # always raises
         raise
-    x, y, cov = fit_center(data, n, (cx, cy), r_lo, r_out, search_px=1.0)
+    x, y, cov = fit_center(data, n, (cx, cy), r_lo, r_out, search_px=1.0, lin=lin)
     if cov is None:
         raise InputError(f"image: the star centre cannot be determined (no star with {n} cycles near {start})")
     moved = float(np.hypot(x - given_xy[0], y - given_xy[1])) if given else float(np.hypot(x - cx, y - cy))
@@ -158,16 +169,15 @@ def _locate(data, n, start, r_in, r_out, given: bool, refine: bool):
     return (x, y), (float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))), "refined" if given else "estimated"
 
 
-def _far_centre(data, n, given_xy, r_in) -> None:
+def _far_centre(data, n, given_xy, r_in, sm=None) -> None:
     """A given centre from which no ``n``-cycle star is found: refused about the centre when the region's
     centre of point symmetry holds an ``n``-cycle star (or none at all), about the cycles (naming the count
     found there) when another count dominates there."""
     sx, sy = symmetry_center(data)
-    ny, nx = data.shape
-    r_out = min(sx, sy, nx - 1 - sx, ny - 1 - sy)
+    r_out = _inside_radius(data.shape, (sx, sy), sm)
     where = ""
     try:
-        _check_cycles(data, n, sx, sy, r_in, r_out)
+        _check_cycles(data, n, sx, sy, r_in, r_out, None if sm is None else sm[0])
         where = f" (a {n}-cycle star is centred near ({sx:.1f}, {sy:.1f}))"
     except InputError as exc:
         if "dominant angular harmonic" in str(exc):  # another count dominates at the star's centre
@@ -179,12 +189,12 @@ def _far_centre(data, n, given_xy, r_in) -> None:
     )
 
 
-def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
+def _check_cycles(data, n, xc, yc, r_in, r_out, lin=None) -> None:
     """Refuse when ``n`` is not the dominant angular harmonic of the outer radii, or does not stand out."""
     r_lo = max(r_in, 0.6 * r_out)
     m_max = int(max(3 * n, n + 10))
     m_max = min(m_max, int(np.pi * r_lo)) if np.pi * r_lo > n + 2 else m_max
-    m, amp, noise = harmonic_spectrum(data, xc, yc, r_lo, r_out, m_max)
+    m, amp, noise = harmonic_spectrum(data, xc, yc, r_lo, r_out, m_max, lin)
     top = int(m[np.argmax(amp)])
     if top != n:
         raise InputError(
@@ -199,7 +209,15 @@ def _check_cycles(data, n, xc, yc, r_in, r_out) -> None:
         )
 
 
-def _geometry(data, n, center, radius_px, f_max):
+def _inside_radius(shape, centre, sm=None) -> float:
+    """The largest star-frame radius whose image (a circle, or an ellipse through the map ``sm``) about
+    ``centre`` lies inside a region of ``shape`` (pixel centres)."""
+    (ny, nx), (xc, yc) = shape, centre
+    ex, ey = (1.0, 1.0) if sm is None else sm[2]
+    return min(xc / ex, yc / ey, (nx - 1 - xc) / ex, (ny - 1 - yc) / ey)
+
+
+def _geometry(data, n, center, radius_px, f_max, sm=None):
     """Start centre, outer and inner radius (checked)."""
     ny, nx = data.shape
     xc, yc = ((nx - 1) / 2, (ny - 1) / 2) if center is None else (float(center[0]), float(center[1]))
@@ -208,7 +226,7 @@ def _geometry(data, n, center, radius_px, f_max):
             f"center = ({xc:g}, {yc:g}): outside the region (x in [0, {nx - 1}], y in [0, {ny - 1}] px); give "
             "the star's approximate centre in pixels of the region"
         )
-    r_out = min(xc, yc, nx - 1 - xc, ny - 1 - yc) if radius_px is None else float(radius_px)
+    r_out = _inside_radius(data.shape, (xc, yc), sm) if radius_px is None else float(radius_px)
     return xc, yc, r_out, max(n / (2 * np.pi * f_max), 2.0)
 
 
@@ -237,6 +255,7 @@ def measure_star(
     pixel_m: float | None = None,
     refine_center: bool = True,
     full_scale: float | None = None,
+    image_affine=None,
 ) -> StarResult:
     """Measure the MTF per direction from a sinusoidal Siemens star.
 
@@ -271,6 +290,17 @@ def measure_star(
         The sensor's full scale in the image's units; integer images default to their dtype maximum.  The
         star is flagged ``clipping`` only on evidence: pixels at the full scale, or a flat run at its top
         (bottom) that shows saturation (:func:`satchain.measure.find_clipping`).
+    image_affine : affine.Affine or (a, b, c, d, e, f), optional
+        The image's geometry, scene metres -> image ``(col, row)`` (as :func:`satchain.measure.auto.measure_auto`
+        takes it; only its linear part is used): a pushbroom image sheared, scaled along track or turned (Earth
+        rotation, a line-rate error, a yaw) images the star as an ellipse.  Radii and angles are then computed in
+        the star's own frame (the ground, scaled to unit determinant: radii in the image's mean pixels, ``sqrt
+        |det|`` per metre), so the spokes are fitted on the star's true phase; each direction's MTF is reported
+        at the image's own frequency along it: the sector whose gratings have their image wave vector along the
+        direction (``ACT`` = +x, ``ALT`` = +y, in image pixels), fitted at the star radius where that wave vector
+        is ``f_cy_per_px`` cycles per image pixel (see :func:`satchain.measure._starfit.star_map`).  ``mtf_all``
+        and ``radius_px`` are then in the star's frame (mean pixels).  Without it an elliptical star is measured
+        as if circular: its phase drifts around each circle and the MTF is wrong (or the star is refused).
 
     Raises
     ------
@@ -291,18 +321,19 @@ def measure_star(
     data = crop_roi(masked_as_nan("image", image), roi, min_size=16)  # masked pixels: nodata, refused in the region
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
+    sm = None if image_affine is None else star_map(image_affine, STAR_DIRECTIONS)
     (xc, yc), r_in, r_out, c_std, c_from = _centre_and_radii(
-        data, n, center, radius_px, annulus_px, f_max, refine_center
+        data, n, center, radius_px, annulus_px, f_max, refine_center, sm
     )
-    radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px)
+    radii, mods, sigs, levels, noise, gradient = _annuli(data, n, xc, yc, r_in, r_out, annulus_px, sm)
     f = n / (2 * np.pi * radii)
     m0, m0_std, m0_from = _input_modulation(f, mods, sigs, input_modulation)
     order = np.argsort(f)
     f = f[order]
     mtf, std = _normalised(mods, sigs, order, m0, m0_std)
     _check_range_of_mtf(mtf, f, m0, m0_from)
-    nyq = {k: (float(np.interp(0.5, f, mtf[k])) if f[0] <= 0.5 <= f[-1] else None) for k in STAR_DIRECTIONS}
-    nyq_std = {k: (float(np.interp(0.5, f, std[k])) if nyq[k] is not None else None) for k in STAR_DIRECTIONS}
+    nyq = {k: _at_nyquist(f, mtf[k]) for k in STAR_DIRECTIONS}
+    nyq_std = {k: (_at_nyquist(f, std[k], mtf[k]) if nyq[k] is not None else None) for k in STAR_DIRECTIONS}
     amp_outer = float(np.nanmedian(mods["all"][order][:5] * levels[order][:5]))
     cnr = amp_outer / noise if noise > 0 else None
     flags = _flags(data, levels, c_std, cnr, float(mtf["all"][0]), input_modulation is None, noise, gradient)
@@ -327,7 +358,16 @@ def measure_star(
         noise_std=float(noise),
         contrast_to_noise=cnr,
         flags=tuple(flags),
+        star_map=None if sm is None else sm[0],
     )
+
+
+def _at_nyquist(f, curve, valid=None) -> float | None:
+    """``curve`` at 0.5 cy/px, linear between its finite points (of ``valid`` too); None outside them."""
+    ok = np.isfinite(curve) & (np.isfinite(valid) if valid is not None else True)
+    if np.count_nonzero(ok) < 2 or not f[ok][0] <= 0.5 <= f[ok][-1]:
+        return None
+    return float(np.interp(0.5, f[ok], curve[ok]))
 
 
 def _check_args(cycles, annulus_px, f_max_cy_per_px, input_modulation):
@@ -342,14 +382,13 @@ def _check_args(cycles, annulus_px, f_max_cy_per_px, input_modulation):
     return n, f_max, input_modulation
 
 
-def _centre_and_radii(data, n, center, radius_px, annulus_px, f_max, refine_center):
+def _centre_and_radii(data, n, center, radius_px, annulus_px, f_max, refine_center, sm=None):
     """The centre used, the inner and outer radius (checked against the centre found), the centre's 1-sigma and
     how it was obtained."""
-    xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max)
+    xc, yc, r_out, r_in = _geometry(data, n, center, radius_px, f_max, sm)
     _check_extent(n, r_in, r_out, annulus_px, f_max, (xc, yc) if center is not None and radius_px is None else None)
-    (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center)
-    ny, nx = data.shape
-    r_fit = min(xc, yc, nx - 1 - xc, ny - 1 - yc)  # the largest circle about the centre found
+    (xc, yc), c_std, c_from = _locate(data, n, (xc, yc), r_in, r_out, center is not None, refine_center, sm)
+    r_fit = _inside_radius(data.shape, (xc, yc), sm)  # the largest star circle about the centre found
     r_out = r_fit if radius_px is None else min(r_out, r_fit)
     _check_extent(n, r_in, r_out, annulus_px, f_max)
     return (xc, yc), r_in, r_out, c_std, c_from
@@ -384,7 +423,7 @@ def _normalised(mods, sigs, order, m0, m0_std):
     return mtf, std
 
 
-def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
+def _annuli(data, n, xc, yc, r_in, r_out, annulus_px, sm=None):
     """Per-annulus modulation and 1-sigma, all angles and per direction; mean level; pooled noise sigma;
     relative peak-to-peak illumination change across the outer circles.
 
@@ -395,11 +434,13 @@ def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
     star centred on or near a pixel centre: the local amplitude changes by a few % across the annulus (and
     across a sector under anisotropic blur), and the least-squares fit averages it with weights set by where
     the pixels fall on the wave, which the lattice makes non-uniform (see the README's star section).
+
+    Through a star map ``sm`` (:func:`~satchain.measure._starfit.star_map`) radii and angles are the star
+    frame's, and each direction is fitted on its own radii ``r s`` (:func:`_direction_fits`).
     """
     ny, nx = data.shape
     y, x = np.mgrid[0:ny, 0:nx]
-    rr = np.hypot(x - xc, y - yc).ravel()
-    th = np.arctan2(y - yc, x - xc).ravel()
+    rr, th = polar(x.ravel(), y.ravel(), xc, yc, None if sm is None else sm[0])
     v = data.ravel()
     radii = np.arange(r_out - annulus_px / 2, r_in, -annulus_px)
     mods = {k: np.full(radii.size, np.nan) for k in [*STAR_DIRECTIONS, "all"]}
@@ -416,8 +457,10 @@ def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
         levels[i], mods["all"][i], sigs["all"][i] = a, amp / a, sb / a
         res.append(s)
         grads.append(g)
-        for k, (mk, sk) in _sector_fits(t, val, dr, n).items():
+        for k, (mk, sk) in (_sector_fits(t, val, dr, n) if sm is None else {}).items():
             mods[k][i], sigs[k][i] = mk, sk
+    if sm is not None:
+        _direction_fits(rr, th, v, n, radii, (r_in, r_out), annulus_px, sm[1], mods, sigs)
     third = max(3, radii.size // 3)  # outer radii: residual = noise, little model error
     gradient = 2 * float(np.median(grads[:third]))  # peak-to-peak relative level change across a circle
     return radii, mods, sigs, levels, float(np.median(res[:third])), gradient
@@ -427,11 +470,30 @@ def _annuli(data, n, xc, yc, r_in, r_out, annulus_px):
 SECTOR_HALF = np.pi / 8
 
 
-def _sector_fits(t, val, dr, n) -> dict:
-    """Modulation and its 1-sigma per direction (pairs of opposite sectors), from one band of pixels."""
+def _direction_fits(rr, th, v, n, radii, limits, annulus_px, dirs, mods, sigs) -> None:
+    """Through a star map: direction ``k``'s tangent is at star-frame angle ``beta`` and star radius ``rho`` gives
+    its image frequency ``s n / (2 pi rho)`` cy/px, so the value reported at radius ``r`` (frequency ``n / (2 pi
+    r)``) is fitted at ``rho = r s`` (NaN where that falls outside ``limits = (r_in, r_out)``); fills
+    ``mods`` and ``sigs`` in place."""
+    r_in, r_out = limits
+    half = 1.5 * annulus_px
+    for k, (beta, scale) in dirs.items():
+        for i, rho in enumerate(radii * scale):
+            if not r_in < rho <= r_out - annulus_px / 2 + 1e-9:
+                continue
+            sel = (rr >= rho - half) & (rr < min(rho + half, r_out))
+            got = _sector_fits(th[sel], v[sel], (rr[sel] - rho) / annulus_px, n, {k: beta})
+            if k in got:
+                mods[k][i], sigs[k][i] = got[k]
+
+
+def _sector_fits(t, val, dr, n, axes=None) -> dict:
+    """Modulation and its 1-sigma per direction (pairs of opposite sectors), from one band of pixels; ``axes``:
+    direction -> the polar angle (rad) of its tangent (default: :data:`STAR_DIRECTIONS`)."""
     out = {}
-    for k, a in STAR_DIRECTIONS.items():
-        psi = np.angle(np.exp(2j * (t - np.deg2rad(a + 90.0)))) / 2  # angle to the sector axis, both sides
+    axes = {k: np.deg2rad(a) for k, a in STAR_DIRECTIONS.items()} if axes is None else axes
+    for k, beta in axes.items():
+        psi = np.angle(np.exp(2j * (t - beta - np.pi / 2))) / 2  # angle to the sector axis, both sides
         m = np.abs(psi) <= SECTOR_HALF
         if np.count_nonzero(m) >= 24:  # 11 coefficients
             q = psi[m] ** 2 - SECTOR_HALF**2 / 3  # zero mean over uniform psi
