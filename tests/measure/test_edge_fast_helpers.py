@@ -128,28 +128,31 @@ def test_median_equals_np_median(shape, nan, seed):
 @given(n=st.integers(4, 60), k=st.floats(0.0, 0.3), b=st.floats(-0.01, 0.01), seed=st.integers(0, 10**6))
 def test_plateau_line_equals_lstsq_with_pinv_errors(n, k, b, seed):
     """Level and slope of a plateau by scaled normal equations = the QR least squares with pinv standard errors
-    (the same terms dropped, the same coefficients)."""
+    (the same terms taken, the same coefficients)."""
     rng = np.random.default_rng(seed)
     xs = np.sort(rng.uniform(4.0, 40.0, n)) * rng.choice([-1, 1])
     es = 0.8 + b * xs + k / np.abs(xs) + rng.normal(0.0, 0.002, n)
 
-    def reference(xs, es):
-        ax_s = np.abs(xs)
-        cols = [np.ones_like(xs)]
-        if xs.size >= 8 and np.ptp(xs) > 2.0:
-            cols.append(xs)
-            if xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
-                cols.append(1.0 / ax_s)
-        while True:
-            m = np.stack(cols, axis=1)
-            coef = np.linalg.lstsq(m, es, rcond=None)[0]
-            if len(cols) == 1:
-                return float(coef[0]), 0.0
-            s2 = float(np.sum((es - m @ coef) ** 2)) / max(xs.size - len(cols), 1)
-            t = np.abs(coef[1:]) / np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))[1:]
-            if np.all(t >= 3.0):
-                return float(coef[0]), float(coef[1]) if cols[1] is xs else 0.0
-            cols.pop(1 + int(np.argmin(t)))
+    def fit(cols):  # (smallest |t| beyond the level, level, slope or 0)
+        m = np.stack(cols, axis=1)
+        coef = np.linalg.lstsq(m, es, rcond=None)[0]
+        s2 = float(np.sum((es - m @ coef) ** 2)) / max(xs.size - len(cols), 1)
+        t = np.abs(coef[1:]) / np.sqrt(np.maximum(np.diag(np.linalg.pinv(m.T @ m)) * s2, 1e-300))[1:]
+        return float(t.min()), float(coef[0]), float(coef[1]) if cols[1] is xs else 0.0
+
+    def reference(xs, es):  # forward selection: a term enters where resolved on its own (|t| >= 3)
+        one, ax_s = np.ones_like(xs), np.abs(xs)
+        extra = [xs] if xs.size >= 8 and np.ptp(xs) > 2.0 else []
+        if extra and xs.size >= 12 and ax_s.max() > 3 * ax_s.min():
+            extra.append(1.0 / ax_s)
+        best = (float(es.mean()), 0.0)
+        if extra:
+            t, a, s = max((fit([one, c]) for c in extra), key=lambda r: r[0])
+            if t >= 3.0:
+                best = (a, s)
+                if len(extra) == 2 and fit([one, *extra])[0] >= 3.0:
+                    best = fit([one, *extra])[1:]
+        return best
 
     fast, ref = checks._plateau_line(xs, es), reference(xs, es)
     assert abs(fast[0] - ref[0]) < 1e-10 and abs(fast[1] - ref[1]) < 1e-11
