@@ -56,7 +56,6 @@ from satchain.errors import InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import (
     ResultMixin,
-    first_crossing,
     robust_sigma,
     unmask,
 )
@@ -76,18 +75,17 @@ from satchain.measure._edge_checks import (
     unfitted_curvature,
 )
 from satchain.measure._edge_lines import edge_line_fields, line_numbers
-from satchain.measure._edge_locate import curvature, edge_region, locate_edge, orient_edge, project
+from satchain.measure._edge_locate import edge_region, locate_edge, orient_edge, project
 from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
 from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
 from satchain.measure._edge_mtf import trim_ends as _trim_ends
-from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
+from satchain.measure._edge_result import NU_STEP as _NU_STEP
+from satchain.measure._edge_result import result_fields
 
 __all__ = ["EdgeResult", "measure_edge", "DEGENERATE_ANGLES_DEG"]
 
 #: Edge tilts (from the nearest axis) where the per-row phases repeat after 1, 4, 3, 2 or 1 rows.
 DEGENERATE_ANGLES_DEG = tuple(sorted(CRITICAL_TILTS_DEG))
-_NU_STEP = 0.005
-_I_NYQ = int(round(0.5 / _NU_STEP))  # index of Nyquist on the output frequencies
 _MTF_MAX = 1.2  # an MTF above this up to Nyquist is not a measurement
 _LOW_CNR = 25.0  # contrast-to-noise below which the result is flagged
 _CURVE_MTF_SHIFT = 0.01  # an edge curvature left by the fit moving the MTF (up to Nyquist) by more: flagged
@@ -307,11 +305,11 @@ def measure_edge(
         x, esf_n, (f, mtf, mtf_sig), half_w = aligned
     mtf_al = mtf if aligned is None else on_grid(f, aligned[2])[0]
     imaged = (mtf, mtf_sig) if imaged is None else on_grid(f, imaged)
-    return _result(
+    return EdgeResult(**result_fields(
         (f, mtf, mtf_sig, axis, scale), (x, esf_n), (coef, rows, slope, transposed, roi),
         (contrast * sign, sigma, half_w, w, grad, direction, flags), (pixel_m, pitch_m), lines,
         (mtf_al, *imaged, los),
-    )  # fmt: skip
+    ))  # fmt: skip
 
 
 def _moved_curve(work, valid, moved, stats, opts, axis_opts):
@@ -339,70 +337,6 @@ def _line_positions(work, coef, valid, clip, where, flags):
         flags.append(("lines_unmeasured", f"per-line edge positions not measured: {exc}"))
         nan = np.full(work.shape[0], np.nan)
         return line_numbers(work.shape[0], transposed, roi), nan, nan
-
-
-def _result(curve, esf, fit, stats, scales, lines, imaged) -> EdgeResult:
-    """The :class:`EdgeResult`: ``curve = (f, mtf, sigma, axis, scale)``, ``esf = (x, esf)``, ``fit = (coef,
-    rows, slope, transposed, roi)``, ``stats = (contrast, noise, window, bin width, gradient, direction, flags)``,
-    ``scales = (pixel_m, pitch_m)``, ``lines = (lines, edge positions, their 1-sigma)`` and ``imaged = (MTF
-    aligned, MTF as imaged, its 1-sigma, los motion px rms)``."""
-    f, mtf, mtf_sig, axis, scale = curve
-    x, esf_n = esf
-    coef, rows, slope, transposed, roi = fit
-    contrast, sigma, half_w, w, grad, direction, flags = stats
-    pixel_m, pitch_m = scales
-    rer, overshoot = _edge_metrics(x, esf_n)
-    return EdgeResult(
-        f_cy_per_px=f,
-        mtf=mtf,
-        esf_x_px=x,
-        esf=esf_n,
-        lsf=np.gradient(esf_n, x),
-        angle_deg=_angle_deg(slope, transposed),
-        direction=direction,
-        mtf_at_nyquist=float(mtf[_I_NYQ]),
-        mtf50_cy_per_px=first_crossing(f, mtf, 0.5),
-        rer=rer,
-        overshoot=overshoot,
-        contrast=float(contrast),
-        noise_sigma=float(sigma),
-        window_half_width_px=float(half_w),
-        n_lines=len(rows),
-        warnings=tuple(t for _, t in flags),
-        f_cy_per_m_ground=None if pixel_m is None else cy_per_px_to_cy_per_m_ground(f, gsd_m=pixel_m),
-        f_cy_per_mm=None if pitch_m is None else cy_per_px_to_cy_per_mm(f, pitch_m=pitch_m),
-        mtf_sigma=mtf_sig,
-        mtf_at_nyquist_sigma=float(mtf_sig[_I_NYQ]),
-        flags=tuple(c for c, _ in flags),
-        fit_degree=len(coef) - 1,
-        curvature_per_px=curvature(coef, rows),
-        cnr=float(abs(contrast) / sigma) if sigma > 0 else float("inf"),
-        bin_width_px=float(w),
-        illumination_gradient_per_px=float(grad),
-        edge_point_xy=_edge_point(coef, rows, transposed, roi),
-        frequency_axis=axis,
-        frequency_scale=float(scale),
-        lines=lines[0],
-        edge_position_px=lines[1],
-        edge_position_sigma_px=lines[2],
-        mtf_aligned=imaged[0],
-        mtf_as_imaged=imaged[1],
-        mtf_as_imaged_sigma=imaged[2],
-        mtf_as_imaged_at_nyquist=float(imaged[1][_I_NYQ]),
-        los_motion_rms_px=float(imaged[3]),
-    )
-
-
-def _edge_point(coef, rows, transposed: bool, roi) -> tuple[float, float]:
-    """(x, y) in the image of the fitted edge at the middle line used."""
-    r = float(np.mean(rows))
-    c = float(np.polyval(coef, r))
-    x, y = (r, c) if transposed else (c, r)
-    if hasattr(roi, "to_roi"):
-        roi = roi.to_roi()
-    if roi is not None:
-        x, y = x + int(roi[0]), y + int(roi[1])
-    return (x, y)
 
 
 def _check_args(image, oversampling, f_max_cy_per_px, noise_target, fit_degree, full_scale, saturation_level):
@@ -577,24 +511,3 @@ def _check_mtf(f, mtf, sig, flags):
         flags.append(("band_limited", f"MTF above {_MTF_MAX:g} beyond {f[k]:.2f} cy/px (noise): output stops there"))
         return f[:k], mtf[:k], sig[:k]
     return f, mtf, sig
-
-
-def _angle_deg(slope: float, transposed: bool) -> float:
-    """Angle of the edge line from the image y axis, in (-90, 90]."""
-    dx, dy = (1.0, slope) if transposed else (slope, 1.0)
-    ang = float(np.degrees(np.arctan2(dx, dy)))
-    if ang > 90.0:
-        ang -= 180.0
-    elif ang <= -90.0:
-        ang += 180.0
-    return ang
-
-
-def _edge_metrics(x: np.ndarray, esf: np.ndarray):
-    """GIQE RER = ESF(+0.5) - ESF(-0.5); overshoot H = max in [1, 3] px if it peaks there, else ESF(1.25)."""
-    rer = float(np.interp(0.5, x, esf) - np.interp(-0.5, x, esf))
-    xs = np.arange(1.0, 3.0 + 1e-9, 0.25)
-    es = np.interp(xs, x, esf)
-    i = int(np.argmax(es))
-    overshoot = float(es[i]) if i < xs.size - 1 else float(np.interp(1.25, x, esf))
-    return rer, overshoot
