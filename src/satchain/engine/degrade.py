@@ -70,29 +70,56 @@ class _ArrayBand:
         return np.isfinite(self.a[window.rows, window.cols]) if self.masked else None
 
 
-def _source_values(source, input_scale) -> tuple[np.ndarray, np.dtype]:
-    """(the array, the dtype its values are stored in): a numpy masked array's masked pixels NaN (no data, as
-    NaN is); refuses a boolean array, and integers wider than 16 bits without ``input_scale``, whose width
-    states no DN range (``np.array([[0, 200]])`` is int64: its 2**63 - 1 would make 200 a reflectance of 2e-17)."""
+def _source_values(source, input_scale) -> tuple[np.ndarray, float]:
+    """(the array, the gain that turns its stored values into reflectance: the one rule of
+    :func:`satchain.engine.sources.reflectance_gain`, which refuses integers wider than 16 bits without
+    ``input_scale``): a numpy masked array's masked pixels NaN (no data, as NaN is); a boolean array is refused."""
     from satchain._validate import masked_as_nan, split_mask
+    from satchain.engine.sources import reflectance_gain
 
-    dtype = np.asarray(split_mask("image", source)[0]).dtype
-    if dtype.kind in "iu" and dtype.itemsize > 2 and input_scale is None:
-        raise InputError(
-            f"image: dtype {dtype} states no DN range (only 8- and 16-bit integers are scaled by their range); "
-            "give input_scale (1 for values that are reflectance, 1 / 4095 for 12-bit DN), or the array as float "
-            "reflectance or uint8 / uint16 DN"
+    gain = reflectance_gain(np.asarray(split_mask("image", source)[0]).dtype, input_scale)
+    return np.asarray(masked_as_nan("image", source)), gain
+
+
+def _as_affine(transform):
+    """``transform`` as an ``affine.Affine``: one already, or a sequence of 6 real numbers in its order (a, b, c,
+    d, e, f), as ``tuple(affine)[:6]``; anything else is refused, naming its type (a GDAL geotransform's order
+    (c, a, b, f, d, e) is named when the numbers read in it give square pixels and in Affine's order do not)."""
+    from affine import Affine
+
+    from satchain.errors import ParameterTypeError
+
+    if transform is None or isinstance(transform, Affine):
+        return transform
+    seq = isinstance(transform, (list, tuple, np.ndarray)) and np.ndim(transform) == 1 and len(transform) == 6
+    if not (seq and all(isinstance(v, (int, float, np.integer, np.floating)) for v in transform)):
+        shown = repr(transform) if len(repr(transform)) <= 60 else repr(transform)[:57] + "..."
+        raise ParameterTypeError(
+            f"simulate_image(): transform = {shown} ({type(transform).__name__}): must be an affine.Affine, or a "
+            "sequence of 6 numbers in its order (a, b, c, d, e, f) (for a GDAL geotransform: Affine.from_gdal(*gt))"
         )
-    return np.asarray(masked_as_nan("image", source)), dtype
+    v = [float(x) for x in transform]
+    if not all(map(math.isfinite, v)):
+        raise ConfigError(f"transform = {tuple(v)!r}: its 6 numbers must be finite")
+    t, g = Affine(*v), Affine.from_gdal(*v)
+    if not _square(t) and _square(g):
+        raise ConfigError(
+            f"transform = {tuple(v)!r}: in affine.Affine's order (a, b, c, d, e, f) its pixels are not square; "
+            "it reads as a GDAL geotransform (c, a, b, f, d, e): give Affine.from_gdal(*transform)"
+        )
+    return t
+
+
+def _square(t) -> bool:
+    sx, sy = math.hypot(t.a, t.d), math.hypot(t.b, t.e)
+    return sx > 0 and math.isclose(sx, sy, rel_tol=1e-6)
 
 
 def _array_bands(source, pixel_m, transform, input_scale) -> tuple[list, Any, float]:
     from affine import Affine
 
-    from satchain._validate import check_positive
-    from satchain.io import integer_scale
-
-    a, stored = _source_values(source, input_scale)
+    transform = _as_affine(transform)
+    a, gain = _source_values(source, input_scale)
     if a.ndim not in (2, 3) or min(a.shape) < 1 or a.dtype.kind not in "biuf":
         raise InputError(f"image: must be a real 2-D (rows, cols) or 3-D (bands, rows, cols) array, got "
                          f"shape {a.shape}, dtype {a.dtype}")  # fmt: skip
@@ -110,7 +137,6 @@ def _array_bands(source, pixel_m, transform, input_scale) -> tuple[list, Any, fl
                           "keeps the transform); give one of them, or both agreeing")  # fmt: skip
     pixel_m = sx if transform is not None else pixel_m  # agreeing: the transform's, so the output's stays exact
     t = transform if transform is not None else Affine(pixel_m, 0.0, 0.0, 0.0, -pixel_m, 0.0)
-    gain = integer_scale(stored) if input_scale is None else check_positive("input_scale", input_scale)
     planes = a if a.ndim == 3 else a[None]
     return [_ArrayBand(p, pixel_m, gain) for p in planes], t, float(pixel_m)
 
@@ -138,10 +164,11 @@ def simulate_image(
         (int8 / int16) DN scaled by ``1 / (2**bits - 1)`` (``2**(bits - 1) - 1``) unless ``input_scale``; wider
         integers need ``input_scale``; a boolean array is refused), or any GDAL raster (every band, or
         ``band``; its georeference, nodata, mask, scale and offset used as ``satchain simulate`` uses them).
-    pixel_m, transform, crs : an array's ground pixel size (m), affine transform (default: north up, origin
-        (0, 0), ``pixel_m``) and CRS. ``pixel_m`` with a ``transform`` (or a path whose georeference states a
-        pixel size) must agree with its pixel size to 0.1 % (the output keeps the transform): one that
-        contradicts it is refused.
+    pixel_m, transform, crs : an array's ground pixel size (m), affine transform (an ``affine.Affine``, or a
+        sequence of 6 numbers in its order (a, b, c, d, e, f); a GDAL geotransform through ``Affine.from_gdal``;
+        default: north up, origin (0, 0), ``pixel_m``) and CRS. ``pixel_m`` with a ``transform`` (or a path
+        whose georeference states a pixel size) must agree with its pixel size to 0.1 % (the output keeps the
+        transform): one that contradicts it is refused.
     units, noise, seed : as :func:`satchain.engine.files.simulate_file` (band i > 1 draws from a seed derived
         from ``(seed, i)``).
 

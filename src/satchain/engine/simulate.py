@@ -584,8 +584,10 @@ def simulate(
     noise: bool = False,
     seed: int = 0,
     progress: Progress | None = None,
+    input_scale: float | None = None,
 ) -> np.ndarray:
-    """The image of ``ground_truth``: an array of reflectance with ``pixel_m`` (no NaN, no mask), a scene, or a source.
+    """The image of ``ground_truth``: an array with ``pixel_m`` (no NaN, no mask; uint8 / uint16 DN by their range,
+    wider integers with ``input_scale``, as simulate_image: :func:`.sources.reflectance_gain`), a scene, or a source.
 
     Examples
     --------
@@ -594,6 +596,6 @@ def simulate(
     >>> img.shape, bool(np.allclose(img, 0.2, atol=1e-6))
     ((50, 50), True)
     """
-    src = as_ground_truth(ground_truth, pixel_m=pixel_m)
+    src = as_ground_truth(ground_truth, pixel_m=pixel_m, input_scale=input_scale)
     sim = Simulator(system, input_pixel_m=src.pixel_m, input_shape=src.shape_px, params=params, motion_seed=seed)
     return sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, progress=progress)

@@ -30,6 +30,7 @@ __all__ = [
     "SceneSource",
     "as_ground_truth",
     "read_with_border",
+    "reflectance_gain",
     "release_pages",
 ]
 
@@ -59,8 +60,35 @@ class GroundTruth(Protocol):
     def read(self, window: Window) -> np.ndarray: ...
 
 
+def reflectance_gain(dtype, input_scale: float | None = None) -> float:
+    """The factor that turns an array's stored values into reflectance, the one rule of :func:`satchain.simulate`
+    and :func:`satchain.simulate_image`: ``input_scale`` when given (> 0); else 1 for floats and ``1 / (2**bits
+    - 1)`` for uint8 / uint16 DN (``2**(bits - 1) - 1`` for int8 / int16); wider integers are refused without
+    ``input_scale``, their width states no DN range (``np.array([[0, 200]])`` is int64: its 2**63 - 1 would make
+    200 a reflectance of 2e-17).
+
+    Examples
+    --------
+    >>> reflectance_gain(np.uint8), reflectance_gain(np.float32), reflectance_gain(np.int64, 1e-3)
+    (0.00392156862745098, 1.0, 0.001)
+    """
+    from satchain.io import integer_scale
+
+    if input_scale is not None:
+        return check_positive("input_scale", input_scale)
+    dt = np.dtype(dtype)
+    if dt.kind in "iu" and dt.itemsize > 2:
+        raise InputError(
+            f"image: dtype {dt} states no DN range (only 8- and 16-bit integers are scaled by their range); "
+            "give input_scale (1 for values that are reflectance, 1 / 4095 for 12-bit DN), or the array as float "
+            "reflectance or uint8 / uint16 DN"
+        )
+    return integer_scale(dt)
+
+
 class ArraySource:
-    """A 2-D array (in memory or a memmap) as ground truth with a stated ground pixel size.
+    """A 2-D array (in memory or a memmap) as ground truth with a stated ground pixel size; its values are
+    reflectance as :func:`reflectance_gain` reads them (uint8 / uint16 DN by their range, or ``input_scale``).
 
     Examples
     --------
@@ -69,7 +97,7 @@ class ArraySource:
     [[5.0, 6.0], [9.0, 10.0]]
     """
 
-    def __init__(self, array, *, pixel_m: float):
+    def __init__(self, array, *, pixel_m: float, input_scale: float | None = None):
         array, masked = split_mask("image", array)
         if masked is not None:
             raise InputError(
@@ -83,7 +111,7 @@ class ArraySource:
             raise InputError(f"image: must not be empty, got shape {a.shape}")
         if not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
             raise InputError(f"image: must be real numeric, got dtype {a.dtype}")
-        self.array = a
+        self.array, self.gain = a, reflectance_gain(a.dtype, input_scale)
         self.pixel_m = check_positive("pixel_m", pixel_m)
         self.shape_px = (int(a.shape[0]), int(a.shape[1]))
 
@@ -91,11 +119,12 @@ class ArraySource:
         return np.asarray(self.read_stored(window), dtype=np.float64)
 
     def read_stored(self, window: Window, *, check: bool = True) -> np.ndarray:
-        """``window`` as stored (a view of the array, its own dtype: no copy), checked finite (``check``)."""
+        """``window`` as stored (a view of the array, its own dtype: no copy; scaled by the gain, a copy, when
+        that is not 1), checked finite (``check``)."""
         block = self.array[window.rows, window.cols]
         if check:
             _check_finite(block, window)
-        return block
+        return block if self.gain == 1.0 else block * self.gain
 
 
 def _check_finite(block: np.ndarray, window: Window) -> None:
@@ -128,14 +157,17 @@ class SceneSource:
         return np.asarray(self.scene.render(tuple(window), pixel_m=self.pixel_m))
 
 
-def as_ground_truth(obj, *, pixel_m: float | None = None) -> GroundTruth:
-    """An array (with ``pixel_m``), a scene, or a source -> a :class:`GroundTruth` for the engine."""
+def as_ground_truth(obj, *, pixel_m: float | None = None, input_scale: float | None = None) -> GroundTruth:
+    """An array (with ``pixel_m``; values as :func:`reflectance_gain` reads them), a scene, or a source -> a
+    :class:`GroundTruth` for the engine."""
     from satchain.errors import ConfigError
 
     if isinstance(obj, np.ndarray):
         if pixel_m is None:
             raise ConfigError("pixel_m = None: an array ground truth needs its ground pixel size in metres")
-        return ArraySource(obj, pixel_m=pixel_m)
+        return ArraySource(obj, pixel_m=pixel_m, input_scale=input_scale)
+    if input_scale is not None:
+        raise ConfigError(f"input_scale = {input_scale!r}: applies to arrays only, not to a {type(obj).__name__}")
     if hasattr(obj, "render") and callable(getattr(obj, "shape_px", None)):
         return SceneSource(obj, pixel_m=pixel_m)
     if isinstance(obj, GroundTruth):
