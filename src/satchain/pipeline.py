@@ -119,7 +119,8 @@ def _stage_measure(
     full_scale = sim.sensor.full_scale(sim.units, noise=noise)
     geo = _image_affine(system, scene.truth_dict, sim.image.shape)
     auto = measure_auto(sim.image, scene.truth_dict, pixel_m=system.gsd_act_m, full_scale=full_scale,
-                        **({} if geo is None else {"image_affine": geo}))  # fmt: skip
+                        **({} if geo is None else {"image_affine": geo}),
+                        **_row_offsets(system, scene, sim))  # fmt: skip
     cal = auto.calibration  # its gain models the diffraction tail that pulls the plateaus' medians
     gain = cal.get("gain") if cal.get("fitted") else None
     snr = measure_snr(sim.image, scene.truth, pixel_m=system.gsd_act_m, gain=gain, image_affine=geo)
@@ -129,6 +130,18 @@ def _stage_measure(
                                   snr_sigma_null_means=f"the SNR is not measured: {why}")  # fmt: skip
     progress("measure", 1, 1)
     return Measurements(auto, snr)
+
+
+def _row_offsets(system: ImagingSystem, scene: SceneResult, sim: SimulationResult) -> dict:
+    """``{"row_offsets_px": (du, dv)}`` when the line of sight moves the image's rows (oscillations, jitter, a log):
+    row ``i`` sees the mean map's point of image pixel ``(j + du_i, i + dv_i)``
+    (:class:`~satchain.image_geometry.ImageGeometry`; the star aligns its rows with them), else {}."""
+    from satchain.image_geometry import run_geometry
+
+    g = run_geometry(system, scene.truth_dict, sim.simulator, sim.image.shape)
+    if g is None or not g.moves:
+        return {}
+    return {"row_offsets_px": g._row_offsets(np.arange(sim.image.shape[0], dtype=float))}
 
 
 def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):

@@ -101,8 +101,7 @@ class _SystemOTF:
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
         m = self._mtf
-        fy = np.asarray(fy_cy_per_px) * (m._to_mm / m.alt_scale)  # on the image's axes, as _SystemMTF
-        return m._otf(np.asarray(fx_cy_per_px) * m._to_mm, fy, exclude=m._exclude)
+        return m._otf(*m.detector_cy_per_mm(fx_cy_per_px, fy_cy_per_px), exclude=m._exclude)  # image axes
 
 
 class _SystemMTF:
@@ -110,7 +109,11 @@ class _SystemMTF:
     the components named in ``exclude`` are left out.  Frequencies are on the **image's** axes: where pushbroom
     terms space the image rows ``alt_scale`` detector pixels apart on the ground (a line-rate error ``e``:
     ``1 + e``; Earth rotation; :meth:`~satchain.tf.pushbroom.PushbroomTerms.geometry`), ``fy`` cycles per image
-    row are ``fy / alt_scale`` cycles per detector pixel (the budget's own tables stay on the detector's axis)."""
+    row are ``fy / alt_scale`` cycles per detector pixel (the budget's own tables stay on the detector's axis). A
+    shear ``sigma`` (Earth rotation: row ``i`` sees the ground ``sigma i`` px across) tilts the image's axes on the
+    detector too: image row ``i``, column ``j`` sees the blurred focal plane at detector ``(j + sigma i, alt_scale
+    i)``, so the image's wave vector ``(fx, fy)`` is the detector's ``(fx, (fy - sigma fx) / alt_scale)`` (a star's
+    diagonals see it at first order: ``-+ sigma`` on the ALT part, 6.6 % at the equator)."""
 
     def __init__(self, otf: Any, exclude: tuple[str, ...] = ()):
         from satchain import units
@@ -124,10 +127,16 @@ class _SystemMTF:
         pb = getattr(otf, "pushbroom", None)
         geo = pb.geometry() if pb is not None and pb.active else None
         self.alt_scale = 1.0 if geo is None else float(geo["alt_scale"])  # image rows apart, in detector px
+        self.shear = 0.0 if geo is None else float(geo["shear_act_px_per_line"])  # ACT px per image row
+
+    def detector_cy_per_mm(self, fx_cy_per_px, fy_cy_per_px) -> tuple[np.ndarray, np.ndarray]:
+        """The detector's frequencies (cy/mm) of the image's wave vector ``(fx, fy)`` (cy per image px)."""
+        fx, fy = np.asarray(fx_cy_per_px), np.asarray(fy_cy_per_px)
+        fy_det = (fy - self.shear * fx) / self.alt_scale if self.shear else fy / self.alt_scale
+        return fx * self._to_mm, fy_det * self._to_mm
 
     def __call__(self, fx_cy_per_px, fy_cy_per_px) -> np.ndarray:
-        fx, fy = np.asarray(fx_cy_per_px) * self._to_mm, np.asarray(fy_cy_per_px) * (self._to_mm / self.alt_scale)
-        return np.abs(self._otf(fx, fy, exclude=self._exclude))
+        return np.abs(self._otf(*self.detector_cy_per_mm(fx_cy_per_px, fy_cy_per_px), exclude=self._exclude))
 
 
 #: Components whose PSF is far wider than any target's measurement region (the aerosol adjacency spreads a

@@ -265,3 +265,4 @@ class AutoContext:
     wedge_threshold: float
     full_scale: float | None = None  # the sensor's full scale in the image's units (None: unknown) ...
     full_scale_refl: float | None = None  # ... and in the calibrated reflectance the star/bars/wedge read
+    row_offsets_px: tuple | None = None  # per image row (du, dv): a moving line of sight's displaced rows

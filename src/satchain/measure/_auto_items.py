@@ -25,10 +25,6 @@ _EDGE_MIN_PX = 16
 _EDGE_MARGIN_PX = 3
 _STAR_EDGE_PX = 2.0
 _STAR_MIN_PX = 8.0
-#: Under an image affine the star is measured while ``cycles x anisotropy / 2`` (the largest phase shift, rad, of
-#: its pattern around a circle) stays below this: the fundamental's amplitude is then within ``1 - J0(0.1)``
-#: = 0.25 % and each direction's frequency within ``0.2 / cycles``.
-_STAR_MAX_PHASE_RAD = 0.1
 #: Under an image affine a bar group is measured while the drift of its bars' edges across its region lowers the
 #: fundamental by at most 1 % (``sinc(drift / period) >= 0.99``: drift <= 0.078 period).
 _BAR_MAX_LOSS = 0.01
@@ -112,36 +108,34 @@ def geometry_text(frame: Frame) -> str:
     )
 
 
-def _star_geometry(frame: Frame, cycles: int) -> None:
-    """Refuse a star the image geometry makes elliptical beyond :data:`_STAR_MAX_PHASE_RAD` (see there)."""
+def _star_extent(frame: Frame) -> tuple[float, float]:
+    """Half-extents (px) along x and y of the image of a star of unit radius (mean pixels): 1 on a plain grid,
+    the ellipse's under an image affine."""
     if frame.affine is None:
-        return
-    aniso = frame.anisotropy()
-    phase = 0.5 * cycles * aniso
-    if phase > _STAR_MAX_PHASE_RAD:
-        raise Skip(
-            f"distorted by the image geometry ({geometry_text(frame)}): the star is imaged as an ellipse, its axes "
-            f"{100 * aniso:.2f} % apart, which shifts its {cycles} cycles by up to {phase:.2f} rad around a circle "
-            f"(> {_STAR_MAX_PHASE_RAD} rad): the star measurement needs a circular star"
-        )
+        return 1.0, 1.0
+    a, b, d, e = frame.linear
+    k = math.sqrt(abs(a * e - b * d))
+    return math.hypot(a, b) / k, math.hypot(d, e) / k
 
 
 def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
-    """Siemens star: centre, radius and cycles from the truth; input modulation = amplitude / mean."""
+    """Siemens star: centre, radius and cycles from the truth; input modulation = amplitude / mean. Under an image
+    affine the star is an ellipse: it is measured in its own frame through the affine, each direction at the
+    image's frequency along it (``image_affine`` of :func:`~satchain.measure.star.measure_star`)."""
     refl, frame, calibrated = ctx.refl, ctx.frame, ctx.calibrated
     p = frame.pixel_m
     cycles = int(it["cycles"])
-    _star_geometry(frame, cycles)
     xc, yc = frame.px(*it["center_m"])
     radius = frame.length_px(float(it["radius_m"])) - _STAR_EDGE_PX
     inner = frame.length_px(float(it.get("inner_radius_m", 0.0))) + 1.0
     if radius < _STAR_MIN_PX:
         raise Skip(f"too small at {p:g} m pixels: usable radius {radius:.1f} px < {_STAR_MIN_PX:g} px")
+    ex, ey = _star_extent(frame)
     roi = (
-        math.floor(xc - radius) - 1,
-        math.floor(yc - radius) - 1,
-        math.ceil(xc + radius) + 2,
-        math.ceil(yc + radius) + 2,
+        math.floor(xc - radius * ex) - 1,
+        math.floor(yc - radius * ey) - 1,
+        math.ceil(xc + radius * ex) + 2,
+        math.ceil(yc + radius * ey) + 2,
     )
     frame.check_roi(roi)
     f_max = min(0.75, cycles / (2 * math.pi * max(inner, 2.0)))
@@ -156,6 +150,8 @@ def star_item(ctx: AutoContext, it: dict) -> tuple[AutoItem, list[dict]]:
         f_max_cy_per_px=f_max,
         pixel_m=p,
         full_scale=ctx.full_scale_refl,
+        image_affine=frame.affine,
+        row_offsets_px=ctx.row_offsets_px,
     )
     summary = {
         "id": it["id"],

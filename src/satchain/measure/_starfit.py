@@ -11,23 +11,49 @@ and ``s^2 = J / (N - p)`` the residual variance.
 Star frame.  Every helper takes ``lin``, the linear map (2x2, unit determinant) from an image pixel step
 ``(dcol, drow)`` to the star's own frame (a star imaged through a shear, an along-track scale or a rotation is an
 ellipse in the image and a circle there): radii and polar angles are computed in that frame about a centre given
-in image pixels (None: the identity, the image's own axes).
+in image pixels (None: the identity, the image's own axes).  It may also be a :class:`StarFrame`, which adds
+each image row's offset (a pushbroom line of sight that moves in time displaces whole rows): row ``i`` sees the
+star where the mean map puts image point ``(x + du_i, y + dv_i)``.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import minimize
 
 from satchain.errors import ConfigError
 
-__all__ = ["fit_center", "harmonic_spectrum", "annulus_fit", "symmetry_center", "coarse_center", "polar", "star_map"]
+__all__ = [
+    "StarFrame",
+    "annulus_fit",
+    "coarse_center",
+    "fit_center",
+    "harmonic_spectrum",
+    "polar",
+    "star_map",
+    "symmetry_center",
+]
+
+
+class StarFrame(NamedTuple):
+    """The star's frame with per-row offsets: ``lin`` (2x2 or None) and ``du``, ``dv`` (image px, per row of
+    the region measured: row ``i`` sees the mean map's point of ``(x + du[i], y + dv[i])``)."""
+
+    lin: tuple | None
+    du: np.ndarray
+    dv: np.ndarray
 
 
 def polar(x, y, xc: float, yc: float, lin=None) -> tuple[np.ndarray, np.ndarray]:
-    """Radius and polar angle (rad, from the frame's +x towards its +y) of image pixels ``(x, y)`` about the image
-    point ``(xc, yc)``, in the star's frame: ``lin @ (x - xc, y - yc)`` (see the module docstring)."""
+    """Radius and polar angle (rad, from the frame's +x towards its +y) of image pixels ``(x, y)`` (``y`` whole
+    rows) about the image point ``(xc, yc)``, in the star's frame: ``lin @ (x - xc, y - yc)`` (see the module
+    docstring; a :class:`StarFrame` adds each row's offset first)."""
     dx, dy = np.asarray(x, float) - xc, np.asarray(y, float) - yc
+    if isinstance(lin, StarFrame):
+        rows = np.rint(np.asarray(y, float)).astype(int)
+        dx, dy, lin = dx + lin.du[rows], dy + lin.dv[rows], lin.lin
     if lin is not None:
         (a, b), (d, e) = lin
         dx, dy = a * dx + b * dy, d * dx + e * dy
@@ -232,7 +258,7 @@ def coarse_center(data: np.ndarray, n: int, start_xy, r_lo: float, r_hi: float, 
     return best[0], best[1], at_limit
 
 
-def star_map(image_affine, directions_deg: dict) -> tuple[tuple, dict, tuple[float, float]]:
+def star_map(image_affine, directions_deg: dict) -> tuple[tuple | None, dict, tuple[float, float]]:
     """The star frame of a star imaged through ``image_affine`` (scene metres -> image ``(col, row)``: an
     ``affine.Affine`` or ``(a, b, c, d, e, f)`` with ``col = a x + b y + c``, ``row = d x + e y + f``; its
     linear part only): ``lin``, the pixel-step -> star-frame map scaled to unit determinant (star-frame units are
@@ -243,7 +269,10 @@ def star_map(image_affine, directions_deg: dict) -> tuple[tuple, dict, tuple[flo
 
     The wave vector of a grating ``k`` (cy per star unit) is ``lin^T k`` in the image (cy/px): along the image
     direction ``u`` it is ``k`` parallel to ``lin^-T u``, and ``|lin^T k| = |k| / |lin^-T u|``.
+    ``image_affine = None``: the image's own axes (``lin`` None, ``beta`` the direction, ``s = 1``).
     """
+    if image_affine is None:
+        return None, {k: (float(np.deg2rad(deg)), 1.0) for k, deg in directions_deg.items()}, (1.0, 1.0)
     try:
         a, b, _, d, e, _ = (float(v) for v in tuple(image_affine)[:6])
     except (TypeError, ValueError):

@@ -31,10 +31,10 @@ assumes the pattern aligned with the pixel grid are measured only while the map 
 tolerance, and skipped with the reason otherwise, never measured wrong: a bar group while the drift of its
 bars' edges across its region lowers its CTF by <= 1 % (``sinc(drift / period) >= 0.99``), a horizontal or
 vertical wedge while its stripes drift <= 0.25 px over its length and its position <= 0.25 px down its
-stripes, a Siemens star while its image is round enough that its pattern's phase around a circle moves by
-<= 0.1 rad (``cycles x anisotropy / 2``; the fundamental then within 0.25 %, each direction's frequency
-within ``0.2 / cycles``).  A diagonal wedge is resampled through the map onto its own axes.  Periods and line
-widths are read in pixels of the axis across the pattern (its ground step ``Frame.step_m``).
+stripes.  A Siemens star, an ellipse in such an image, is measured in its own frame through the map, each
+direction at the image's own frequency along it (``image_affine`` of :func:`~satchain.measure.star.measure_star`;
+with ``row_offsets_px`` its rows aligned too).  A diagonal wedge is resampled through the map onto its own axes.
+Periods and line widths are read in pixels of the axis across the pattern (its ground step ``Frame.step_m``).
 
 Radiometry.  The star's input modulation, the bars' large-area levels and the wedge's contrast need image
 values proportional to reflectance.  The image is calibrated to reflectance by a fit of
@@ -146,6 +146,7 @@ def measure_auto(
     wedge_threshold: float = 0.15,
     full_scale: float | None = None,
     image_affine=None,
+    row_offsets_px=None,
 ) -> AutoResult:
     """Run every applicable measurement on a simulated image, guided by its scene's truth record.
 
@@ -179,6 +180,10 @@ def measure_auto(
         the image by itself (``origin_m`` is then not given; ``AutoResult.origin_m`` is the scene point of the
         image's top-left corner) and ``pixel_m`` defaults to its ACT ground step.  See "Image geometry" in the
         module docstring for what each target kind does with it.
+    row_offsets_px : (du, dv), optional
+        Per image row, the offsets a line of sight moving in time gives whole rows (``satchain run`` passes
+        :class:`satchain.image_geometry.ImageGeometry`): a Siemens star is measured with its rows
+        aligned (``row_offsets_px`` of :func:`~satchain.measure.star.measure_star`).
 
     Returns
     -------
@@ -203,7 +208,7 @@ def measure_auto(
     cal = calibrate(data, truth, items, frame)
     fs = resolve_full_scale(raw, full_scale)
     fs_refl = None if fs is None else (fs - cal["offset"]) / cal["gain"]
-    ctx = AutoContext(raw, (data - cal["offset"]) / cal["gain"], frame, cal["fitted"], thr, fs, fs_refl)
+    ctx = AutoContext(raw, (data - cal["offset"]) / cal["gain"], frame, cal["fitted"], thr, fs, fs_refl, row_offsets_px)
     wanted = None if ids is None else {str(i) for i in ids}
     measured, skipped = [], []
     for it in items:

@@ -39,6 +39,7 @@ from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, clipping_flag, crop_roi, masked_as_nan
 from satchain.measure._starfit import (
+    StarFrame,
     annulus_fit,
     coarse_center,
     fit_center,
@@ -213,8 +214,8 @@ def _inside_radius(shape, centre, sm=None) -> float:
     """The largest star-frame radius whose image (a circle, or an ellipse through the map ``sm``) about
     ``centre`` lies inside a region of ``shape`` (pixel centres)."""
     (ny, nx), (xc, yc) = shape, centre
-    ex, ey = (1.0, 1.0) if sm is None else sm[2]
-    return min(xc / ex, yc / ey, (nx - 1 - xc) / ex, (ny - 1 - yc) / ey)
+    (ex, ey), (mx, my) = ((1.0, 1.0), (0.0, 0.0)) if sm is None else sm[2:4]
+    return min((xc - mx) / ex, (yc - my) / ey, (nx - 1 - xc - mx) / ex, (ny - 1 - yc - my) / ey)
 
 
 def _geometry(data, n, center, radius_px, f_max, sm=None):
@@ -256,6 +257,7 @@ def measure_star(
     refine_center: bool = True,
     full_scale: float | None = None,
     image_affine=None,
+    row_offsets_px=None,
 ) -> StarResult:
     """Measure the MTF per direction from a sinusoidal Siemens star.
 
@@ -301,6 +303,13 @@ def measure_star(
         is ``f_cy_per_px`` cycles per image pixel (see :func:`satchain.measure._starfit.star_map`).  ``mtf_all``
         and ``radius_px`` are then in the star's frame (mean pixels).  Without it an elliptical star is measured
         as if circular: its phase drifts around each circle and the MTF is wrong (or the star is refused).
+    row_offsets_px : (du, dv), optional
+        Per row of ``image`` (before ``roi``), the image-pixel offsets that a line of sight moving in time gives
+        whole rows (oscillations, jitter; :class:`satchain.image_geometry.ImageGeometry`): row
+        ``i``, column ``j`` sees the star where the mean map (``image_affine``, or the plain grid) puts ``(j +
+        du_i, i + dv_i)``.  Each pixel is placed there, so the rows are aligned and the MTF is the blur about each
+        row's mean position (what the budget's motion terms give); without them a star over rows displaced
+        differently is measured with the displacements folded in (lower, and not the budget's).
 
     Raises
     ------
@@ -321,7 +330,7 @@ def measure_star(
     data = crop_roi(masked_as_nan("image", image), roi, min_size=16)  # masked pixels: nodata, refused in the region
     if data.max() == data.min():
         raise InputError(f"image: the region is flat (every pixel = {data.min():g}); no star to measure")
-    sm = None if image_affine is None else star_map(image_affine, STAR_DIRECTIONS)
+    sm = _star_frame(image_affine, row_offsets_px, np.shape(image)[0], roi)
     (xc, yc), r_in, r_out, c_std, c_from = _centre_and_radii(
         data, n, center, radius_px, annulus_px, f_max, refine_center, sm
     )
@@ -358,8 +367,31 @@ def measure_star(
         noise_std=float(noise),
         contrast_to_noise=cnr,
         flags=tuple(flags),
-        star_map=None if sm is None else sm[0],
+        star_map=None if sm is None else sm[4],
     )
+
+
+def _star_frame(image_affine, row_offsets_px, n_rows: int, roi):
+    """``(frame, directions, extent, margin, lin)`` for the helpers (see :func:`~satchain.measure._starfit.
+    star_map`; ``frame`` is ``lin`` or a :class:`~satchain.measure._starfit.StarFrame` with the region's row
+    offsets, ``margin`` their largest size in x and y), or None on the image's own plain grid."""
+    if image_affine is None and row_offsets_px is None:
+        return None
+    lin, dirs, extent = star_map(image_affine, STAR_DIRECTIONS)
+    if row_offsets_px is None:
+        return lin, dirs, extent, (0.0, 0.0), lin
+    try:
+        du, dv = (np.asarray(v, dtype=float) for v in row_offsets_px)
+    except (TypeError, ValueError):
+        raise ConfigError("row_offsets_px: must be two sequences (du, dv) of image-pixel offsets") from None
+    if du.shape != (n_rows,) or dv.shape != (n_rows,) or not (np.isfinite(du).all() and np.isfinite(dv).all()):
+        raise ConfigError(
+            f"row_offsets_px: shapes {du.shape} and {dv.shape}: must be {n_rows} finite offsets each (one per row)"
+        )
+    y0, y1 = (0, n_rows) if roi is None else (int(roi[1]), int(roi[3]))
+    du, dv = du[max(y0, 0) : y1], dv[max(y0, 0) : y1]
+    margin = (float(np.max(np.abs(du), initial=0.0)), float(np.max(np.abs(dv), initial=0.0)))
+    return StarFrame(lin, du, dv), dirs, extent, margin, lin
 
 
 def _at_nyquist(f, curve, valid=None) -> float | None:
