@@ -355,7 +355,9 @@ def simulate(
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
     check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
-    bars, previous = _StageBars(), out.exists()
+    from satchain._commit import CommitState, committed_together
+
+    bars, commit = _StageBars(), CommitState()
     try:
         with terminate_as_interrupt() as received:  # SIGTERM as Ctrl-C: the staging files are removed, as by run
 
@@ -363,15 +365,16 @@ def simulate(
                 received.check()  # a signal whose exception library code swallowed stops it here
                 bars(stage, done, total)
 
-            r = simulate_file(
-                input_, out, system_obj, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
-                units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
-                scheduler=scheduler, progress=progress, notify=_say, names=_SIMULATE_OPTIONS, band=band,
-            )  # fmt: skip
-            received.check()
+            with committed_together(received.check) as commit:  # image, preview, focal plane: all or none
+                r = simulate_file(
+                    input_, out, system_obj, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+                    units=units_, noise=not no_noise, seed=seed, focal_plane=focal_plane, focal_plane_grid=fp_grid,
+                    scheduler=scheduler, progress=progress, notify=_say, names=_SIMULATE_OPTIONS, band=band,
+                )  # fmt: skip
     except KeyboardInterrupt as exc:
         bars.close()
-        raise typer.Exit(_interrupted(exc, out, previous, what="simulation", kind="staging files")) from None
+        outputs = [out, out.with_suffix(".png"), *([focal_plane] if focal_plane is not None else [])]
+        raise typer.Exit(_interrupted_simulation(exc, outputs, commit.committed)) from None
     finally:
         bars.close()
     how = ", streamed" if r.streamed else ""
@@ -395,6 +398,27 @@ _SIMULATE_OPTIONS = {
     "seed": "--seed",
     "band": "--band",
 }
+
+
+def _interrupted_simulation(exc: KeyboardInterrupt, outputs: list[Path], committed: bool) -> int:
+    """Say what an interrupted single-file simulation did with its ``outputs`` (committed together: all were
+    written, or none was replaced); the exit status 128 + signal."""
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see _interrupted)
+    names = ", ".join(repr(str(p)) for p in outputs)
+    if committed:
+        what = f"the simulation had finished: {names} were written"
+    else:
+        old = [repr(str(p)) for p in outputs if p.exists()]
+        kept = (
+            f": the previous {', '.join(old)} {'is' if len(old) == 1 else 'are'} unchanged" if old else f" to {names}"
+        )
+        what = f"the simulation stopped and its staging files were removed; nothing was written{kept}"
+    err_console.print(Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red") + Text(what),
+                      highlight=False, soft_wrap=True)  # fmt: skip
+    return 128 + int(signum)
 
 
 def _say(message: str) -> None:

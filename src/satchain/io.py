@@ -41,6 +41,7 @@ import numpy as np
 import tifffile
 from PIL import Image, PngImagePlugin
 
+from satchain._commit import committed_together, defer_rename, staged  # noqa: F401 (named here too)
 from satchain._imagemeta import (  # the checks of what a file says of itself
     _GEO_KEY_DIRECTORY,
     _MODEL_PIXEL_SCALE,
@@ -106,7 +107,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp_path, 0o666 & ~umask)  # mkstemp makes 0600 files; give the usual permissions
-        os.replace(tmp_path, final)
+        if not defer_rename(tmp_path, final):  # inside committed_together: renamed in at the group's end
+            os.replace(tmp_path, final)
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_path.unlink()

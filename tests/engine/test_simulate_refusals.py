@@ -116,7 +116,7 @@ def test_a_scale_that_is_not_finite_and_positive_is_refused_by_name(tmp_path, op
 
 
 # ----------------------------------------------------------------------------- item 5: contradicting pixel size
-@pytest.mark.parametrize("focal_plane", [False, True])  # with --focal-plane the raster is read without its CRS
+@pytest.mark.parametrize("focal_plane", [False, True])
 def test_a_pixel_size_that_contradicts_the_files_transform_is_refused(tmp_path, focal_plane):
     src = _write(tmp_path / "in.tif", _edge())
     out = tmp_path / "out.tif"

@@ -37,13 +37,13 @@ from satchain._safety import (
     memory_limit_bytes,
 )
 from satchain._validate import check_choice
-from satchain.engine.georaster import check_pixel_m, check_scales
+from satchain.engine.georaster import check_scales
 from satchain.engine.memory import check_simulation_memory
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import Simulator
 from satchain.engine.stream import choose_streamed
 from satchain.errors import ConfigError
-from satchain.io import GDAL_SUFFIXES
+from satchain.io import GDAL_SUFFIXES, committed_together
 
 if TYPE_CHECKING:
     from satchain.engine.sensor import SensorModel
@@ -203,19 +203,18 @@ def simulate_file(
     check_scales(scene_pixel_m, input_scale, name)
     out, fp_path = Path(out), (None if focal_plane is None else Path(focal_plane))
     _check_paths(input_, out, fp_path, name)
-    if fp_path is None and Path(input_).suffix.lower() in GDAL_SUFFIXES:
+    if Path(input_).suffix.lower() in GDAL_SUFFIXES:  # georeference, nodata and bands kept (focal plane too)
         from satchain.engine.georaster import simulate_raster
 
         r = simulate_raster(input_, out, system, band=band, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
                             units=units, noise=noise, seed=seed, scheduler=scheduler, progress=progress,
-                            notify=notify, names=names)  # fmt: skip
-        return SimulatedFile(out, r["preview"], r["shape_px"], units, r["streamed"], None, None, r["metadata"],
-                             r["count"], r["crs"], r["transform"])  # fmt: skip
-    if Path(input_).suffix.lower() in GDAL_SUFFIXES:
-        check_pixel_m(input_, scene_pixel_m, name)  # read without its georeference: its pixel size still holds
+                            notify=notify, names=names, focal_plane=fp_path,
+                            focal_plane_grid=focal_plane_grid)  # fmt: skip
+        return SimulatedFile(out, r["preview"], r["shape_px"], units, r["streamed"], fp_path,
+                             r["focal_plane_pixel_m"], r["metadata"], r["count"], r["crs"], r["transform"])  # fmt: skip
     if band is not None:
         raise ConfigError(f"{name('band')} {band!r}: applies to a GDAL raster input (one of "
-                          f"{', '.join(GDAL_SUFFIXES)}) without {name('focal_plane')}")  # fmt: skip
+                          f"{', '.join(GDAL_SUFFIXES)})")  # fmt: skip
     src, scene = ground_truth_source(input_, pixel_m=scene_pixel_m, input_scale=input_scale, names=names)
     sim, streamed = _plan(system, src, focal_plane_grid if fp_path is not None else None, seed)
     if min(src.shape_px) < MIN_INPUT_PX:
@@ -237,10 +236,12 @@ def simulate_file(
     run = dict(sensor=sensor, units=units, noise=bool(noise), seed=int(seed), bits=bits, meta=meta)
     report = progress or (lambda stage, done, total: None)
     if streamed:
-        shape = _simulate_streamed(sim, src, out, scheduler=scheduler, progress=report, notify=notify, **run)
+        with committed_together():  # the image and its preview
+            shape = _simulate_streamed(sim, src, out, scheduler=scheduler, progress=report, notify=notify, **run)
         return SimulatedFile(out, out.with_suffix(".png"), shape, units, True, None, None, meta)
     coarse = _decimate(sim, src, scheduler, f"simulating {src.shape_px[0]}x{src.shape_px[1]} px", report)
-    shape, fp_pixel = _write_in_memory(sim, src, coarse, out, fp_path, focal_plane_grid, **run)
+    with committed_together():  # the image, its preview and the focal plane
+        shape, fp_pixel = _write_in_memory(sim, src, coarse, out, fp_path, focal_plane_grid, **run)
     return SimulatedFile(out, out.with_suffix(".png"), shape, units, False, fp_path, fp_pixel, meta)
 
 

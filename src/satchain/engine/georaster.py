@@ -24,7 +24,14 @@ Memory
     :data:`WORK_BYTES` or the machine's limit if lower), else streamed (the coarse grid on disk, stage 2 in
     tiles sized to fit), so a 20000^2 input needs well under 2 GB (``benchmarks/bench_georaster.py``). Each band
     is written by windows into a tiled staging GeoTIFF, which GDAL's COG driver turns into the output
-    (DEFLATE, 512-px tiles, averaged overviews), written atomically.
+    (DEFLATE, 512-px tiles, averaged overviews). The image, its preview and the focal plane are committed
+    together (:func:`satchain.io.committed_together`): an error or an interruption replaces none of them.
+Focal plane
+    ``focal_plane``: also the focal-plane image (every band; float32 reflectance, in memory only) as a GeoTIFF
+    in the input's CRS. On the input grid its transform is the input's; on the coarse grid (every D-th pixel)
+    sample (j, i) is the D x D input block it is centred on, so its transform is ``T_in * Affine.scale(D)`` (the
+    ground footprint of the samples). The input's invalid pixels are filled as for the image; a sample on an
+    invalid input pixel (coarse: whose block touches one) is NaN, the file's nodata.
 """
 
 from __future__ import annotations
@@ -53,7 +60,9 @@ from satchain.engine.raster_input import (  # noqa: F401 (the input side, named 
     check_scales,
     invalid_cells,
 )
+from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError, SatchainError
+from satchain.io import committed_together
 
 __all__ = ["WORK_BYTES", "RasterBandSource", "check_scales", "invalid_cells", "output_transform", "simulate_raster"]
 
@@ -132,13 +141,16 @@ def simulate_raster(
     names: Mapping[str, str] | None = None,
     check_only: bool = False,
     also_check: Sequence[tuple[Any, str | os.PathLike]] = (),
+    focal_plane: str | os.PathLike | None = None,
+    focal_plane_grid: str = "input",
 ) -> dict[str, Any] | None:
     """Simulate every band (or only ``band``) of a raster file and write the COG ``out`` (and its ``.png``
     preview); see the module docstring. Returns ``{"shape_px", "count", "streamed", "metadata", "preview"}``.
     Options and inputs are checked before anything is written; a failure leaves nothing under ``out``.
     ``check_only``: only those checks (the input, its values' sample, memory and disk); returns None.
     ``also_check``: ``(system, out)`` of other simulations of this input (a sweep's cases), whose checks that
-    depend on the system are made too, before anything is written."""
+    depend on the system are made too, before anything is written. ``focal_plane``: also write the focal-plane
+    image there (see the module docstring); the result then holds its ``focal_plane_pixel_m``."""
     from satchain._safety import clean_stale
     from satchain.engine.sensor import sensor_from_system
 
@@ -156,13 +168,15 @@ def simulate_raster(
         )
     bands = [band] if band is not None else list(range(1, plan.count + 1))
     sources = [_band_source(plan, b, input_scale) for b in bands]
+    fp_grid = None if focal_plane is None else focal_plane_grid
     try:
         for other, other_out in also_check:  # a sweep's other cases of this input: their system's checks alone
             try:
-                _plan_case(plan, bands, sources, other, Path(other_out), units, noise, seed, memory_bytes, name)
+                _plan_case(plan, bands, sources, other, Path(other_out), units, noise, seed, memory_bytes, name,
+                           fp_grid)  # fmt: skip
             except SatchainError as exc:
                 raise type(exc)(f"case {Path(other_out).stem}: {exc}") from None
-        job = _plan_case(plan, bands, sources, system, out, units, noise, seed, memory_bytes, name)
+        job = _plan_case(plan, bands, sources, system, out, units, noise, seed, memory_bytes, name, fp_grid)
     except BaseException:
         for src in sources:
             src.close()
@@ -190,7 +204,8 @@ def simulate_raster(
     out.parent.mkdir(parents=True, exist_ok=True)
     clean_stale(out)
     report = progress or (lambda stage, done, total: None)
-    with _staging(out) as d:
+    fp = None if focal_plane is None else _FocalPlane(Path(focal_plane), fp_grid, plan, sim0, len(bands), meta)
+    with committed_together(), _staging(out) as d:
         stage_tif = d / "stage.tif"
         with _open_staging(stage_tif, plan, sim0.output_shape, len(bands), dtype, nodata, transform, meta) as dst:
             for i, (b, sim, src, s) in enumerate(zip(bands, sims, sources, systems, strict=True)):
@@ -198,14 +213,17 @@ def simulate_raster(
                 tag = f"band {b}/{plan.count}: " if len(bands) > 1 else ""
                 write = _Writer(dst, i + 1, src, sim, dtype, nodata, lowest, bits)
                 run = dict(sensor=sensor_b, units=units, noise=noise, seed=_seed(seed, i), scheduler=scheduler)
-                _form_band(sim, src, write, d, planned[i][1], tag, report, **run)
+                _form_band(sim, src, write, d, planned[i][1], tag, report, fp=fp, **run)
                 dst.set_band_description(i + 1, plan.descriptions[b - 1] or f"band {b}")
                 dst.update_tags(i + 1, wavelength_m=f"{s.optics.effective_wavelength_m:.6g}", input_band=str(b))
                 src.close()
         _write_cog(stage_tif, out)
-    preview = _write_preview(out, nodata)
+        preview = _write_preview(out, nodata)
+        if fp is not None:
+            fp.write()
     return {"shape_px": sim0.output_shape, "count": len(bands), "streamed": streamed, "metadata": meta,
-            "preview": preview, "transform": transform, "crs": plan.crs}  # fmt: skip
+            "preview": preview, "transform": transform, "crs": plan.crs,
+            "focal_plane_pixel_m": None if fp is None else fp.pixel_m}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -226,7 +244,8 @@ class _Job:
 
 
 def _plan_case(plan: _Plan, bands: list[int], sources: list[RasterBandSource], system, out: Path, units: str,
-               noise: bool, seed: int, memory_bytes: float | None, name: Callable[[str], str]) -> _Job:  # fmt: skip
+               noise: bool, seed: int, memory_bytes: float | None, name: Callable[[str], str],
+               fp_grid: str | None = None) -> _Job:  # fmt: skip
     """Everything ``system`` needs checked before the input is simulated by it into ``out``: its bands, the
     output's disk, the simulators in the memory budget, an output pixel that is not nodata."""
     from satchain._safety import check_disk, memory_limit_bytes
@@ -238,7 +257,7 @@ def _plan_case(plan: _Plan, bands: list[int], sources: list[RasterBandSource], s
     systems = [system.for_band(b - 1) for b in bands]
     _check_output_disk(plan, system, len(bands), units, out)  # before planning, which grows with the input
     budget = min(float(memory_bytes or WORK_BYTES), float(memory_limit_bytes()))
-    planned = [_simulator(s, plan, budget, seed) for s in systems]  # one line-of-sight motion for every band
+    planned = [_simulator(s, plan, budget, seed, fp_grid) for s in systems]  # one line-of-sight motion for every band
     sims, streamed = [p[0] for p in planned], any(p[1] for p in planned)
     for b, src, sim in zip(bands, sources, sims, strict=True):
         _check_some_valid(src, sim, b, name)
@@ -291,14 +310,20 @@ def _in_memory(sim, budget: float) -> bool:
     return simulation_bytes(sim) <= budget and sim.frame_bytes <= sim.params.max_frame_bytes
 
 
-def _simulator(system, plan: _Plan, budget: float, seed: int = 0):
+def _simulator(system, plan: _Plan, budget: float, seed: int = 0, fp_grid: str | None = None):
     """``(simulator, streamed)`` of a band: in memory when its estimate fits ``budget``, else streamed in tiles
-    that fit."""
+    that fit; with a focal plane (``fp_grid``) in memory, or refused when it cannot fit."""
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.stream import stream_bytes
     from satchain.errors import ResourceLimitError
 
     sim = Simulator(system, input_pixel_m=plan.pixel_m, input_shape=plan.shape, motion_seed=seed)
+    if fp_grid is not None:  # the focal plane is a full-frame product
+        from satchain.engine.memory import check_simulation_memory
+
+        check_simulation_memory(sim, focal_plane=fp_grid)
+        sim.check_frame()
+        return sim, False
     if _in_memory(sim, budget):
         return sim, False
     if min(sim.k) < 1:  # an output finer than the input is not a streaming job: in memory, if it fits at all
@@ -367,9 +392,9 @@ def _open_staging(path: Path, plan: _Plan, shape, count: int, dtype, nodata: flo
 
 
 def _form_band(sim, src, write: _Writer, scratch: Path, streamed: bool, tag: str, report: Progress, *, sensor,
-               units: str, noise: bool, seed: int, scheduler: str | None) -> None:  # fmt: skip
+               units: str, noise: bool, seed: int, scheduler: str | None, fp=None) -> None:  # fmt: skip
     """Both stages and the sensor for one band, in memory or streamed (stage 1 on a Dask ``scheduler`` when
-    given); rows go to ``write``."""
+    given); rows go to ``write``, the band's focal plane (in memory only) to ``fp``."""
     from satchain.engine.files import _decimate
     from satchain.engine.stream import FarField, coarse_store, stream_tile_px, stream_tiles
 
@@ -379,6 +404,8 @@ def _form_band(sim, src, write: _Writer, scratch: Path, streamed: bool, tag: str
     (iy, ix), (ny, nx) = sim.input_shape, sim.output_shape
     if not streamed:
         coarse = _decimate(sim, src, scheduler, f"{tag}simulating {iy}x{ix} px", report)
+        if fp is not None:
+            fp.add(src, sim.focal_plane(coarse, grid=fp.grid))
         img = sim.form_image(coarse)
         del coarse
         if sensor is not None:
@@ -424,9 +451,10 @@ def _write_cog(stage: Path, out: Path) -> None:
 def _write_preview(out: Path, nodata: float) -> Path:
     """A PNG of band 1 beside ``out`` (from the COG's overviews; at most :data:`_PREVIEW_MAX_PX` a side)."""
     from satchain import io
+    from satchain.io import staged
     from satchain.raster import open_raster
 
-    with open_raster(out, band=1) as r:
+    with open_raster(staged(out), band=1) as r:  # the COG, committed with the preview
         values, valid = r.overview(_PREVIEW_MAX_PX)
         step = r.shape[1] / values.shape[1]
         pixel = r.pixel_m[0] * step if r.pixel_m else None
@@ -436,3 +464,51 @@ def _write_preview(out: Path, nodata: float) -> Path:
     png = out.with_suffix(".png")
     io.write_png(png, io.preview_uint8(v), pixel_m=pixel)
     return png
+
+
+class _FocalPlane:
+    """The focal-plane images of the bands (see the module docstring), gathered in memory and written as one
+    GeoTIFF at ``path``."""
+
+    def __init__(self, path: Path, grid: str, plan: _Plan, sim, count: int, meta: Mapping[str, Any]):
+        from affine import Affine
+
+        self.path, self.grid, self.plan, self.count, self.bands = path, grid, plan, count, []
+        d = int(sim.D) if grid == "coarse" else 1
+        self.d, self.pixel_m = d, plan.pixel_m * d
+        self.transform = plan.transform @ Affine.scale(d, d)  # the samples' ground footprint
+        self.meta = {"units": "input (reflectance) filtered by the optics and motion", "system": meta["system"],
+                     "grid": grid, "pixel_m": self.pixel_m, "input": meta["input"]}  # fmt: skip
+
+    def add(self, src: RasterBandSource, image: np.ndarray) -> None:
+        """One band's focal plane, NaN where it sits on invalid input."""
+        a = image.astype(np.float32)
+        valid = src.valid(Window(0, 0, *src.shape_px)) if src.masked else None
+        if valid is not None and not valid.all():
+            a[_blocks_invalid(valid, self.d, a.shape)] = np.nan
+        self.bands.append(a)
+
+    def write(self) -> None:
+        from satchain.io import atomic_path
+        from satchain.raster import _gdal_env, _rasterio
+
+        rasterio = _rasterio()
+        ny, nx = self.bands[0].shape
+        profile = dict(driver="GTiff", width=nx, height=ny, count=len(self.bands), dtype="float32",
+                       crs=self.plan.crs, transform=self.transform, nodata=float("nan"), tiled=True,
+                       blockxsize=256, blockysize=256, compress="deflate", BIGTIFF="IF_SAFER")  # fmt: skip
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(self.path) as tmp, _gdal_env(), rasterio.open(tmp, "w", **profile) as dst:
+            dst.update_tags(TIFFTAG_IMAGEDESCRIPTION=json.dumps({"satchain": self.meta}))
+            for i, a in enumerate(self.bands):
+                dst.write(a, i + 1)
+
+
+def _blocks_invalid(valid: np.ndarray, d: int, shape: tuple[int, int]) -> np.ndarray:
+    """True at the samples (``shape``; sample (j, i) = input block ``[d j, d j + d) x [d i, d i + d)``) that
+    touch an invalid input pixel (beyond the input counts as valid: the image's fill)."""
+    ny, nx = shape
+    pad = np.ones((ny * d, nx * d), dtype=bool)
+    h, w = min(valid.shape[0], ny * d), min(valid.shape[1], nx * d)
+    pad[:h, :w] = valid[:h, :w]
+    return ~pad.reshape(ny, d, nx, d).all(axis=(1, 3))
