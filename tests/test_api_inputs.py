@@ -282,3 +282,16 @@ def test_predict_refuses_an_unknown_quality_key_naming_it_and_the_allowed_ones()
 def test_predict_refuses_a_quality_figure_that_is_no_number(key, value):
     with pytest.raises(ConfigError, match=rf"quality\['{key}'\] = "):
         satchain.predict(SYSTEM, _TRUTH, quality={key: value})
+
+
+@pytest.mark.parametrize(("key", "value"), [("rer", 0.3), ("gsd_m", 1.0), ("otf_kind", "x"), ("giqe4", 9.0)])
+def test_predict_refuses_a_quality_figure_it_does_not_use_unless_it_is_the_systems_own(key, value):
+    """{"rer": 0.3} used to be accepted and ignored (the NIIRS came from the system's rer_giqe5): refused, naming
+    the key and the keys predict uses; a whole record of this system (the pipeline's) is still taken."""
+    with pytest.raises(ConfigError, match=rf"quality\['{key}'\] = .*not use.*giqe5, rer_giqe5, snr"):
+        satchain.predict(SYSTEM, _TRUTH, quality={key: value})
+    q = satchain.predict_quality(SYSTEM).to_dict()
+    with pytest.raises(ConfigError, match=rf"quality\['{key}'\]"):  # an edited whole record
+        satchain.predict(SYSTEM, _TRUTH, quality={**q, key: value})
+    own = satchain.predict(SYSTEM, _TRUTH, quality={key: q[key], "snr": 50.0})  # the system's own value: harmless
+    assert own.snr == 50.0 and own.rer == q["rer_giqe5"]

@@ -420,14 +420,35 @@ def predict_quality(system, *, otf=None, kernel=None, df_cy_per_px: float = 0.00
 QUALITY_USED = ("giqe5", "rer_giqe5", "snr")
 
 
+def _refuse_unused(given: dict[str, Any], own: dict[str, Any]) -> None:
+    """Refuse a figure of ``given`` that is not used (not in :data:`QUALITY_USED`) and differs from the system's
+    own (``own``): it would be ignored without a word."""
+    for k, v in given.items():
+        mine = own[k]
+        if k in QUALITY_USED or v == mine:
+            continue
+        try:
+            same = not isinstance(mine, str) and (math.isclose(float(v), mine, rel_tol=1e-9) or
+                                                  (math.isnan(float(v)) and math.isnan(mine)))  # fmt: skip
+        except (TypeError, ValueError):
+            same = False
+        if not same:
+            raise ConfigError(
+                f"quality[{k!r}] = {v!r}: predict does not use it (it uses {', '.join(QUALITY_USED)}: the NIIRS "
+                f"given, or that of the RER and SNR used), and it is not this system's ({mine!r}); leave it out, "
+                "or give the figure used (an RER as 'rer_giqe5')"
+            )
+
+
 def complete_quality(system, quality=None, *, otf=None) -> dict[str, Any]:
     """A quality mapping with every figure it does not give taken from :func:`predict_quality` (``system``).
 
-    ``quality`` (None: all predicted) may give any of :class:`QualityResult`'s fields (a whole ``.to_dict()``
-    too); ``giqe5``, ``rer_giqe5`` and ``snr`` are used. Without ``giqe5`` the NIIRS is that of the RER and
-    SNR used (:func:`giqe5`), so ``{"snr": 50}`` gives the system's NIIRS at SNR 50. A key that is no field
-    is refused naming it and the allowed ones, as is a used figure that is no finite number (> 0 for the RER
-    and SNR).
+    ``quality`` (None: all predicted) gives ``giqe5``, ``rer_giqe5`` and ``snr``, the figures that are used, or
+    some of them; another of :class:`QualityResult`'s fields is taken only as the system's own value (a whole
+    ``predict_quality(system).to_dict()``), as it is not used: one that differs (``{"rer": 0.3}``) is refused,
+    naming the figures used. Without ``giqe5`` the NIIRS is that of the RER and SNR used (:func:`giqe5`), so
+    ``{"snr": 50}`` gives the system's NIIRS at SNR 50. A key that is no field is refused naming it and the
+    allowed ones, as is a used figure that is no finite number (> 0 for the RER and SNR).
 
     Examples
     --------
@@ -449,9 +470,11 @@ def complete_quality(system, quality=None, *, otf=None) -> dict[str, Any]:
         if k in given:
             lo = None if k == "giqe5" else 0.0
             given[k] = check_range(f"quality[{k!r}]", given[k], lo, None, lo_open=True)
-    if all(k in given for k in QUALITY_USED):
+    if set(given) == set(QUALITY_USED):
         return given
-    out = {**predict_quality(system, otf=otf).to_dict(), **given}
+    own = predict_quality(system, otf=otf).to_dict()
+    _refuse_unused(given, own)
+    out = {**own, **given}
     if "giqe5" not in given:
         elev = system.orbit.elevation_deg
         out["giqe5"] = giqe5(gsd_in=out["gsd_in"], rer=out["rer_giqe5"], snr=out["snr"], elevation_deg=elev)
