@@ -13,6 +13,7 @@ import typer
 from rich.console import Console
 from rich.text import Text
 
+from satchain._safety import end_startup
 from satchain.errors import ConfigError, SatchainError
 
 __all__ = [
@@ -93,6 +94,8 @@ def handle_errors(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        if not getattr(fn, "handles_interrupts", False):  # it may write: SIGTERM's default action again
+            end_startup()
         try:
             return fn(*args, **kwargs)
         except (typer.Exit, typer.Abort, click.exceptions.Exit, click.exceptions.Abort, click.ClickException):

@@ -263,6 +263,34 @@ class _Received:
             raise Interrupted(self.signum)
 
 
+def _starting(signum, frame):  # noqa: ARG001 (a signal handler's signature)
+    """SIGTERM while the command line starts (imports, options): nothing was written yet; one line, 128 + 15."""
+    sys.stderr.write(f"interrupted ({signal.Signals(signum).name}): satchain was starting; nothing was written\n")
+    sys.stderr.flush()
+    os._exit(128 + int(signum))
+
+
+def install_startup_handler() -> None:
+    """Answer SIGTERM from the command line's first import on (a command that writes takes over with
+    :func:`terminate_as_interrupt`; :func:`end_startup` puts the default back). Only for the process's own
+    command line (``satchain`` or ``python -m satchain``), in the main thread, over the default action; the
+    Python start-up before it (about 0.1 s) keeps the default: killed without a word, nothing written."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    entry = os.path.basename(getattr(main, "__file__", "") or "") == "satchain" or (
+        spec is not None and spec.name == "satchain.__main__"
+    )
+    if entry and threading.current_thread() is threading.main_thread():
+        if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+            signal.signal(signal.SIGTERM, _starting)
+
+
+def end_startup() -> None:
+    """The default SIGTERM action again, once a command may write (unless it installs its own handler)."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is _starting:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 @contextlib.contextmanager
 def terminate_as_interrupt() -> Iterator[_Received]:
     """Within the block, SIGTERM raises :class:`Interrupted` (as Ctrl-C raises KeyboardInterrupt), so
@@ -287,8 +315,9 @@ def terminate_as_interrupt() -> Iterator[_Received]:
             received.signum = int(signum)
         raise KeyboardInterrupt
 
-    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
-        handlers[signal.SIGTERM] = signal.signal(signal.SIGTERM, _raise)
+    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None, _starting):  # the start-up's: taken over
+        previous = signal.signal(signal.SIGTERM, _raise)
+        handlers[signal.SIGTERM] = signal.SIG_DFL if previous is _starting else previous
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         handlers[signal.SIGINT] = signal.signal(signal.SIGINT, _sigint)
     previous_hook = sys.unraisablehook

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import satchain._startup  # noqa: F401 (first: SIGTERM answered from the first import on)
+
+# isort: split
 import json
 import os
 from pathlib import Path
@@ -39,6 +42,13 @@ SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML fi
 
 
 _handle_errors = handle_errors
+
+
+def _handles_interrupts(fn):
+    """A command that answers SIGTERM itself once it writes (satchain._safety.terminate_as_interrupt): the
+    start-up's answer ("nothing was written") stays until then."""
+    fn.handles_interrupts = True
+    return fn
 
 
 @app.callback()
@@ -294,6 +304,7 @@ class _StageBars:
 
 @app.command()
 @_handle_errors
+@_handles_interrupts
 def simulate(
     inputs: Annotated[
         list[str],
@@ -455,6 +466,7 @@ def _print_run(result) -> None:
 
 @app.command()
 @_handle_errors
+@_handles_interrupts
 def run(
     preset: PresetOpt = None,
     config: Annotated[Path | None, typer.Option("--config", help="run configuration TOML (see --print-config)")] = None,

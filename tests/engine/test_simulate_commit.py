@@ -101,3 +101,38 @@ def test_a_signal_during_the_renames_waits_until_every_output_is_in(tmp_path):
     with rasterio.open(outs[0]) as a, rasterio.open(outs[2]) as f:
         assert a.crs.to_epsg() == 32636 and f.crs.to_epsg() == 32636
         assert np.nanmax(f.read(1)) > 0.6  # this run's scene (0.7), not an earlier one
+
+
+def test_a_signal_while_the_command_line_starts_is_answered_in_one_line(tmp_path):
+    """SIGTERM before simulate's own handler (here: while the system is loaded) says nothing was written, as
+    the console script ``satchain`` runs it (the handler is installed at the command line's first import)."""
+    script = tmp_path / "satchain"  # the console script's name: the start-up handler is the entry point's only
+    script.write_text(_CHILD)
+    (tmp_path / "o").mkdir()
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    cmd = [
+        sys.executable,
+        str(script),
+        str(int(signal.SIGTERM)),
+        "satchain.cli:_system",
+        "simulate",
+        str(_raster(tmp_path / "in.tif", 0.7)),
+        "--preset",
+        "ankarasat3",
+        "-o",
+        str(tmp_path / "o" / "OUT.tif"),
+    ]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120,
+                       preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))  # fmt: skip
+    assert p.returncode == 128 + signal.SIGTERM, (p.returncode, p.stderr[-800:])
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "interrupted (SIGTERM)" in lines[0] and "nothing was written" in lines[0], p.stderr
+    assert list((tmp_path / "o").iterdir()) == []
+
+
+def test_importing_the_command_line_leaves_sigterm_alone_in_another_program():
+    import satchain.cli  # noqa: F401
+
+    assert signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None) or "satchain" not in str(
+        getattr(signal.getsignal(signal.SIGTERM), "__module__", "")
+    )
