@@ -378,3 +378,43 @@ def test_errors_exit_2_with_a_clear_message(tmp_path):
     results.append(_err(["auto", str(edge), "--truth", str(tmp_path / "none.json")], "no such file"))
 
     assert len(results) >= 15 and all(r.exit_code == 2 and r.stderr for r in results)
+
+
+# issue 29 follow-up: item 5's rule for measure: a --pixel-m that contradicts the GeoTIFF's georeference is refused
+def _geotiff_049(tmp_path):
+    import rasterio
+    from rasterio import Affine
+
+    n = 160
+    y, x = np.mgrid[0:n, 0:n]
+    a = np.where((x - n / 2) + 0.1 * (y - n / 2) > 0, 0.8, 0.1).astype("float32")
+    path = tmp_path / "g.tif"
+    with rasterio.open(path, "w", driver="GTiff", width=n, height=n, count=1, dtype="float32", crs="EPSG:32636",
+                       transform=Affine(0.49, 0, 5e5, 0, -0.49, 4.4e6)) as d:  # fmt: skip
+        d.write(a, 1)
+    return path
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["edge"],
+        ["find"],
+        ["star", "--cycles", "32"],
+        ["bars", "--periods-px", "4"],
+        ["wedge"],
+        ["jitter", "--line-time", "1e-4"],
+    ],  # fmt: skip
+)
+def test_a_pixel_m_that_contradicts_the_geotiff_is_refused_by_every_measure_command(tmp_path, args):
+    path = _geotiff_049(tmp_path)
+    r = runner.invoke(measure_app, [args[0], str(path), *args[1:], "--pixel-m", "5"])
+    line = " ".join(r.output.split())
+    assert r.exit_code == 2 and "--pixel-m = 5" in line and "0.49 m" in line and "contradicts" in line, r.output
+
+
+def test_a_pixel_m_that_agrees_with_the_geotiff_uses_the_files(tmp_path):
+    path = _geotiff_049(tmp_path)
+    r = runner.invoke(measure_app, ["edge", str(path), "--pixel-m", "0.4901", "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output[r.output.index("{") :])["pixel_m"] == pytest.approx(0.49, rel=1e-12)

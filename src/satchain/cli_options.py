@@ -269,6 +269,10 @@ def load_image(path: Path, pixel_m: float | None, band: int | None = None):
         meta = {**meta, "valid": valid}
     if pixel_m is not None:
         pixel_m = check_positive("--pixel-m", pixel_m)
+        if Path(path).suffix.lower() in GDAL_SUFFIXES and not meta.get("pixel_m_xy"):  # as simulate's
+            from satchain.engine.raster_input import check_pixel_m
+
+            pixel_m = check_pixel_m(path, pixel_m, lambda _: "--pixel-m")  # a contradiction of the file's refused
     elif meta.get("pixel_m_xy"):  # not square: no one ground frequency per cy/px; said, not guessed
         sx, sy = meta["pixel_m_xy"]
         meta = {**meta, "pixel_m_note": f"IMAGE {str(path)!r}: its pixels are {sx:.6g} x {sy:.6g} m (not square): "

@@ -173,15 +173,16 @@ def _own_pixel_m(r, meta: Mapping[str, Any]) -> float | None:
     return own if isinstance(own, float) else None
 
 
-def check_pixel_m(path: str | os.PathLike, scene_pixel_m: float | None, name: Callable[[str], str]) -> None:
+def check_pixel_m(path: str | os.PathLike, scene_pixel_m: float | None, name: Callable[[str], str]) -> float | None:
     """Refuse a ``scene_pixel_m`` that contradicts the pixel size the georeference of the raster ``path``
-    states (see :func:`_given_pixel_m`), for the paths that read it without it (``--focal-plane``)."""
+    states (see :func:`_given_pixel_m`; e.g. ``measure --pixel-m``); returns the pixel size to use (the file's
+    where they agree), None when none is given."""
     from satchain.raster import open_raster
 
     if scene_pixel_m is None:
-        return
+        return None
     with open_raster(path) as r:
-        _given_pixel_m(float(scene_pixel_m), _georeferenced_pixel_m(r), Path(path), name)
+        return _given_pixel_m(float(scene_pixel_m), _georeferenced_pixel_m(r), Path(path), name)
 
 
 def _georeferenced_pixel_m(r) -> float | None:
