@@ -10,6 +10,7 @@ from satchain.check_sigma import edge_angle_sigma
 from satchain.comparison._common import finite, sigma_or_why, within
 from satchain.comparison.records import CheckRow, EdgeCheck
 from satchain.prediction import Predictions
+from satchain.tf.pushbroom_roi import rows_blur_otf
 
 __all__ = ["edge_checks"]
 
@@ -23,7 +24,11 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
     for e in entries:
         p = pred.edge(e["id"], e["direction"])
         meas = finite(e.get("mtf_at_nyquist"))
-        err = None if meas is None else meas - p.mtf_at_nyquist
+        moved, flags = _as_imaged(e, p, pred), list(e.get("flags") or []) + _alt_rows_moved(e, pred)
+        p_nyq, run_flags = _compared_prediction(
+            e, moved.get("mtf_at_nyquist_predicted_per_row"), p.mtf_at_nyquist, moved, flags
+        )
+        err = None if meas is None else meas - p_nyq
         f = np.asarray(e.get("f_cy_per_px", []), float)
         a, a_true = finite(e.get("angle_deg")), finite(e.get("angle_deg_truth"))
         a_los = _angle_through_rows(e, pred)
@@ -38,7 +43,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 "angle_deg": a,
                 "angle_deg_truth": a_true,
                 "mtf_at_nyquist_measured": meas,
-                "mtf_at_nyquist_predicted": p.mtf_at_nyquist,
+                "mtf_at_nyquist_predicted": p_nyq,
                 "mtf_at_nyquist_error": err,
                 "pass": within(err, tol.edge_mtf_at_nyquist),
                 "rer_measured": finite(e.get("rer")),
@@ -48,9 +53,9 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 "mtf_predicted": p.mtf(f).tolist(),
                 "mtf_at_nyquist_sigma": finite(e.get("mtf_at_nyquist_sigma", e.get("mtf_at_nyquist_std"))),
                 "mtf_sigma": e.get("mtf_sigma"),
-                "flags": list(e.get("flags") or []) + _alt_rows_moved(e, pred),
+                "flags": flags + run_flags,
                 **({"angle_deg_expected": a_ref} if geometric else {}),
-                **_as_imaged(e, p, pred),
+                **moved,
             }
         )
         why = None if meas is not None else "the edge gave no MTF at Nyquist"
@@ -58,7 +63,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
         rows.append(
             CheckRow(
                 f"edge {e['id']} MTF@Nyquist ({e['direction']})", "edge_mtf_at_nyquist", e["id"], meas,
-                p.mtf_at_nyquist, err, tol.edge_mtf_at_nyquist, f"±{tol.edge_mtf_at_nyquist}",
+                p_nyq, err, tol.edge_mtf_at_nyquist, f"±{tol.edge_mtf_at_nyquist}",
                 within(err, tol.edge_mtf_at_nyquist), why, *sig, note=_as_imaged_note(details[-1]),
             )
         )  # fmt: skip
@@ -93,20 +98,68 @@ def _as_imaged(e: dict, p, pred: Predictions) -> dict:
     """An edge on a pushbroom image whose rows the line of sight displaces: its MTF at Nyquist as imaged (the
     rows' displacements folded in, ISO 12233) measured, and predicted over its region's rows
     (:meth:`satchain.tf.pushbroom.PushbroomTerms.as_imaged_otf` over the budget's per-row terms, on each axis of
-    the normal), with the motion the measurement removed; {} without such a geometry."""
+    the normal) about a straight edge and about the measurement's own edge polynomial (``fit_degree``: what its
+    headline MTF folds in when it does not locate each line), the motion the measurement removed and the rms
+    displacement the geometry predicts about a straight edge over the region's rows; {} without such a
+    geometry."""
     geo = getattr(pred, "geometry", None)
     terms, roi = getattr(geo, "terms", None), e.get("roi_px")
-    meas = finite(e.get("mtf_as_imaged_at_nyquist"))
-    if terms is None or roi is None or meas is None or not geo.moves:
+    if terms is None or roi is None or not geo.moves:
         return {}
-    out = {"mtf_as_imaged_at_nyquist_measured": meas, "los_motion_rms_px": finite(e.get("los_motion_rms_px"))}
-    ratio, span = 1.0, {"first_line": int(roi[1]), "n_lines": int(roi[3]) - int(roi[1])}
+    ratio, ratio_fit, ratio_rows = 1.0, 1.0, 1.0
+    span = {"first_line": max(int(roi[1]), 0), "n_lines": int(roi[3]) - max(int(roi[1]), 0)}
+    deg = int(min(max(int(e.get("fit_degree") or 1), 1), 3))
     for axis, comp in zip(("act", "alt"), np.abs(np.asarray(p.normal, float)), strict=True):
         if comp > 1e-6:  # lines in time (an ACT edge's rows): about the straight edge; else about the mean
             per = abs(terms.per_row_otf(0.5 * comp, axis)[0])
-            img = terms.as_imaged_otf(0.5 * comp, axis, **span, about_line=e["direction"] == "ACT")[0]
-            ratio = ratio * img / per if per > 1e-3 else float("nan")
-    return out | {"mtf_as_imaged_at_nyquist_predicted": finite(p.mtf_at_nyquist * ratio)}
+            kw = {**span, "about_line": e["direction"] == "ACT"}
+            img = terms.as_imaged_otf(0.5 * comp, axis, **kw)[0]
+            fit = img if deg == 1 else terms.as_imaged_otf(0.5 * comp, axis, **kw, degree=deg)[0]
+            own = rows_blur_otf(terms, 0.5 * comp, axis, **span)[0]  # the rows' blur as their paths are
+            if per <= 1e-3:
+                ratio = ratio_fit = ratio_rows = float("nan")
+                continue
+            ratio, ratio_fit, ratio_rows = ratio * img / per, ratio_fit * fit / per, ratio_rows * own / per
+    rows = np.arange(span["first_line"], min(int(roi[3]), np.asarray(geo.dx_px).size))
+    d = np.asarray(geo.dx_px if e["direction"] == "ACT" else geo.dy_px, float)[rows]
+    rms = float(np.std(d - np.polyval(np.polyfit(rows, d, 1), rows))) if d.size > 2 else 0.0
+    return {
+        "mtf_as_imaged_at_nyquist_measured": finite(e.get("mtf_as_imaged_at_nyquist")),
+        "los_motion_rms_px": finite(e.get("los_motion_rms_px")),
+        "mtf_as_imaged_at_nyquist_predicted": finite(p.mtf_at_nyquist * ratio),
+        "mtf_at_nyquist_predicted_per_row": finite(p.mtf_at_nyquist * ratio_rows),
+        "mtf_at_nyquist_predicted_as_located": finite(p.mtf_at_nyquist * ratio_fit),
+        "los_motion_rms_px_predicted": rms,
+        "fit_degree": deg,
+    }
+
+
+#: The run flags an edge whose lines the geometry displaces when its as-imaged and per-row MTFs at Nyquist differ
+#: by more than this, or the displacement about a straight edge over its rows exceeds LOS_FLAG_RMS_PX.
+LOS_FLAG_MTF = 0.01
+LOS_FLAG_RMS_PX = 0.03
+
+
+def _compared_prediction(e: dict, per_row, budget: float, moved: dict, flags: list) -> tuple[float, list[str]]:
+    """The prediction of what the edge's headline MTF at Nyquist measures, and the run's own flags: the per-row
+    terms (the blur about each row's position over the region's rows as their paths are, ``per_row``; the
+    budget's expectation ``budget`` without a moving geometry) where the measurement located each line (its flag
+    ``line_of_sight_motion``: ``mtf_aligned``) or nothing moves the rows; else the MTF as imaged over the
+    region's rows about the measurement's own edge polynomial, and flag ``line_of_sight_motion`` when the
+    geometry's displacement changes it (more than :data:`LOS_FLAG_MTF` from the per-row MTF, or over
+    :data:`LOS_FLAG_RMS_PX` rms) though the measurement saw no motion. An ALT edge flagged
+    ``alt_line_of_sight_motion`` keeps the budget's per-row terms (see its note)."""
+    located = moved.get("mtf_at_nyquist_predicted_as_located")
+    if "alt_line_of_sight_motion" in flags or not moved:
+        return budget, []
+    if "line_of_sight_motion" in flags or located is None:
+        moved["mtf_at_nyquist_compared"] = "aligned"
+        return (budget if per_row is None else per_row), []
+    moved["mtf_at_nyquist_compared"] = "as_imaged"
+    line, ref = moved.get("mtf_as_imaged_at_nyquist_predicted"), budget if per_row is None else per_row
+    big = moved["los_motion_rms_px_predicted"] > LOS_FLAG_RMS_PX
+    return located, (["line_of_sight_motion"] if big or (line is not None and abs(line - ref) > LOS_FLAG_MTF)
+                     else [])  # fmt: skip
 
 
 def _alt_rows_moved(e: dict, pred: Predictions) -> list[str]:
@@ -121,8 +174,9 @@ def _alt_rows_moved(e: dict, pred: Predictions) -> list[str]:
 
 
 def _as_imaged_note(d: dict) -> str | None:
-    """The MTF row's note for an edge whose lines the line of sight moves (flag ``line_of_sight_motion``), or an
-    ALT edge whose rows it displaces (``alt_line_of_sight_motion``)."""
+    """The MTF row's note for an edge whose lines the line of sight moves: which quantity is compared (aligned:
+    each line located; as imaged: the lines' displacements folded in), or an ALT edge whose rows it displaces
+    (``alt_line_of_sight_motion``)."""
     if "alt_line_of_sight_motion" in d["flags"]:
         return (
             "an ALT edge whose rows the line of sight displaces along its normal: the displacements warp the ESF's "
@@ -130,14 +184,29 @@ def _as_imaged_note(d: dict) -> str | None:
             "show them; the measured MTF is as imaged, the prediction the budget's per-row terms (not like with "
             "like: measure the motion on a near-vertical edge)"
         )
-    if "line_of_sight_motion" not in d["flags"] or d.get("mtf_as_imaged_at_nyquist_measured") is None:
+    how, imaged = d.get("mtf_at_nyquist_compared"), d.get("mtf_as_imaged_at_nyquist_measured")
+    if how is None or (how == "aligned" and "line_of_sight_motion" not in d["flags"]):
         return None
-    pred = d.get("mtf_as_imaged_at_nyquist_predicted")
+    pred, rms = d.get("mtf_as_imaged_at_nyquist_predicted"), d.get("los_motion_rms_px_predicted") or 0.0
+    tail = "" if imaged is None else f"as imaged (ISO 12233, one straight edge): measured {imaged:.3f}"
+    tail += "" if pred is None else f"{', p' if tail else 'p'}redicted over the region's rows {pred:.3f}"
+    if how == "aligned":
+        return (
+            f"aligned: measured with each line located ({d.get('los_motion_rms_px') or 0:.3f} px rms of "
+            "line-of-sight motion removed) vs the per-row motion terms (the blur about each row's position, over "
+            "the region's rows as their paths are)" + (f"; {tail}" if tail else "")
+        )
+    flag = "line_of_sight_motion" in d["flags"]
+    moved = f"the geometry displaces the region's lines by {rms:.3f} px rms about a straight edge" + (
+        ", below what the measurement could locate line by line (flag line_of_sight_motion)" if flag else ""
+    )
     return (
-        f"measured with each line located ({d.get('los_motion_rms_px') or 0:.3f} px rms of line-of-sight motion "
-        "removed) vs the budget's per-row motion terms; as imaged (ISO 12233, the lines' displacements folded in): "
-        f"measured {d['mtf_as_imaged_at_nyquist_measured']:.3f}"
-        + ("" if pred is None else f", predicted over the region's rows {pred:.3f}")
+        "as imaged"
+        + (f": {moved}" if rms > LOS_FLAG_RMS_PX or flag else "")
+        + f"; the headline (the edge located as a degree-{int(d.get('fit_degree') or 1)} curve, the lines' "
+        f"displacements about it folded in) vs the MTF as imaged about that curve over the region's rows "
+        f"{d['mtf_at_nyquist_predicted']:.3f} (per-row terms over those rows "
+        f"{d.get('mtf_at_nyquist_predicted_per_row') or float('nan'):.3f})" + (f"; {tail}" if tail else "")
     )
 
 

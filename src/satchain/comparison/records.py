@@ -158,12 +158,21 @@ class EdgeCheck(_Detail):
     mtf_as_imaged_at_nyquist_measured: float | None = None
     mtf_as_imaged_at_nyquist_predicted: float | None = None
     los_motion_rms_px: float | None = None
+    # which MTF at Nyquist the headline is compared as ("aligned": each line located, the per-row terms over its rows;
+    # "as_imaged": the lines' displacements about the measurement's edge polynomial folded in, predicted over its
+    # rows), both predictions, the polynomial's degree and the rms displacement the geometry predicts over them
+    mtf_at_nyquist_compared: str | None = None
+    mtf_at_nyquist_predicted_per_row: float | None = None
+    mtf_at_nyquist_predicted_as_located: float | None = None
+    los_motion_rms_px_predicted: float | None = None
+    fit_degree: int | None = None
     as_built: dict | None = None  # the prediction for the camera as built (written only for such a run)
 
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
         for k in ("angle_deg_expected", "mtf_as_imaged_at_nyquist_measured", "mtf_as_imaged_at_nyquist_predicted",
-                  "los_motion_rms_px"):  # fmt: skip
+                  "los_motion_rms_px", "mtf_at_nyquist_compared", "mtf_at_nyquist_predicted_per_row",
+                  "mtf_at_nyquist_predicted_as_located", "los_motion_rms_px_predicted", "fit_degree"):  # fmt: skip
             if d[k] is None:
                 del d[k]
         return d
@@ -241,6 +250,15 @@ class BarCheck(_Detail):
     at_noise_floor: list = field(default_factory=list)
     worst_group: int | None = None
     as_built: dict | None = None
+    # a pushbroom run: each group's CTF measured on the noise-free image of the target at the image's placement
+    # (satchain.bar_prediction), what ``max_abs_error`` is taken against (written only when made)
+    ctf_predicted_at_placement: list | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        if d["ctf_predicted_at_placement"] is None:
+            del d["ctf_predicted_at_placement"]
+        return d
 
 
 @dataclass(frozen=True)

@@ -396,12 +396,15 @@ class PushbroomTerms:
 
         return per_row_otf(self, nu_cy_per_px, axis)
 
-    def as_imaged_otf(self, nu_cy_per_px, axis: str, *, first_line: int, n_lines: int, about_line: bool = True):
+    def as_imaged_otf(self, nu_cy_per_px, axis: str, *, first_line: int, n_lines: int, about_line: bool = True,
+                      degree: int = 1):  # fmt: skip
         """The motion's OTF on ``axis`` of an edge measured as imaged over the image rows ``first_line ..
-        first_line + n_lines - 1``: :func:`satchain.tf.pushbroom_roi.as_imaged_otf`."""
+        first_line + n_lines - 1`` (about a fitted polynomial of ``degree``): :func:`satchain.tf.pushbroom_roi.
+        as_imaged_otf`."""
         from satchain.tf.pushbroom_roi import as_imaged_otf
 
-        return as_imaged_otf(self, nu_cy_per_px, axis, first_line=first_line, n_lines=n_lines, about_line=about_line)
+        kw = {"first_line": first_line, "n_lines": n_lines, "about_line": about_line, "degree": degree}
+        return as_imaged_otf(self, nu_cy_per_px, axis, **kw)
 
     def image_affine(self, shape: tuple[int, int] | None = None, *, origin_m: tuple[float, float] = (0.0, 0.0)):
         """The mean map from ground metres (x ACT, y ALT, from the scene's origin) to image pixel coordinates

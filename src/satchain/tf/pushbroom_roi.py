@@ -17,7 +17,7 @@ import numpy as np
 from satchain.errors import ConfigError
 from satchain.tf.pushbroom import _frequency_nodes, jitter_psd_otf, log_otf, oscillation_otf
 
-__all__ = ["as_imaged_otf", "displacement_factor", "per_row_otf"]
+__all__ = ["as_imaged_otf", "displacement_factor", "per_row_otf", "rows_blur_otf"]
 
 
 def displacement_factor(nu_cy_per_px, d_px, *, about_line: bool = True) -> np.ndarray:
@@ -41,18 +41,18 @@ def displacement_factor(nu_cy_per_px, d_px, *, about_line: bool = True) -> np.nd
     return np.abs(np.mean(np.exp(2j * np.pi * np.outer(nu, r)), axis=1))
 
 
-def _line_detrended_fraction(f_hz: np.ndarray, line_time_s: float, n_lines: int) -> np.ndarray:
+def _line_detrended_fraction(f_hz: np.ndarray, line_time_s: float, n_lines: int, degree: int = 1) -> np.ndarray:
     """The expected fraction of a sinusoid's variance at ``f_hz`` sampled on ``n_lines`` lines that is left
-    about the least-squares straight line through them: ``1 - |P e|^2 / n`` (``P`` the projection on
-    ``(1, i)``, ``e_i = exp(2 pi i f i dt)``)."""
+    about the least-squares polynomial of ``degree`` (1: the straight line) through them: ``1 - |P e|^2 / n``
+    (``P`` the projection on ``(1, i, .., i^degree)``, ``e_i = exp(2 pi i f i dt)``)."""
     i = np.arange(n_lines, dtype=float)
-    q0 = np.full(n_lines, 1.0 / math.sqrt(n_lines))
-    q1 = (i - i.mean()) / max(float(np.linalg.norm(i - i.mean())), 1e-300)
+    t = (i - i.mean()) / max(float(np.ptp(i)), 1.0)
+    q = np.linalg.qr(np.vander(t, min(int(degree), n_lines - 1) + 1))[0]  # orthonormal basis of the polynomials
     out = np.empty(f_hz.size)
     step = max(1, 2_000_000 // max(n_lines, 1))
     for lo in range(0, f_hz.size, step):
         e = np.exp(2j * np.pi * np.outer(f_hz[lo : lo + step] * line_time_s, i))
-        out[lo : lo + step] = 1.0 - (np.abs(e @ q0) ** 2 + np.abs(e @ q1) ** 2) / n_lines
+        out[lo : lo + step] = 1.0 - np.sum(np.abs(e @ q) ** 2, axis=1) / n_lines
     return out
 
 
@@ -74,11 +74,14 @@ def per_row_otf(terms, nu_cy_per_px, axis: str) -> np.ndarray:
     return out * np.sinc(terms.stages * drift * nu)
 
 
-def as_imaged_otf(terms, nu_cy_per_px, axis: str, *, first_line: int, n_lines: int, about_line: bool = True):
+def as_imaged_otf(
+    terms, nu_cy_per_px, axis: str, *, first_line: int, n_lines: int, about_line: bool = True, degree: int = 1
+):
     """The motion's OTF on ``axis`` (cy/px of it) for an edge measured as imaged over the image rows
     ``first_line .. first_line + n_lines - 1`` (ISO 12233: one straight edge through the rows, their
     displacements folded into the ESF): ``|mean_i mean_(t in window i) exp(2 pi i nu (x(t) - L_i))|`` with
-    ``L`` the least-squares line through the rows' window means (their mean: ``about_line`` False), exactly
+    ``L`` the least-squares line through the rows' window means (their mean: ``about_line`` False; a
+    polynomial of ``degree`` > 1: an edge located as a curve of that degree, its lines' departures folded), exactly
     for the oscillations, the line-of-sight log and the TDI drift (their path on the rows' windows), times
     the jitter PSD's Gaussian expectation: its per-row term and ``exp(-2 pi^2 nu^2 v)``, ``v = int S
     sinc^2(f T) g(f) df`` the rows' displacement variance left about that line (:func:`_line_detrended_fraction`,
@@ -100,7 +103,8 @@ def as_imaged_otf(terms, nu_cy_per_px, axis: str, *, first_line: int, n_lines: i
     x = _window_paths(terms, axis, int(first_line), n)
     d = x.mean(axis=1)
     i = np.arange(n, dtype=float)
-    ref = np.polyval(np.polyfit(i, d, 1), i) if about_line and n > 2 else np.full(n, d.mean())
+    deg = max(1, min(int(degree), n - 2))
+    ref = np.polyval(np.polyfit(i - i.mean(), d, deg), i - i.mean()) if about_line and n > 2 else np.full(n, d.mean())
     r = (x - ref[:, None]).ravel()
     out = np.empty(nu.shape)
     step = max(1, 4_000_000 // max(r.size, 1))
@@ -110,12 +114,31 @@ def as_imaged_otf(terms, nu_cy_per_px, axis: str, *, first_line: int, n_lines: i
         if table.axis == axis:
             f = np.asarray(table.frequency_hz, float)
             fn, fw = _frequency_nodes(f, t_w)
-            left = _line_detrended_fraction(fn, dt, n) if about_line and n > 2 else np.ones(fn.size)
+            left = _line_detrended_fraction(fn, dt, n, deg) if about_line and n > 2 else np.ones(fn.size)
             v = float(np.sum(np.interp(fn, f, table.psd_px2_per_hz) * fw * np.sinc(fn * t_w) ** 2 * left))
             out = out * np.exp(-2.0 * np.pi**2 * nu**2 * v)
     if axis in terms.psd:
         out = out * jitter_psd_otf(nu, terms.psd[axis])
     return out
+
+
+def rows_blur_otf(terms, nu_cy_per_px, axis: str, *, first_line: int, n_lines: int) -> np.ndarray:
+    """The motion's blur on ``axis`` (cy/px of it) about each row's own window mean, averaged over the image rows
+    ``first_line .. first_line + n_lines - 1`` as their paths are (not the budget's expectation over the
+    oscillations' phases, :func:`per_row_otf`): ``|mean_i mean_(t in window i) exp(2 pi i nu (x(t) - d_i))|``,
+    exactly for the oscillations, the log and the TDI drift together (an oscillation whose velocity opposes a
+    drift on these rows shortens its smear), times the jitter PSD's per-row expectation. What a target a few
+    rows tall sees; the rows' displacements ``d_i`` themselves are left to the image geometry."""
+    nu = np.atleast_1d(np.asarray(nu_cy_per_px, dtype=float))
+    if int(n_lines) < 1 or int(first_line) < 0:
+        raise ConfigError(f"n_lines = {n_lines}, first_line = {first_line}: need n_lines >= 1 and first_line >= 0")
+    x = _window_paths(terms, axis, int(first_line), int(n_lines))
+    r = (x - x.mean(axis=1, keepdims=True)).ravel()
+    out = np.empty(nu.shape)
+    step = max(1, 4_000_000 // max(r.size, 1))
+    for lo in range(0, nu.size, step):
+        out[lo : lo + step] = np.abs(np.mean(np.exp(2j * np.pi * np.outer(nu[lo : lo + step], r)), axis=1))
+    return out * np.abs(jitter_psd_otf(nu, terms.psd[axis])) if axis in terms.psd else out
 
 
 def _window_paths(terms, axis: str, first: int, n: int) -> np.ndarray:
