@@ -39,6 +39,8 @@ class ImageGeometry:
     dy_px: np.ndarray = field(repr=False)
     edges: dict = field(default_factory=dict, repr=False)
     terms: object = field(default=None, repr=False, compare=False)  # the PushbroomTerms (an edge as imaged)
+    bars: dict = field(default_factory=dict, repr=False)  # the truth's bar-target records by id (their CTF)
+    background: float = 0.0  # the scene's background reflectance around the targets
 
     @property
     def steps_m(self) -> tuple[float, float]:
@@ -127,7 +129,7 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
     from affine import Affine
 
     from satchain.measure.auto import truth_origin_m
-    from satchain.scene.targets import SlantedEdge
+    from satchain.scene.targets import BarTarget, SlantedEdge
     from satchain.tf.pushbroom import PushbroomTerms, window_means
 
     terms = PushbroomTerms(system)
@@ -148,7 +150,11 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
     for it in truth.get("items", []):
         if it.get("kind") == SlantedEdge.kind and "edge_point_m" in it and "edge_direction" in it:
             edges[str(it["id"])] = (tuple(map(float, it["edge_point_m"])), tuple(map(float, it["edge_direction"])))
-    return ImageGeometry(to_image, (float(drift[0]), float(drift[1])), np.asarray(dx), np.asarray(dy), edges, terms)
+    bars = {str(it["id"]): it for it in truth.get("items", []) if it.get("kind") == BarTarget.kind and "groups" in it}
+    drift = (float(drift[0]), float(drift[1]))
+    return ImageGeometry(
+        to_image, drift, np.asarray(dx), np.asarray(dy), edges, terms, bars, float(truth.get("background", 0.0))
+    )
 
 
 def geometry_table(system) -> list[dict]:
