@@ -216,3 +216,26 @@ def test_simulate_image_refuses_an_input_scale_that_is_not_finite_and_positive(t
     for source in (src, _edge()[0]):
         with pytest.raises(ConfigError, match="input_scale"):
             satchain.simulate_image(source, system, pixel_m=PX, input_scale=value)
+
+
+# ------------------------------------------------------------------------ item 6 follow-up: a scale far too small
+@pytest.mark.parametrize("suffix", [".tif", ".npy"])
+def test_an_input_scale_that_makes_every_value_darker_than_any_ground_is_refused(tmp_path, suffix):
+    dn = np.round(_edge()[0] * 65535).astype(np.uint16)
+    src = _write(tmp_path / "in.tif", dn) if suffix == ".tif" else tmp_path / "in.npy"
+    if suffix == ".npy":
+        np.save(src, dn)
+    pixel = ["--scene-pixel-m", PX] if suffix == ".npy" else []
+    out = tmp_path / "out.tif"
+    r = _sim(src, "--preset", "ankarasat3", "--input-scale=1e-30", *pixel, "-o", out)
+    line = " ".join(r.output.split())
+    assert r.exit_code == 2 and "--input-scale" in line and "1e-30" in line and "darker" in line, r.output
+    assert not out.exists()
+
+
+def test_a_dark_water_scene_at_a_sensible_scale_is_simulated(tmp_path):
+    """Real dark ground (0.02-0.05 reflectance as uint16 x 10000) is far above the rule's 1e-3."""
+    dn = np.round((_edge()[0] - 0.2) * 0.075 / 0.4 * 10000 + 200).astype(np.uint16)  # 0.02 .. 0.05
+    src = _write(tmp_path / "in.tif", dn)
+    r = _sim(src, "--preset", "ankarasat3", "--input-scale", "1e-4", "-o", tmp_path / "out.tif")
+    assert r.exit_code == 0, r.output

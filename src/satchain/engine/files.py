@@ -114,6 +114,7 @@ def ground_truth_source(
     name = dict(names or {}).get
     if Path(input_).suffix.lower() in IMAGE_SUFFIXES:
         img = ImageScene(input_, pixel_m=pixel_m, scale=input_scale, valid_range=REFLECTANCE_RANGE)
+        _check_not_too_dark(img, input_, input_scale is None)
         return SceneSource(img), None
     if input_scale is not None:
         raise ConfigError(
@@ -122,6 +123,22 @@ def ground_truth_source(
         )
     sc = load_layout(input_)
     return SceneSource(sc, pixel_m=pixel_m), sc
+
+
+def _check_not_too_dark(img, input_, default: bool, n: int = 4, side: int = 256) -> None:
+    """The rule of :func:`satchain.engine.raster_input.check_not_too_dark` on a fixed sample of the image (``n x n``
+    windows of ``side`` px spread evenly, or the whole image), before any work."""
+    from satchain.engine.raster_input import check_not_too_dark
+
+    rows, cols = img.shape_px()
+    ys = np.unique(np.linspace(0, max(rows - side, 0), n).astype(int))
+    xs = np.unique(np.linspace(0, max(cols - side, 0), n).astype(int))
+    lo, hi = np.inf, -np.inf
+    for y in ys:
+        for x in xs:
+            v = img.render((int(y), int(x), min(side, rows), min(side, cols))).astype(np.float64)
+            lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
+    check_not_too_dark(f"image = {str(input_)!r}:", lo, hi, img.scale, default)
 
 
 def _check_options(units: str, noise: bool, seed: int, fp_grid: str, name: Callable[[str], str]) -> None:

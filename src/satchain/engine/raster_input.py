@@ -18,10 +18,21 @@ import numpy as np
 from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError
 
-__all__ = ["PIXEL_RTOL", "REFLECTANCE_RANGE", "RasterBandSource", "check_pixel_m", "check_scales", "invalid_cells"]
+__all__ = [
+    "DARKEST_GROUND",
+    "PIXEL_RTOL",
+    "REFLECTANCE_RANGE",
+    "RasterBandSource",
+    "check_not_too_dark",
+    "check_pixel_m",
+    "check_scales",
+    "invalid_cells",
+]
 
 #: reflectance an input may hold after scaling (as for every image input of ``satchain simulate``)
 REFLECTANCE_RANGE = (-0.5, 4.0)
+#: the largest reflectance an input's valid values must reach (unless all are 0): real ground is brighter
+DARKEST_GROUND = 1e-3
 #: a pixel size given for a raster that states its own agrees with it within this relative difference
 PIXEL_RTOL = 1e-3
 
@@ -240,8 +251,24 @@ def _band_source(plan: _Plan, band: int, input_scale: float | None) -> RasterBan
     return src
 
 
+def check_not_too_dark(what: str, lo: float, hi: float, gain: float, default: bool) -> None:
+    """Refuse values whose largest magnitude, as reflectance, is above 0 but below :data:`DARKEST_GROUND`: darker
+    than any real ground (dark water is 0.02-0.05), so the scale is wrong (e.g. ``--input-scale 1e-30``, or
+    12-bit DN read as 16-bit ones). An all-zero image is left alone (a black scene is what it says)."""
+    top = max(abs(lo), abs(hi))
+    if not 0.0 < top < DARKEST_GROUND:
+        return
+    how = "the default scale" if default else "--input-scale"
+    raise InputError(
+        f"{what} values {lo:.3g}..{hi:.3g} (as reflectance, x {gain:g}: {how}) are all darker than "
+        f"{DARKEST_GROUND:g}, darker than any real ground (dark water is about 0.02): the scale is wrong; give "
+        "--input-scale, the factor that makes them reflectance (e.g. 0.0001 for reflectance x 10000)"
+    )
+
+
 def _check_reflectance(path: Path, band: int, lo: float, hi: float, gain: float, default: bool) -> None:
     """Refuse sampled values that are not reflectance, naming ``--input-scale``."""
+    check_not_too_dark(f"image = {str(path)!r}: band {band}", lo, hi, gain, default)
     if REFLECTANCE_RANGE[0] <= lo and hi <= REFLECTANCE_RANGE[1]:
         return
     how = "the default scale" if default else "--input-scale"
