@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+import threading
 import uuid
 from collections.abc import Callable
 from pathlib import Path
@@ -65,6 +66,75 @@ def _decimate_tile(sim: Simulator, source, tile: Tile, keep_memory: bool = False
     return tile, sim.decimate_tile(source, tile)
 
 
+def _unreachable(address: str) -> SatchainIOError:
+    return SatchainIOError(
+        f"scheduler = {address!r}: cannot reach a Dask scheduler at that address in {CONNECT_TIMEOUT_S:g} s: check "
+        "that the scheduler runs, its host and port, and the network between (or leave the scheduler out to run in "
+        "this process)"
+    )
+
+
+def _probe_scheduler(address: str, timeout_s: float) -> None:
+    """Refuse ``address`` unless a Dask scheduler answers there, all within ``timeout_s``: the connection, Dask's
+    handshake and an ``identity`` request, on an event loop of their own (a notebook's loop is left alone).
+    Something else listening there (an SSH banner read as a frame of 3 EiB, an HTTP server that waits for a
+    request line) is named as not answering as a Dask scheduler, instead of failing or waiting in Client()."""
+    import time
+
+    deadline, out = time.monotonic() + timeout_s, {}
+    t = threading.Thread(target=_identity, args=(address, deadline, out), name="satchain-probe", daemon=True)
+    t.start()
+    t.join(timeout_s + 2.0)
+    reply, exc = out.get("reply"), out.get("error")
+    if not out.get("connected"):
+        raise _unreachable(address) from exc
+    kind = reply.get("type") if isinstance(reply, dict) else None
+    if kind == "Scheduler":
+        return
+    if kind is not None:
+        answer = f"it answered as a Dask {kind}"
+    elif t.is_alive() or isinstance(exc, TimeoutError):
+        answer = f"no Dask handshake within {timeout_s:g} s"
+    else:
+        answer = f"what it sent is no Dask message: {type(exc).__name__ if exc is not None else repr(reply)[:40]}"
+    raise SatchainIOError(
+        f"scheduler = {address!r}: something listens there but does not answer as a Dask scheduler ({answer}): "
+        "check the port (a Dask scheduler's is 8786 by default) and that the address is the scheduler's, not its "
+        "dashboard's, a worker's or another service's"
+    ) from exc
+
+
+def _identity(address: str, deadline: float, out: dict) -> None:
+    """The probe's thread: ``out["connected"]`` once a TCP connection is made (for tcp / tls / ws addresses;
+    others once Dask connects), ``out["reply"]`` the answer to ``identity``, or ``out["error"]``."""
+    import asyncio
+    import socket
+    import time
+
+    from distributed.comm import connect, get_address_host_port
+
+    async def identity():
+        comm = await connect(address, timeout=max(deadline - time.monotonic(), 0.01))
+        out["connected"] = True
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        try:
+            host, port = get_address_host_port(address)
+        except (ValueError, NotImplementedError):  # an address without host and port (inproc://, ucx://)
+            pass
+        else:
+            socket.create_connection((host, port), timeout=max(deadline - time.monotonic(), 0.01)).close()
+            out["connected"] = True
+        out["reply"] = asyncio.run(asyncio.wait_for(identity(), max(deadline - time.monotonic(), 0.01)))
+    except BaseException as exc:  # noqa: BLE001  (MemoryError: a banner read as a frame length)
+        out["error"] = exc
+
+
 def _client_for(scheduler) -> tuple[Any, bool]:
     """``(client, owned)``: None -> no client (local threads); an address -> a new client (closed by us);
     a ``distributed.Client`` -> itself."""
@@ -77,14 +147,11 @@ def _client_for(scheduler) -> tuple[Any, bool]:
                 "'tcp://10.0.0.5:8786', or a distributed.Client"
             )
         distributed = _require("distributed")
+        _probe_scheduler(scheduler, CONNECT_TIMEOUT_S)
         try:
             return distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S), True
         except (OSError, TimeoutError) as exc:  # refused, unknown host, or no answer (distributed's OSError)
-            raise SatchainIOError(
-                f"scheduler = {scheduler!r}: cannot reach a Dask scheduler at that address in {CONNECT_TIMEOUT_S:g} "
-                "s: check that the scheduler runs, its host and port, and the network between (or leave the "
-                "scheduler out to run in this process)"
-            ) from exc
+            raise _unreachable(scheduler) from exc
     if hasattr(scheduler, "scatter") and hasattr(scheduler, "submit"):
         return scheduler, False
     raise ConfigError(
