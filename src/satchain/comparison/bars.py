@@ -88,8 +88,10 @@ def bar_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[B
 #: What the bars' check compares on a pushbroom image (:mod:`satchain.bar_prediction`).
 PLACEMENT_NOTE = (
     "the prediction is the bar measurement on a noise-free image of the target formed where the pushbroom "
-    "geometry puts each row (its line-of-sight displacement included: the sampling phase of a group of a few px "
-    "per period, the rows' displacements averaged over the group), through the system MTF"
+    "geometry puts each row (its line-of-sight displacement: the group's sampling phase and the rows' "
+    "displacements over it), through the system MTF with the motion blur those rows have as their paths are "
+    "(under Earth rotation a slow oscillation's velocity lengthens or shortens the drift's smear), not the "
+    "budget's expectation over the motion's phases"
 )
 
 

@@ -318,8 +318,9 @@ def _per_group(values, n: int) -> np.ndarray:
 def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
     """Bar-target CTF: compared groups (filled), groups beyond the cut-off (hollow, not compared), each with
     its 1-sigma (``ctf_std_measured``) as an error bar, the raw modulation before the square-wave correction
-    (crosses), the cut-off, Coltman's prediction and the paper's method; residuals of the compared groups with
-    their error bars and the band."""
+    (crosses), the cut-off, Coltman's prediction and the paper's method (a pushbroom image's prediction at its
+    placement, diamonds, is what is compared when given); residuals of the compared groups with their error bars
+    and the band."""
     with matplotlib.rc_context(rc_for(8.5)):
         fig, (ax,), (r,) = _figure(8.5, 6.4)
         f = np.asarray(b["f_cy_per_px"], float)
@@ -332,6 +333,10 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
         cmp_ = f <= lim
         ax.plot(f, col, "-", color=PRED, lw=1.4, label="predicted CTF (Coltman)")
         ax.plot(f, pap, ":", color="tab:blue", lw=1.4, label="predicted, the paper's method")
+        placed = _per_group(b.get("ctf_predicted_at_placement"), f.size)[order]  # a pushbroom image's, compared
+        if np.isfinite(placed).any():
+            ax.plot(f, placed, "D", color=PRED, mfc="none", ms=8, label="predicted at the image's placement (compared)")
+            col = np.where(np.isfinite(placed), placed, col)
         ab = _per_group((b.get("as_built") or {}).get("ctf_coltman_predicted"), f.size)[order]
         if np.isfinite(ab).any():
             ax.plot(f, ab, ls=_AB_LS, color=AS_BUILT, lw=1.4, label="predicted as built (Coltman)")
@@ -380,7 +385,7 @@ def plot_bars_comparison(b: dict, path: Path, *, tol: float | None) -> None:
             mark_failed(r, f[bad], (meas - col)[bad])
         _residual_limits(r, meas - col, std, tol)
         r.set_xlabel("bar frequency = 1 / period (cy/px)")
-        r.set_ylabel("meas. - Coltman")
+        r.set_ylabel("meas. - predicted" if np.isfinite(placed).any() else "meas. - Coltman")
         r.legend(loc="lower left")
         _save(fig, path)
 
