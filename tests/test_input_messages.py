@@ -50,6 +50,19 @@ def test_oscillation_written_as_a_table_says_to_write_an_array_of_tables(tmp_pat
     assert _budget(tmp_path, text.replace("[motion.oscillation]", "[[motion.oscillation]]")).exit_code == 0
 
 
+@pytest.mark.parametrize("value", ['"act"', "1.5", "true", '["act"]', "[1, 2]", '[{ axis = "act", amplitude_px = 1.0, '
+                                   'frequency_hz = 50.0 }, "alt"]', '2026-01-01'])  # fmt: skip
+def test_oscillation_in_any_form_but_an_array_of_tables_says_what_it_must_be(tmp_path, value):
+    """``oscillation = "act"`` gave 'Input should be a valid tuple': every form but an array of tables is named,
+    with the keys an oscillation table takes."""
+    r = _budget(tmp_path, SYSTEM_TOML + f"oscillation = {value}\n")
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "motion.oscillation must be an array of tables" in line and "[[motion.oscillation]]" in line
+    assert "axis, amplitude_px, frequency_hz" in line
+    assert "tuple" not in line and "valid dictionary" not in line and "unexpected" not in line
+
+
 @pytest.mark.parametrize(
     ("good", "bad", "section"),
     [

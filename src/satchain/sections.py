@@ -395,9 +395,11 @@ class Motion(_Frozen):
     @field_validator("oscillation", mode="before")
     @classmethod
     def _array_of_tables(cls, v: Any) -> Any:
-        if isinstance(v, dict):  # [motion.oscillation] (one table) where [[motion.oscillation]] is meant
+        # [motion.oscillation] (one table), oscillation = "act", a list of strings ...: [[motion.oscillation]] is meant
+        if not isinstance(v, (list, tuple)) or not all(isinstance(o, (dict, Oscillation)) for o in v):
             raise ValueError(
-                "motion.oscillation must be an array of tables: write [[motion.oscillation]] (one per oscillation)"
+                "motion.oscillation must be an array of tables: write [[motion.oscillation]] (one per oscillation) "
+                "with axis, amplitude_px, frequency_hz (and phase_deg)"
             )
         return v
 
