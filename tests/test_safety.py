@@ -503,3 +503,19 @@ class warnings_as_errors:  # noqa: N801
 
     def __exit__(self, *exc):
         return self._ctx.__exit__(*exc)
+
+
+def test_a_folder_marked_for_another_kind_is_refused_by_what_its_marker_says(tmp_path):
+    """`budget -o` into a run's folder: the marker is there, so the message must not say it is missing."""
+    from satchain._safety import MARKER, check_run_dir, write_run_marker
+    from satchain.errors import SatchainIOError
+
+    d = tmp_path / "r7a"
+    d.mkdir()
+    write_run_marker(d, kind="run")
+    (d / "report.html").write_text("x")
+    with pytest.raises(SatchainIOError) as e:
+        check_run_dir(d, kind="budget")
+    text = str(e.value)
+    assert "not a satchain budget directory" in text and f"no {MARKER}" not in text
+    assert "'run'" in text and MARKER in text

@@ -20,7 +20,7 @@ from pathlib import Path
 from satchain._safety import MARKER, OWNER, claim
 from satchain.errors import SatchainIOError
 
-__all__ = ["MANIFEST", "swap_in", "written_files"]
+__all__ = ["MANIFEST", "check_user_files", "swap_in", "written_files"]
 
 #: The run folder's manifest: versions, seed, and ``files``, every file satchain wrote into the folder.
 MANIFEST = "manifest.json"
@@ -38,10 +38,14 @@ def _listed(out: Path) -> set[str] | None:
     """The files ``out``'s manifest lists as satchain's; None when it lists none (no manifest, or one written
     before manifests had the list)."""
     try:
-        files = json.loads((out / MANIFEST).read_text()).get("files")
+        data = json.loads((out / MANIFEST).read_text())
+        files = data.get("files")
     except (OSError, ValueError, AttributeError):
         return None
-    return {str(f) for f in files} if isinstance(files, list) else None
+    if files is None and isinstance(data.get("cases"), list):  # a sweep's manifest from before it listed files
+        files = [c.get(k) for c in data["cases"] if isinstance(c, dict) for k in ("image", "preview")]
+        files += ["manifest.csv"]
+    return {str(f) for f in files if f} if isinstance(files, list) else None
 
 
 def _entries(out: Path) -> list[tuple[str, str]]:
@@ -80,6 +84,13 @@ def _users(out: Path, new: set[str]) -> list[tuple[str, str]]:
             )
         users.append((rel, what))
     return users
+
+
+def check_user_files(out: str | os.PathLike, new: set[str]) -> None:
+    """Refuse, before any work, a run into ``out`` that would write one of the files ``new`` (relative paths)
+    where ``out`` holds a file satchain did not write (see :func:`swap_in`)."""
+    if Path(out).is_dir():
+        _users(Path(out), set(new))
 
 
 def _parents(rel: str) -> set[str]:

@@ -139,10 +139,23 @@ def check_run_dir(out: str | os.PathLike, *, kind: str = "run") -> None:
     if not entries or _is_marked(out, kind):
         return
     shown = ", ".join(entries[:5]) + (f", ... ({len(entries)} entries)" if len(entries) > 5 else "")
+    other = _marked_kind(out)
+    why = (f"its {MARKER} marks it as satchain's {other!r} output" if other is not None
+           else f"no {MARKER} of satchain's" if MARKER in entries else f"no {MARKER}")  # fmt: skip
     raise SatchainIOError(
-        f"-o {str(out)!r}: not a satchain {kind} directory (no {MARKER}; it holds {shown}); "
+        f"-o {str(out)!r}: not a satchain {kind} directory ({why}; it holds {shown}); "
         "choose a new or empty directory, nothing was changed"
     )
+
+
+def _marked_kind(directory: Path) -> str | None:
+    """The ``kind`` satchain's marker in ``directory`` names (None without a readable one)."""
+    try:
+        data = json.loads((directory / MARKER).read_text())
+    except (OSError, ValueError):
+        return None
+    ok = isinstance(data, dict) and data.get("tool") == "satchain" and isinstance(data.get("kind"), str)
+    return data["kind"] if ok else None
 
 
 # ---------------------------------------------------------------------------------------------- ownership

@@ -271,3 +271,44 @@ def test_an_interrupted_sweep_records_it_and_exits_130(tmp_path, inputs, monkeyp
     assert [c.status for c in read_manifest(tmp_path / "py")] == ["written", "interrupted", "not run"]
     r = _cli(rows, "--sweep", "motion.smear_px=0.5,1,2", "-o", tmp_path / "cli")
     assert r.exit_code == 130 and "interrupted (SIGINT)" in r.stderr
+
+
+# issue 29 follow-up: a rerun replaces the sweep folder as `run` replaces its own
+@pytest.mark.parametrize("listed", [True, False])  # False: a manifest written before it listed its files
+def test_a_rerun_replaces_the_earlier_sweeps_cases_and_keeps_the_users_files(tmp_path, inputs, listed):
+    rows, _ = inputs
+    out = tmp_path / "sw"
+    assert _cli(rows, "--sweep", "motion.smear_px=0.5,2", "-o", out).exit_code == 0
+    (out / "mynotes.txt").write_text("mine")
+    if not listed:
+        m = json.loads((out / "manifest.json").read_text())
+        m.pop("files", None)
+        (out / "manifest.json").write_text(json.dumps(m))
+    r = _cli(rows, "--sweep", "motion.smear_px=0.7", "-o", out)
+    assert r.exit_code == 0, r.output
+    cases = read_manifest(out)
+    assert [c.parameters for c in cases] == [{"motion.smear_px": 0.7}]
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        [
+            ".satchain-run.json",
+            "manifest.csv",
+            "manifest.json",
+            "mynotes.txt",
+            cases[0].image.name,
+            cases[0].preview.name,
+        ]  # fmt: skip
+    )
+    assert (out / "mynotes.txt").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in", "sw"]  # no staging folder left beside it
+
+
+def test_a_users_file_where_the_rerun_writes_is_refused_before_any_work(tmp_path, inputs):
+    rows, _ = inputs
+    out = tmp_path / "sw"
+    assert _cli(rows, "--sweep", "motion.smear_px=0.5", "-o", out).exit_code == 0
+    (out / "rows__motion.smear_px=0.7.png").write_bytes(b"my drawing")
+    before = sorted(p.name for p in out.iterdir())
+    r = _cli(rows, "--sweep", "motion.smear_px=0.7", "-o", out)
+    assert r.exit_code == 2 and "not listed in its manifest.json" in " ".join(r.output.split()), r.output
+    assert sorted(p.name for p in out.iterdir()) == before
+    assert (out / "rows__motion.smear_px=0.7.png").read_bytes() == b"my drawing"

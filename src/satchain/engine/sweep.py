@@ -6,7 +6,9 @@ parameters step through values (``{"motion.smear_px": [0.5, 1, 2]}``: any dotted
 validates everything first (keys, values, every system of the product, the inputs, the output names), then
 runs :func:`satchain.engine.files.simulate_file` once per case into one directory and keeps
 ``manifest.json`` / ``manifest.csv`` there up to date (written atomically before the first case and after
-each one), so the manifest records what was written even when a case fails or the run is interrupted.
+each one), so the manifest records what was written even when a case fails or the run is interrupted. The
+directory is built as a staging folder beside ``out_dir`` and swapped in as a run folder is
+(:func:`satchain._runfolder.swap_in`): an earlier sweep's cases are replaced, the user's files kept.
 
 Seeds
 -----
@@ -347,29 +349,61 @@ def simulate_sweep(
     cases, systems = plan_sweep(inputs, system, out_dir, sweep=sweep, seed=seed, names=names)
     out = Path(out_dir)
     _check_outputs(cases, out, options, names, name, systems)
-    out.mkdir(parents=True, exist_ok=True)
-    write_run_marker(out, kind="simulate")
-    report = progress or (lambda stage, done, total: None)
     header = _header(system, sweep or {}, seed, options)
-    _write_manifest(out, header, cases)
+    with _sweep_staging(out) as stage:  # swapped in for out at the end (also after a failed case)
+        write_run_marker(stage, kind="simulate")
+        _write_manifest(stage, header, cases)
+        _run_cases(cases, systems, stage, header, progress, notify, names, options)
+    return cases
+
+
+def _run_cases(cases: list[Case], systems: list[ImagingSystem], stage: Path, header: dict[str, Any],
+               progress: Progress | None, notify, names, options: Mapping[str, Any]) -> None:  # fmt: skip
+    """Each case into ``stage`` (its records keep their final paths), the manifest after each one."""
     from satchain.engine.files import simulate_file
 
+    report = progress or (lambda stage, done, total: None)
     for i, (case, sys_i) in enumerate(zip(cases, systems, strict=True)):
         report("cases", i, len(cases))
         try:
-            r = simulate_file(case.input, case.image, sys_i, seed=case.seed, progress=report, notify=notify,
-                              names=names, **options)  # fmt: skip
+            r = simulate_file(case.input, stage / case.image.name, sys_i, seed=case.seed, progress=report,
+                              notify=notify, names=names, **options)  # fmt: skip
         except BaseException as exc:
-            _remove_case_files(case)
+            _remove_case_files(case, stage)
             status = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
             cases[i] = replace(case, status=status, error=_one_line(exc))
             cases[i + 1 :] = [replace(c, status="not run") for c in cases[i + 1 :]]
-            _write_manifest(out, header, cases)
+            _write_manifest(stage, header, cases)
             raise
-        cases[i] = replace(case, status="written", shape_px=tuple(r.shape_px), preview=r.preview)
-        _write_manifest(out, header, cases)
+        cases[i] = replace(case, status="written", shape_px=tuple(r.shape_px), preview=case.image.with_suffix(".png"))
+        _write_manifest(stage, header, cases)
     report("cases", len(cases), len(cases))
-    return cases
+
+
+@contextlib.contextmanager
+def _sweep_staging(out: Path):
+    """A staging folder beside ``out`` that replaces it as ``satchain run`` replaces its folder
+    (:func:`satchain._runfolder.swap_in`: the files satchain did not write are kept, an earlier sweep's
+    cases are not), once the manifest is in it: after the last case, or after a failed or interrupted one
+    (its manifest says which were written). Before the manifest is written, nothing is changed."""
+    import shutil
+    import tempfile
+
+    from satchain._runfolder import swap_in
+    from satchain._safety import claim, clean_stale
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    clean_stale(out)  # the staging folders of killed sweeps
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+    try:
+        claim(stage)
+        try:
+            yield stage
+        finally:
+            if (stage / "manifest.json").exists():
+                swap_in(stage, out)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def _check_options(options: Mapping[str, Any], name: Callable) -> None:
@@ -416,6 +450,10 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
         check_distinct_paths({label: path}, inputs)
     if not (out / MARKER).exists():  # in a sweep's own directory, its files may be replaced
         check_sidecars({**previews, **manifests})
+    else:  # but not a file of the user's there (the folder is replaced as a run's: see _sweep_staging)
+        from satchain._runfolder import check_user_files
+
+        check_user_files(out, {p.name for p in every.values()} | {MARKER})
     raster = {k: options[k] for k in ("band", "scene_pixel_m", "input_scale", "units", "noise") if k in options}
     by_input: dict[str, list[tuple[Case, ImagingSystem]]] = {}
     for c, s in zip(cases, systems, strict=True):
@@ -438,12 +476,11 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
                 raise type(exc)(f"case {c.id}: {exc}") from None
 
 
-def _remove_case_files(case: Case) -> None:
-    """A failed case leaves nothing under its name: remove what it wrote (and an earlier sweep's file there,
-    which the manifest no longer lists)."""
+def _remove_case_files(case: Case, stage: Path) -> None:
+    """A failed case leaves nothing under its name: remove what it wrote into ``stage``."""
     for p in (case.image, case.preview):
         with contextlib.suppress(OSError):
-            p.unlink()
+            (stage / p.name).unlink()
 
 
 def _one_line(exc: BaseException) -> str:
@@ -479,7 +516,9 @@ def _write_manifest(out: Path, header: dict[str, Any], cases: list[Case]) -> Non
     from satchain.io import atomic_path
 
     records = [_record(c, out) for c in cases]
-    text = json.dumps({**header, "cases": records}, indent=2, allow_nan=False) + "\n"
+    done = [n for r in records if r["status"] == "written" for n in (r["image"], r["preview"])]
+    files = sorted({*done, MARKER, "manifest.json", "manifest.csv"})  # satchain's (see satchain._runfolder)
+    text = json.dumps({**header, "files": files, "cases": records}, indent=2, allow_nan=False) + "\n"
     keys = list(header["sweep"])
     buf = _io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
