@@ -418,3 +418,12 @@ def test_a_pixel_m_that_agrees_with_the_geotiff_uses_the_files(tmp_path):
     r = runner.invoke(measure_app, ["edge", str(path), "--pixel-m", "0.4901", "--json"])
     assert r.exit_code == 0, r.output
     assert json.loads(r.output[r.output.index("{") :])["pixel_m"] == pytest.approx(0.49, rel=1e-12)
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "1e-30", "nan", "1e300"])
+def test_a_line_time_outside_its_range_is_one_message_with_the_real_range(tmp_path, value):
+    path = _geotiff_049(tmp_path)
+    r = runner.invoke(measure_app, ["jitter", str(path), "--line-time", value])
+    line = " ".join(r.output.split())
+    assert r.exit_code == 2 and "--line-time" in line and "must be in [1e-09, 1000] s" in line, r.output
+    assert "inf" not in line.replace(value, "")

@@ -418,13 +418,13 @@ def check_star_radius(radius_px: float | None, shape: tuple[int, int], *, annulu
 
     if not radius_px > 0 or radius_px != radius_px:
         raise InputError(f"--radius = {radius_px!r}: must be > 0 (pixels)")
-    check_memory(48.0 * radius_px / annulus_px, f"--radius {radius_px:g}", fix="use a radius inside the image")
     half_diag = 0.5 * (shape[0] ** 2 + shape[1] ** 2) ** 0.5
-    if radius_px > half_diag:
+    if radius_px > half_diag:  # before the memory check: a huge radius is outside the image, not too big for RAM
         raise InputError(
             f"--radius = {radius_px:g}: outside the image ({shape[1]} x {shape[0]} px, half-diagonal "
             f"{half_diag:.0f} px); give a radius inside the image"
         )
+    check_memory(48.0 * radius_px / annulus_px, f"--radius {radius_px:g}", fix="use a radius inside the image")
 
 
 def check_dir_outputs(out_dir: str | os.PathLike | None, names: Iterable[str], inputs: Mapping[str, object]) -> None:

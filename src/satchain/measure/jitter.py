@@ -190,8 +190,11 @@ LINE_TIME_RANGE_S = (1e-9, 1e3)
 def check_line_time(name: str, value) -> float:
     """``value`` as a line time in :data:`LINE_TIME_RANGE_S`, else a ConfigError naming ``name`` and the range."""
     lo, hi = LINE_TIME_RANGE_S
-    dt = check_positive(name, value)
-    if not lo <= dt <= hi:
+    try:
+        dt = check_positive(name, value)
+    except ConfigError:  # one message, with the real range, for 0, a negative, NaN or a non-number too
+        dt = None
+    if dt is None or not lo <= dt <= hi:
         raise ConfigError(f"{name} = {value!r}: must be in [{lo:g}, {hi:g}] s (a line rate of 1 mHz to 1 GHz)")
     return dt
 
