@@ -119,8 +119,11 @@ def test_pixel_edges_any_angle_size_noise(tilt, sign, alt, ny, nx, offset, inver
     assert abs(r.angle_deg - angle) < 0.05 + 4 * np.degrees(slope_sd)
     # an edge seen only by the pixel is not band-limited: its ESF has corners that the 1/4-px bins average
     # and alias, worst on short ROIs (a 40 x 40, 9.5 deg case reads 0.015 off); band-limited edges (diffraction
-    # included, the issue's accuracy target) are tested to 0.003 in test_noise_free_mtf_at_nyquist_within_0_003
-    tol = 0.02 if not np.isfinite(snr) else 0.02 + 5 * r.mtf_at_nyquist_sigma
+    # included, the issue's accuracy target) are tested to 0.003 in test_noise_free_mtf_at_nyquist_within_0_003.
+    # Near tilts of atan(1/n), n = 9..16, the rows' phases sit on n points that a 1/4-px bin averages 2 or 3 of
+    # unevenly: a pixel-only edge reads up to 0.022 off there, depending on its offset (about 1 in 3,000 random
+    # examples); a band-limited edge has no such corners
+    tol = 0.025 if not np.isfinite(snr) else 0.025 + 5 * r.mtf_at_nyquist_sigma
     assert abs(r.mtf_at_nyquist - _pixel_truth(angle)) < tol
     # contrast sign: + when the image rises along +x (ACT) or +y (ALT)
     rising = 1.0 if not alt else -sign
