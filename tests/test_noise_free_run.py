@@ -74,3 +74,7 @@ def test_noise_free_image_gives_no_snr_and_niirs_is_na_with_reason(noise_free_ru
     assert "n/a: NIIRS (GIQE 5): no SNR measured on the image: the image is noise-free" in r.stderr
     html = (out / "report.html").read_text()
     assert "the image is noise-free" in html and "1 not comparable" in html
+    # the NIIRS section does not describe a sigma for a NIIRS that was not measured: it says n/a and why
+    niirs = html[html.index('<h2 id="niirs">') : html.index('<h2 id="image">')]
+    assert "assumed 5 %" not in niirs and "propagates" not in niirs
+    assert "measured NIIRS is n/a" in niirs and "the image is noise-free" in niirs

@@ -22,6 +22,11 @@ reflectance 0.15 (as :func:`satchain.radiometry.contrast_snr` predicts it).
   whose noise is independent -- the rows of each plateau and the background patches -- so correlation
   between neighbouring differences is kept. None (``snr_sigma_null_means`` says why) when the SNR is not
   measured or fewer than :data:`MIN_SIGMA_PATCHES` background patches leave nothing to resample.
+* ``noise_free`` (in ``flags``; the SNR is then NaN with the reason): the background's scatter is not noise. Either
+  it is spatially correlated -- white noise gives second differences 3 x the variance of the first (6 / 2 sigma^2),
+  smooth structure (the optics' tails around the targets in a noise-free render) far less: the median patch's
+  ratio below :data:`WHITE_RATIO_MIN` (half its first differences' variance or more is structure) -- or it is
+  below what the image's floats resolve (16 eps of the level).
 """
 
 from __future__ import annotations
@@ -41,7 +46,8 @@ from satchain.scene.targets import SlantedEdge
 if TYPE_CHECKING:
     from satchain.scene.truth import Truth
 
-__all__ = ["BOOTSTRAP_N", "GIQE_CONTRAST", "GIQE_REFLECTANCE", "MIN_SIGMA_PATCHES", "SnrResult", "measure_snr"]
+__all__ = ["BOOTSTRAP_N", "GIQE_CONTRAST", "GIQE_REFLECTANCE", "MIN_SIGMA_PATCHES", "WHITE_RATIO_MIN", "SnrResult",
+           "measure_snr"]  # fmt: skip
 
 #: The reflectance difference GIQE's SNR is defined for (0.15 - 0.07), and the reflectance of its noise.
 GIQE_CONTRAST = 0.15 - 0.07
@@ -52,6 +58,10 @@ _BOOTSTRAP_SEED = 0
 #: Fewest background patches ``snr_sigma`` is measured from (below that the bootstrap has nothing to resample).
 MIN_SIGMA_PATCHES = 8
 _PATCH_PX = 16
+#: var(second differences) / var(first differences) of the median background patch below which its scatter is taken
+#: as structure, not noise: white noise gives 3, smooth structure ~0 (0.18 in a noise-free render of the reference
+#: camera; 2.9-3.0 with white noise at SNR 50 to 5000); 1.5: half the first differences' variance is structure.
+WHITE_RATIO_MIN = 1.5
 _PLATEAU_PX = 4.0
 _MIN_PLATEAU_SAMPLES = 20
 _CLIP = 3.5
@@ -64,7 +74,8 @@ class SnrResult(ResultMixin):
     """``snr``: GIQE contrast SNR (NaN when not measurable, ``reason`` says why); ``noise_dn``: noise sigma of one
     pixel (image units); ``gain_dn_per_reflectance``: image units per unit reflectance; ``n_edges``: edges the
     gain came from; ``snr_sigma``: the 1-sigma of ``snr`` measured by a bootstrap over the plateaus' rows and
-    the background patches (None when not measured, ``snr_sigma_null_means`` says why)."""
+    the background patches (None when not measured, ``snr_sigma_null_means`` says why); ``flags``:
+    ``noise_free`` when the background's scatter is not noise (see the module docstring; ``snr`` is then NaN)."""
 
     snr: float
     noise_dn: float | None
@@ -73,6 +84,7 @@ class SnrResult(ResultMixin):
     reason: str | None = None
     snr_sigma: float | None = None
     snr_sigma_null_means: str | None = None
+    flags: tuple[str, ...] = ()
 
 
 def _noise_sigma(diffs: np.ndarray) -> float:
@@ -134,20 +146,24 @@ def _edge_plateaus(image: np.ndarray, it: Mapping[str, Any], frame) -> tuple[_Fl
     return _Flat(block, bright), _Flat(block, dark)
 
 
-def _background_patches(image: np.ndarray, items, frame) -> tuple[np.ndarray, np.ndarray]:
-    """(levels, noise sigmas) of all target-free 16 x 16 px patches of the background."""
+def _background_patches(image: np.ndarray, items, frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(levels, noise sigmas, white ratios) of all target-free 16 x 16 px patches of the background; a patch's
+    white ratio is var(second differences) / var(first differences) along its rows (3 for white noise)."""
     occupied = np.zeros(image.shape, bool)
     for it in items:
         c0, r0, c1, r1 = frame.covering(it["bbox_m"])
         occupied[max(r0 - 2, 0) : max(r1 + 2, 0), max(c0 - 2, 0) : max(c1 + 2, 0)] = True
-    n, sigmas, levels = _PATCH_PX, [], []
+    n, sigmas, levels, ratios = _PATCH_PX, [], [], []
     for r in range(0, image.shape[0] - n + 1, n):
         for c in range(0, image.shape[1] - n + 1, n):
             if not occupied[r : r + n, c : c + n].any():
                 patch = image[r : r + n, c : c + n]
-                sigmas.append(_noise_sigma(np.diff(patch, axis=1).ravel()))
+                d1 = np.diff(patch, axis=1).ravel()
+                sigmas.append(_noise_sigma(d1))
                 levels.append(float(np.median(patch)))
-    return np.array(levels), np.array(sigmas)
+                v1 = float(np.mean((d1 - np.median(d1)) ** 2))
+                ratios.append(float(np.mean(np.diff(patch, 2, axis=1) ** 2)) / v1 if v1 > 0 else float("nan"))
+    return np.array(levels), np.array(sigmas), np.array(ratios)
 
 
 def _noise_at(level: float, background: tuple[float, float], plateaus: list[tuple[float, float]]) -> float:
@@ -174,7 +190,7 @@ def _estimate(edges, patches, r_bg: float, rng: np.random.Generator | None = Non
         (hi, p_hi), (lo, p_lo) = bright.level_noise(rows(bright)), dark.level_noise(rows(dark))
         gains.append((hi - lo) / step)
         plateaus += [p for p in (p_hi, p_lo) if p is not None]
-    levels, sigmas = patches
+    levels, sigmas = patches[:2]
     if rng is not None:
         pick = rng.integers(0, len(levels), len(levels))
         levels, sigmas = levels[pick], sigmas[pick]
@@ -259,17 +275,41 @@ def measure_snr(
                 edges.append((*flats, step))
     patches = _background_patches(a, items, frame)
     bg_sigma = float(np.median(patches[1])) if len(patches[1]) else None
-    gain = None
+    gain, free = None, None if bg_sigma is None else _not_noise(image, bg_sigma, patches)
     if not edges:
         reason = "no slanted edge with plateaus on both sides inside the image (the gain needs one)"
     elif bg_sigma is None:
         reason = f"no {_PATCH_PX}x{_PATCH_PX} px background patch free of targets (the noise needs one)"
-    elif bg_sigma <= 0:
-        reason = "the background has no measurable noise (noise-free image?)"
+    elif free is not None:
+        reason = free
     else:
         r_bg = float(truth.get("background", GIQE_REFLECTANCE))
         snr, noise, gain, _ = _estimate(edges, patches, r_bg, gain_given=gain_given)
         return SnrResult(snr, noise, gain, len(edges), None, *_snr_sigma(edges, patches, r_bg, gain_given))
     if edges:
         gain = float(np.median([(bright.level - dark.level) / step for bright, dark, step in edges]))
-    return SnrResult(float("nan"), bg_sigma, gain, len(edges), reason, None, "the SNR is not measured: " + reason)
+    flags = ("noise_free",) if free is not None and edges else ()
+    return SnrResult(float("nan"), bg_sigma, gain, len(edges), reason, None, "the SNR is not measured: " + reason,
+                     flags)  # fmt: skip
+
+
+def _not_noise(image, bg_sigma: float, patches) -> str | None:
+    """Why the background's scatter ``bg_sigma`` is not noise (a noise-free image), or None when it is: none at
+    all, below the image's float resolution, or spatially correlated (the median patch's white ratio below
+    :data:`WHITE_RATIO_MIN`)."""
+    levels, _, ratios = patches
+    if bg_sigma <= 0:
+        return "the background has no measurable noise (noise-free image?)"
+    dtype = np.asarray(image).dtype
+    floor = 16 * np.finfo(dtype).eps * float(np.median(np.abs(levels))) if dtype.kind == "f" else 0.0
+    if bg_sigma < floor:
+        return (f"noise-free image: the background's scatter ({bg_sigma:.3g}) is below its {dtype} values' "
+                f"resolution ({floor:.3g}, 16 eps of the level): no noise to measure an SNR from")  # fmt: skip
+    ratio = float(np.nanmedian(ratios)) if np.isfinite(ratios).any() else float("nan")
+    if ratio < WHITE_RATIO_MIN:
+        return (
+            f"noise-free image: the background's scatter ({bg_sigma:.3g}) is not noise: neighbouring pixels' "
+            f"differences are correlated (second differences carry {ratio:.2f} x the first's variance, white "
+            "noise 3), as the scene's own structure makes them, such as the optics' tails around the targets"
+        )
+    return None
