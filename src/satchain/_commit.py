@@ -6,13 +6,21 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 __all__ = ["CommitState", "committed_together", "defer_rename", "staged"]
 
-#: the open :func:`committed_together` groups (innermost last): each a list of (temporary, final) paths
-_GROUP: list[list[tuple[Path, Path]]] = []
+#: per thread, the open :func:`committed_together` groups (innermost last): each a list of (temporary, final)
+#: paths (a thread's writes never join another thread's group)
+_LOCAL = threading.local()
+
+
+def _groups() -> list[list[tuple[Path, Path]]]:
+    if not hasattr(_LOCAL, "groups"):
+        _LOCAL.groups = []
+    return _LOCAL.groups
 
 
 class CommitState:
@@ -30,12 +38,12 @@ def committed_together(check: Callable[[], None] | None = None) -> Iterator[Comm
     interruption before that removes every one of them, so no output of the group is replaced. A group inside
     another joins the outer one (committed at the outer's end). :func:`staged` names a file written but not
     yet committed."""
-    state = CommitState()
-    if _GROUP:
+    state, groups = CommitState(), _groups()
+    if groups:
         yield state
         return
     pending: list[tuple[Path, Path]] = []
-    _GROUP.append(pending)
+    groups.append(pending)
     try:
         yield state
         if check is not None:
@@ -46,28 +54,35 @@ def committed_together(check: Callable[[], None] | None = None) -> Iterator[Comm
                 tmp.unlink()
         raise
     finally:
-        _GROUP.remove(pending)
+        groups.remove(pending)
     _rename_all(pending, state)
 
 
 def _rename_all(pending: list[tuple[Path, Path]], state: CommitState) -> None:
-    """Rename every file in with SIGINT and SIGTERM held back; a signal received meanwhile is raised after the
-    last rename (``state.committed`` then True). Files not renamed in are removed."""
+    """Rename every file in with SIGINT and SIGTERM held back (their handlers replaced by one that records them:
+    a signal reaches the main thread's handler whichever thread the system gave it to, so masking one thread
+    would not do); a signal received meanwhile is raised after the last rename (``state.committed`` then
+    True). Files not renamed in are removed."""
     import signal
-    import threading
 
+    held: list[int] = []
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(signum) is not None:  # None: a handler not set from Python, left alone
+                previous[signum] = signal.signal(signum, lambda n, _frame: held.append(n))
     done = 0
     try:
-        main = threading.current_thread() is threading.main_thread()
-        previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM}) if main else None
         try:
             for tmp, final in pending:
                 os.replace(tmp, final)
                 done += 1
             state.committed = True
         finally:
-            if previous is not None:
-                signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a held signal is delivered here
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
+            if held:
+                signal.raise_signal(held[0])  # to the handler now in place again
     except BaseException:
         for tmp, _ in pending[done:]:
             with contextlib.suppress(OSError):
@@ -77,9 +92,10 @@ def _rename_all(pending: list[tuple[Path, Path]], state: CommitState) -> None:
 
 def defer_rename(tmp: Path, final: Path) -> bool:
     """Hold ``tmp`` (the finished file for ``final``) for the open group's commit; False when no group is open."""
-    if not _GROUP:
+    groups = _groups()
+    if not groups:
         return False
-    _GROUP[-1].append((Path(tmp), Path(final)))
+    groups[-1].append((Path(tmp), Path(final)))
     return True
 
 
@@ -87,7 +103,7 @@ def staged(path: str | os.PathLike) -> Path:
     """Where the file for ``path`` is now: its temporary name while a :func:`committed_together` group holds
     it, else ``path``."""
     final = Path(path)
-    for group in _GROUP:
+    for group in _groups():
         for tmp, f in group:
             if f == final:
                 return tmp
