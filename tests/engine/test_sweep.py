@@ -286,6 +286,7 @@ def test_a_rerun_replaces_the_earlier_sweeps_cases_and_keeps_the_users_files(tmp
         (out / "manifest.json").write_text(json.dumps(m))
     r = _cli(rows, "--sweep", "motion.smear_px=0.7", "-o", out)
     assert r.exit_code == 0, r.output
+    assert f"kept 1 file satchain did not write in {str(out)!r}: mynotes.txt" in " ".join(r.output.split())
     cases = read_manifest(out)
     assert [c.parameters for c in cases] == [{"motion.smear_px": 0.7}]
     assert sorted(p.name for p in out.iterdir()) == sorted(

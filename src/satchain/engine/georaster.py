@@ -31,7 +31,9 @@ Focal plane
     in the input's CRS. On the input grid its transform is the input's; on the coarse grid (every D-th pixel)
     sample (j, i) is the D x D input block it is centred on, so its transform is ``T_in * Affine.scale(D)`` (the
     ground footprint of the samples). The input's invalid pixels are filled as for the image; a sample on an
-    invalid input pixel (coarse: whose block touches one) is NaN, the file's nodata.
+    invalid input pixel (coarse: whose block touches one) is NaN, the file's nodata. Under yaw steering the
+    focal plane is the ground turned as the image sees it (:meth:`Simulator.focal_plane`), so this transform,
+    which is not turned, places it only to within that turn.
 """
 
 from __future__ import annotations

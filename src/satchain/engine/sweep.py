@@ -350,7 +350,7 @@ def simulate_sweep(
     out = Path(out_dir)
     _check_outputs(cases, out, options, names, name, systems)
     header = _header(system, sweep or {}, seed, options)
-    with _sweep_staging(out) as stage:  # swapped in for out at the end (also after a failed case)
+    with _sweep_staging(out, notify) as stage:  # swapped in for out at the end (also after a failed case)
         write_run_marker(stage, kind="simulate")
         _write_manifest(stage, header, cases)
         _run_cases(cases, systems, stage, header, progress, notify, names, options)
@@ -381,11 +381,12 @@ def _run_cases(cases: list[Case], systems: list[ImagingSystem], stage: Path, hea
 
 
 @contextlib.contextmanager
-def _sweep_staging(out: Path):
+def _sweep_staging(out: Path, notify: Callable[[str], None] | None = None):
     """A staging folder beside ``out`` that replaces it as ``satchain run`` replaces its folder
     (:func:`satchain._runfolder.swap_in`: the files satchain did not write are kept, an earlier sweep's
     cases are not), once the manifest is in it: after the last case, or after a failed or interrupted one
-    (its manifest says which were written). Before the manifest is written, nothing is changed."""
+    (its manifest says which were written). Before the manifest is written, nothing is changed. The user's files
+    kept are named to ``notify``."""
     import shutil
     import tempfile
 
@@ -401,7 +402,11 @@ def _sweep_staging(out: Path):
             yield stage
         finally:
             if (stage / "manifest.json").exists():
-                swap_in(stage, out)
+                kept = swap_in(stage, out)
+                if kept and notify is not None:
+                    more = f", ... ({len(kept)} in all)" if len(kept) > 5 else ""
+                    notify(f"kept {len(kept)} file{'s' * (len(kept) != 1)} satchain did not write in {str(out)!r}: "
+                           f"{', '.join(kept[:5])}{more}")  # fmt: skip
     finally:
         shutil.rmtree(stage, ignore_errors=True)
 
