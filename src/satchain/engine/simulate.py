@@ -586,8 +586,7 @@ def simulate(
     progress: Progress | None = None,
     input_scale: float | None = None,
 ) -> np.ndarray:
-    """The image of ``ground_truth``: an array with ``pixel_m`` (no NaN, no mask; uint8 / uint16 DN by their range,
-    wider integers with ``input_scale``, as simulate_image: :func:`.sources.reflectance_gain`), a scene, or a source.
+    """The image of ``ground_truth``: an array with ``pixel_m`` (no NaN/mask; ints as simulate_image), scene or source.
 
     Examples
     --------
