@@ -52,6 +52,7 @@ def _gdal_meta(r: RasterReader) -> dict[str, Any]:
     if desc:
         with contextlib.suppress(ValueError, TypeError, AttributeError):
             meta.update({k: v for k, v in json.loads(desc).get("satchain", {}).items() if v is not None})
+    desc_m, desc_xy = meta.get("pixel_m"), meta.get("pixel_m_xy")
     t = r.transform
     if r.pixel_m is not None:
         sx, sy = r.pixel_m
@@ -64,6 +65,14 @@ def _gdal_meta(r: RasterReader) -> dict[str, Any]:
     elif r.pixel_m_problem and r.georeferenced:
         meta.pop("pixel_m", None)
         meta["invalid_pixel_m"] = f"none ({r.pixel_m_problem})"
+    if meta.get("georeference") == "image_map" and desc_m is not None:
+        # a satchain image under pushbroom geometry: its transform is the image's map to the ground (turned,
+        # sheared, scaled along track); its pixel is the detector's, whose ground size (the GSD) it states
+        meta["pixel_m"] = desc_m
+        meta.pop("invalid_pixel_m", None)
+        meta.pop("pixel_m_xy", None)
+        if desc_xy is not None:
+            meta["pixel_m_xy"] = desc_xy
     if r.georeferenced and not t.is_identity:
         meta["origin_m"] = [t.c, -t.f]
     meta = _checked_meta(meta, path)

@@ -7,7 +7,11 @@ Geometry
     :class:`satchain.engine.tiling.AxisSampling`). Its transform is the input's composed with that scale,
     ``T_out = T_in * Affine.scale(k_x, k_y)``: the pixel size is the GSD (ACT along the rows, ALT down the
     columns), the origin is the input's (exactly: within one output pixel), a rotation is kept, the CRS is the
-    input's. The output covers the whole output pixels that fit inside the input.
+    input's. Under pushbroom geometry (a drift: Earth rotation, line-rate error; yaw steering) it is the input's
+    composed with the image's mean map instead (:func:`image_transform`: the inverse of
+    :func:`satchain.engine.yaw.image_affine`, turned, sheared and scaled as the image is), so every output pixel
+    lies over the ground it images; the description then says ``georeference = "image_map"`` and the file is
+    read back with the GSD as its pixel size. The output covers the whole output pixels that fit inside the input.
 Nodata
     Invalid input pixels (the nodata value, an internal mask, alpha 0, NaN) are replaced, before the optics, by
     one value per band: the mean of the band's valid pixels from a decimated read (a constant, so the image
@@ -32,8 +36,8 @@ Focal plane
     sample (j, i) is the D x D input block it is centred on, so its transform is ``T_in * Affine.scale(D)`` (the
     ground footprint of the samples). The input's invalid pixels are filled as for the image; a sample on an
     invalid input pixel (coarse: whose block touches one) is NaN, the file's nodata. Under yaw steering the
-    focal plane is the ground turned as the image sees it (:meth:`Simulator.focal_plane`), so this transform,
-    which is not turned, places it only to within that turn.
+    focal plane is the ground turned as the image sees it (:meth:`Simulator.focal_plane`), and its transform is
+    turned with it (:func:`focal_plane_transform`: about the pivot the engine turns the ground about).
 """
 
 from __future__ import annotations
@@ -91,6 +95,41 @@ def output_transform(transform, k: tuple[float, float]):
     from affine import Affine
 
     return transform @ Affine.scale(float(k[1]), float(k[0]))
+
+
+def image_transform(transform, sim, pixel_m: float):
+    """The output's affine transform through the image's mean map: output pixel (corner coordinates) ->
+    ground-truth metres (the inverse of :func:`satchain.engine.yaw.image_affine`, whose pixel centres are at
+    integers) -> input pixels (``pixel_m`` each) -> the input's ``transform``. Under pushbroom geometry (yaw
+    steering, Earth rotation, a line-rate error) it is turned, sheared and scaled as the image is; without any
+    (no drift, no yaw: the map is the plain grid) it is :func:`output_transform` exactly."""
+    from affine import Affine
+
+    from satchain.engine.yaw import image_affine
+    from satchain.tf.pushbroom import PushbroomTerms
+
+    if PushbroomTerms(sim.system).drift_px is None and not sim.yaw_deg:
+        return output_transform(transform, sim.k)
+    to_ground_m = ~image_affine(sim) @ Affine.translation(-0.5, -0.5)
+    return transform @ Affine.scale(1.0 / pixel_m) @ to_ground_m
+
+
+def focal_plane_transform(transform, sim, pixel_m: float, d: int):
+    """The focal plane's affine transform: its samples are ``d`` input pixels apart, of the ground turned as the
+    image sees it (:func:`satchain.engine.yaw.rotated_frame`: ``B'(q) = B(P + M (q - P))`` about the pivot
+    :func:`satchain.tf.pushbroom.yaw_pivot_m` that :func:`~satchain.engine.yaw.image_affine` turns about), so
+    sample corner ``q`` (metres) lies over the ground ``P + M (q - P)``; without a yaw ``T_in * scale(d)``."""
+    from affine import Affine
+
+    from satchain.engine.yaw import grid_origin_m
+    from satchain.tf.pushbroom import yaw_pivot_m
+
+    if not sim.yaw_deg:
+        return transform @ Affine.scale(d, d)
+    a = sim.input_pixel_m
+    pivot = yaw_pivot_m(sim.output_shape, (sim.xs.k * a, sim.ys.k * a), grid_origin_m(sim))  # rotated_frame's
+    turn = Affine.rotation(-sim.yaw_deg, pivot=pivot)  # M (Affine.rotation is counter-clockwise in (x, y))
+    return transform @ Affine.scale(1.0 / pixel_m) @ turn @ Affine.scale(d * a)
 
 
 def _nodata_for(units: str, bits: int | None) -> tuple[np.dtype, float, float]:
@@ -186,7 +225,7 @@ def simulate_raster(
     systems, planned, sims, streamed, budget = job.systems, job.planned, job.sims, job.streamed, job.budget
     sensor, bits, dtype, nodata, lowest = job.sensor, job.bits, job.dtype, job.nodata, job.lowest
     sim0 = sims[0]
-    transform = output_transform(plan.transform, sim0.k)
+    transform = image_transform(plan.transform, sim0, plan.pixel_m)
     meta = {"system": system.name, "seed": int(seed), "noise": bool(noise), "gsd_act_m": system.gsd_act_m,
             "gsd_alt_m": system.gsd_alt_m, "input": str(path), "input_pixel_m": plan.pixel_m, "units": units,
             "bands": bands, "pixel_m": system.gsd_act_m,
@@ -195,6 +234,8 @@ def simulate_raster(
         meta["bit_depth"] = int(bits)
     if not math.isclose(system.gsd_act_m, system.gsd_alt_m, rel_tol=1e-9):
         meta["pixel_m_xy"] = [system.gsd_act_m, system.gsd_alt_m]
+    if transform != output_transform(plan.transform, sim0.k):  # read back with the GSD as its pixel size
+        meta["georeference"] = "image_map"
     if check_only:
         for src in sources:
             src.close()
@@ -473,12 +514,10 @@ class _FocalPlane:
     GeoTIFF at ``path``."""
 
     def __init__(self, path: Path, grid: str, plan: _Plan, sim, count: int, meta: Mapping[str, Any]):
-        from affine import Affine
-
         self.path, self.grid, self.plan, self.count, self.bands = path, grid, plan, count, []
         d = int(sim.D) if grid == "coarse" else 1
         self.d, self.pixel_m = d, plan.pixel_m * d
-        self.transform = plan.transform @ Affine.scale(d, d)  # the samples' ground footprint
+        self.transform = focal_plane_transform(plan.transform, sim, plan.pixel_m, d)  # the samples' ground
         self.meta = {"units": "input (reflectance) filtered by the optics and motion", "system": meta["system"],
                      "grid": grid, "pixel_m": self.pixel_m, "input": meta["input"]}  # fmt: skip
 
