@@ -98,3 +98,21 @@ def test_outputs_place_each_spot_on_its_ground_coordinates(tmp_path, geometry):
 
         _, meta = read_image(out)  # measurements still read the detector pixel's ground size, the GSD
         assert meta["pixel_m"] == pytest.approx(0.49) and "pixel_m_xy" not in meta and "invalid_pixel_m" not in meta
+
+
+@pytest.mark.parametrize("geometry", ["yaw", "earth40"])
+def test_simulate_image_with_a_transform_places_each_spot_as_the_file_path_does(tmp_path, geometry):
+    """The Python API (an array with its transform) georeferences through the same image map as the CLI."""
+    from satchain import load_system
+    from satchain.engine.degrade import simulate_image
+
+    src, known = _squares(tmp_path / "in.tif")
+    with rasterio.open(src) as f:
+        a = f.read(1)
+    sim = simulate_image(a, load_system(_system_file(tmp_path, GEOMETRY[geometry])), transform=T_IN,
+                         units="reflectance", noise=False)  # fmt: skip
+    t = sim.transform
+    found = [t @ c for c in _centroids(np.asarray(sim.image))]
+    pixel_m = np.sqrt(abs(t.determinant))
+    for x, y in known:
+        assert min(np.hypot(fx - x, fy - y) for fx, fy in found) < 0.5 * pixel_m

@@ -209,7 +209,7 @@ def simulate_image(
         images.append(img)
         valids.append(np.ones(img.shape, bool) if bad is None else ~bad)
     valid = np.stack(valids)
-    out_t = g.output_transform(t, sim.k)
+    out_t = g.image_transform(t, sim, px)  # through the image map (pushbroom geometry), as the file path
     image = np.stack(images)
     if squeeze:
         image, valid = image[0], valid[0]
