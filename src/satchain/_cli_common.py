@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import functools
+import inspect
 import logging
 import math
 import os
+import re
 import shutil
 
 import click
@@ -17,6 +19,7 @@ from satchain._safety import end_startup
 from satchain.errors import ConfigError, SatchainError
 
 __all__ = [
+    "ReflowGroup",
     "console",
     "err_console",
     "error_line",
@@ -24,6 +27,7 @@ __all__ = [
     "parse_numbers",
     "print_error",
     "print_warning",
+    "reflow_help",
     "set_debug",
 ]
 
@@ -127,3 +131,50 @@ def parse_numbers(name: str, text: str, n: int | None = None, *, minimum: float 
         floor = "" if minimum is None else f" >= {minimum:g}"
         raise ConfigError(f"{name} = {text!r}: must be {what}{floor}")
     return vals
+
+
+_LIST_ITEM = re.compile(r"(?:[-*]\s|\d+[.)]\s)")
+
+
+def reflow_help(text: str | None) -> str | None:
+    """A command's help as typer/rich reflow it well: each paragraph one line (its source lines joined), so that
+    it wraps at the terminal's width and not where the docstring was wrapped; paragraphs (a blank line between),
+    list items (``- ``, ``* ``, ``1. ``) and click's verbatim blocks (a paragraph opening with ``\\b``) are kept,
+    and so is everything after ``\\f`` (click's cut).
+
+    Examples
+    --------
+    >>> reflow_help("A summary\\n    in two lines.\\n\\n- one\\n  item\\n- two")
+    'A summary in two lines.\\n\\n- one item\\n- two'
+    """
+    if not text:
+        return text
+    head, cut, tail = inspect.cleandoc(text).partition("\f")
+    paragraphs = []
+    for paragraph in re.split(r"\n\s*\n", head.strip()):
+        if paragraph.startswith("\b"):
+            paragraphs.append(paragraph)
+            continue
+        items: list[str] = []
+        for line in paragraph.splitlines():
+            if items and not _LIST_ITEM.match(line.strip()):
+                items[-1] = f"{items[-1]} {line.strip()}"
+            else:
+                items.append(line.strip())
+        paragraphs.append("\n".join(items))
+    return "\n\n".join(paragraphs) + (f"\n{cut}{tail}" if cut else "")
+
+
+def _reflow_command(command: click.Command | typer.core.TyperCommand) -> None:
+    command.help = reflow_help(command.help)
+    for sub in getattr(command, "commands", {}).values():
+        _reflow_command(sub)
+
+
+class ReflowGroup(typer.core.TyperGroup):
+    """The typer group of satchain's apps: its commands' help, and its sub-groups', written as wrapped source
+    lines, is reflowed into paragraphs (:func:`reflow_help`) once, when typer builds the group."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        _reflow_command(self)
