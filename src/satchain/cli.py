@@ -14,7 +14,15 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from satchain._cli_common import console, err_console, handle_errors, parse_numbers, print_warning, set_debug
+from satchain._cli_common import (
+    ReflowGroup,
+    console,
+    err_console,
+    handle_errors,
+    parse_numbers,
+    print_warning,
+    set_debug,
+)
 from satchain._safety import (
     check_dir_outputs,
     check_disk,
@@ -32,6 +40,7 @@ from satchain.errors import ConfigError
 app = typer.Typer(
     name="satchain",
     help="Satellite image-chain simulation and image-quality measurement.",
+    cls=ReflowGroup,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -567,7 +576,7 @@ def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool, *, what: str
 
 from satchain.cli_measure import measure_app  # noqa: E402
 
-app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find.")
+app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find, jitter.")
 
 
 def main() -> None:  # pragma: no cover

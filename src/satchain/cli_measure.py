@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import typer
 
+from satchain._cli_common import ReflowGroup
 from satchain._cli_common import handle_errors as _handle_errors
 from satchain._cli_common import parse_numbers as _numbers
 from satchain.cli_auto import auto
@@ -41,6 +42,7 @@ measure_app = typer.Typer(
     name="measure",
     help="Measure image quality (slanted edge, Siemens star, bar targets, hyperbolic wedge) and line-of-sight "
     "motion (jitter, from a long edge) from images.",
+    cls=ReflowGroup,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,

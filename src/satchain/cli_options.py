@@ -115,7 +115,7 @@ FrequencyAxisOpt = Annotated[
     typer.Option(
         "--frequency-axis",
         help="normal: the MTF along each edge's normal (ISO 12233); row: along the image row (ACT) or column "
-        "(ALT), MTF_Estimator's convention, whose frequencies are cos(tilt) x the normal ones (4.3 %% lower at "
+        "(ALT), MTF_Estimator's convention, whose frequencies are cos(tilt) x the normal ones (4.3 % lower at "
         "16.8 deg)",
     ),
 ]
