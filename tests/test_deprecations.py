@@ -1,5 +1,6 @@
 """Duplicate result field names are retired with a versioned warning: the old name still reads the same value
-for one minor version and says which version removes it; the JSON carries the canonical name only."""
+for one minor version and says which version removes it; ``to_dict()`` carries the canonical name only (the
+command line's JSON outputs write the former key beside it until then: tests/test_changelog_aliases.py)."""
 
 from __future__ import annotations
 

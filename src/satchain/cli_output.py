@@ -10,6 +10,7 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
+from satchain._deprecate import with_renamed_keys
 from satchain.errors import SatchainIOError
 
 __all__ = [
@@ -32,8 +33,9 @@ def wide_console() -> Console:
 
 
 def emit(payload: dict, as_json: bool, out: Path | None, name: str, plot, table) -> None:
-    """Print (JSON or tables) and write ``out/name.json`` + the figures ``plot(out)`` returns (atomically)."""
-    text = json.dumps(payload, indent=2, allow_nan=False)
+    """Print (JSON or tables) and write ``out/name.json`` + the figures ``plot(out)`` returns (atomically); a
+    renamed key is written beside its new name until satchain 0.2 (:func:`satchain._deprecate.with_renamed_keys`)."""
+    text = json.dumps(with_renamed_keys(name, payload), indent=2, allow_nan=False)
     written = []
     if out is not None:
         from satchain.report._save import write_text
