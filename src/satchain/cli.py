@@ -578,6 +578,10 @@ from satchain.cli_measure import measure_app  # noqa: E402
 
 app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find, jitter.")
 
+from satchain.cli_schema import schema  # noqa: E402
+
+app.command("schema")(schema)
+
 
 def main() -> None:  # pragma: no cover
     app()

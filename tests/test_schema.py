@@ -1,0 +1,119 @@
+"""Issue 30, point 6: ``satchain schema system|run|results`` prints JSON Schemas, from the pydantic models, that
+validate a system file, a run configuration and a results.json; a misspelt key fails them."""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+from importlib import resources
+from pathlib import Path
+
+import jsonschema
+import pytest
+import tomllib
+from typer.testing import CliRunner
+
+from satchain.cli import app
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+MINIMAL_SYSTEM = """
+[orbit]
+altitude_m = 500000
+[optics]
+aperture_diameter_m = 0.5
+focal_length_m = 5.0
+wavelengths_m = [6.5e-7]
+[detector]
+pitch_x_m = 5e-6
+pitch_y_m = 5e-6
+"""
+
+MOTION = """
+[[motion.oscillation]]
+axis = "act"
+amplitude_px = 0.3
+frequency_hz = 40.0
+[motion.jitter_psd]
+axis = "alt"
+frequency_hz = [1.0, 100.0]
+psd_px2_per_hz = [1e-4, 1e-6]
+"""
+
+
+def _schema(kind: str) -> dict:
+    result = CliRunner().invoke(app, ["schema", kind])
+    assert result.exit_code == 0, result.output
+    schema = json.loads(result.stdout)
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return schema
+
+
+def _errors(kind: str, data) -> list[str]:
+    validator = jsonschema.Draft202012Validator(_schema(kind))
+    return [f"{'.'.join(map(str, e.absolute_path))}: {e.message}" for e in validator.iter_errors(data)]
+
+
+def _readme_system_file() -> dict:
+    section = README.read_text().split("### A system file", 1)[1]
+    return tomllib.loads(re.search(r"```toml\n(.*?)```", section, re.S).group(1))
+
+
+def test_the_preset_the_readme_example_and_a_minimal_system_file_validate():
+    preset = tomllib.loads((resources.files("satchain.presets") / "ankarasat3.toml").read_text())
+    readme = _readme_system_file()
+    assert readme["detector"]["pitch_m"] and readme["detector"]["fill_factor"]  # the loader's extra keys
+    for data in (preset, readme, tomllib.loads(MINIMAL_SYSTEM)):
+        assert _errors("system", data) == []
+    motion = tomllib.loads(MINIMAL_SYSTEM + MOTION)  # one [motion.jitter_psd] table, an array of oscillations
+    assert _errors("system", motion) == []
+
+
+def test_a_misspelt_or_missing_key_fails_the_system_schema():
+    data = _readme_system_file()
+    data["optics"]["f_numbr"] = data["optics"].pop("f_number")
+    errors = _errors("system", data)
+    assert any("f_numbr" in e for e in errors), errors
+    minimal = tomllib.loads(MINIMAL_SYSTEM)
+    del minimal["detector"]["pitch_y_m"]  # neither pitch_m nor both pitches: the loader refuses it too
+    assert _errors("system", minimal)
+    minimal = tomllib.loads(MINIMAL_SYSTEM)
+    minimal["optics"]["obscuration_ratio"] = 1.2  # out of its range
+    assert _errors("system", minimal)
+
+
+def test_the_system_schema_describes_each_key_with_unit_and_range():
+    orbit = _schema("system")["$defs"]["Orbit"]["properties"]["altitude_m"]
+    assert orbit["x-unit"] == "m" and "range (0, 1e+08]" in orbit["description"]
+    assert "height above the ground" in orbit["description"]
+
+
+def test_print_config_validates_against_the_run_schema():
+    out = CliRunner().invoke(app, ["run", "--print-config"])
+    assert out.exit_code == 0
+    config = tomllib.loads(out.stdout)
+    assert _errors("run", config) == []
+    assert _errors("run", {**config, "system": {"inline": _readme_system_file()}}) == []
+    assert _errors("run", {**config, "as_built": {"motion": {"smear_px": 3.0}}}) == []
+    assert _errors("run", {**config, "simulation": {"sede": 1}})
+
+
+@pytest.fixture(scope="module")
+def results_json(tmp_path_factory, reduced_scene_toml):
+    import satchain
+    from satchain.runconfig import load_run_config
+
+    d = tmp_path_factory.mktemp("run")
+    (d / "scene.toml").write_text(reduced_scene_toml)
+    (d / "run.toml").write_text('[scene]\nlayout = "scene.toml"\npixel_m = 0.07\n[simulation]\nseed = 11\n')
+    with warnings.catch_warnings():  # the reduced scene's wedge is finer than its raster resolves
+        warnings.simplefilter("ignore")
+        satchain.run(load_run_config(d / "run.toml"), out_dir=d / "out")
+    return json.loads((d / "out" / "results.json").read_text())
+
+
+def test_a_real_results_json_validates_against_the_results_schema(results_json):
+    assert _errors("results", results_json) == []
+    assert _errors("results", {k: v for k, v in results_json.items() if k != "summary"})  # a key missing
+    assert _errors("results", {**results_json, "format_version": 1})
