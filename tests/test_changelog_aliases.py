@@ -13,7 +13,7 @@ import pytest
 from scipy.special import ndtr
 from typer.testing import CliRunner
 
-from satchain._deprecate import REMOVED_IN, RENAMED, RENAMED_JSON_KEYS
+from satchain._deprecate import REMOVED_IN, RENAMED, renamed_json_keys
 from satchain.cli_measure import measure_app
 from satchain.io import write_npy
 
@@ -95,7 +95,9 @@ def test_changelog_lists_every_renamed_name_with_its_replacement(owner, old, new
     )
 
 
-JSON_RENAMES = [(out, o, n) for out, places in RENAMED_JSON_KEYS.items() for r in places.values() for o, n in r.items()]
+JSON_RENAMES = [
+    (out, o, n) for out, places in renamed_json_keys().items() for r in places.values() for o, n in r.items()
+]
 
 
 @pytest.mark.parametrize("output, old, new", JSON_RENAMES)

@@ -10,7 +10,7 @@ from typing import Any
 
 from satchain.errors import SatchainDeprecationWarning
 
-__all__ = ["DEPRECATED_IN", "RENAMED", "RENAMED_JSON_KEYS", "REMOVED_IN", "warn_renamed", "with_renamed_keys"]
+__all__ = ["DEPRECATED_IN", "RENAMED", "renamed_json_keys", "REMOVED_IN", "warn_renamed", "with_renamed_keys"]
 
 #: The version that deprecates the names retired now, and the one that removes them.
 DEPRECATED_IN, REMOVED_IN = "0.1", "0.2"
@@ -24,14 +24,20 @@ RENAMED: tuple[tuple[str, str, str], ...] = (
     ("SceneResult", "typed_truth", "truth"),
 )
 
-#: JSON keys renamed in an output, written beside their new name with its value until :data:`REMOVED_IN`:
-#: {output: {where: {old key: new key}}}. The output is the JSON file's stem (``measure edge`` writes edge.json,
-#: ``measure auto`` auto.json, their ``--json`` prints the same); where is ``""`` for the top level, else the key
-#: of a list whose every item carries the key (auto.json's ``slanted_edges``).
-RENAMED_JSON_KEYS: dict[str, dict[str, dict[str, str]]] = {
-    "edge": {"": {"edge_angle_deg": "angle_deg", "mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
-    "auto": {"slanted_edges": {"mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
-}
+
+def renamed_json_keys() -> dict[str, dict[str, dict[str, str]]]:
+    """JSON keys renamed in an output, written beside their new name with its value until :data:`REMOVED_IN`:
+    {output: {where: {old key: new key}}}. The output is the JSON file's stem (``measure edge`` writes edge.json,
+    ``measure auto`` auto.json, their ``--json`` prints the same); where is ``""`` for the top level, else the key
+    of a list whose every item carries the key (auto.json's slanted edges, named by the measure layer's registry,
+    imported here when first asked for: the measurement modules import this one)."""
+    from satchain.measure._keys import RESULT_KEY
+    from satchain.scene.targets import SlantedEdge
+
+    return {
+        "edge": {"": {"edge_angle_deg": "angle_deg", "mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
+        "auto": {RESULT_KEY[SlantedEdge.kind]: {"mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
+    }
 
 
 def warn_renamed(owner: str, old: str, new: str, *, stacklevel: int = 3) -> None:
@@ -66,7 +72,7 @@ def _beside(d: dict, renamed: dict[str, str]) -> dict:
 
 
 def with_renamed_keys(output: str, payload: dict) -> dict:
-    """The JSON ``payload`` of ``output`` with every renamed key of :data:`RENAMED_JSON_KEYS` beside its new
+    """The JSON ``payload`` of ``output`` with every renamed key of :func:`renamed_json_keys` beside its new
     name (a new dict; ``payload`` is left as it is).
 
     Examples
@@ -77,7 +83,7 @@ def with_renamed_keys(output: str, payload: dict) -> dict:
     {'angle_deg': 5.0}
     """
     out = dict(payload)
-    for where, renamed in RENAMED_JSON_KEYS.get(output, {}).items():
+    for where, renamed in renamed_json_keys().get(output, {}).items():
         if where == "":
             out = _beside(out, renamed)
         elif isinstance(out.get(where), list):
