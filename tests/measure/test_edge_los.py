@@ -67,6 +67,7 @@ def test_jitter_band_50_800_hz():
     path = {"amp_px": [np.sqrt(2.0 / 40)] * 40, "freq_hz": list(f), "phase_rad": list(rng.uniform(0, 2 * np.pi, 40))}
     r, static = _pair(200, path)
     _check(r, static, 200, path)
+    assert r.mtf_as_imaged_at_nyquist < r.mtf_aligned[100]  # the lines' displacements folded in blur further
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -174,3 +175,4 @@ def test_slow_oscillation_a_cycle_or_two_over_the_roi(f_hz, n, amp):
     path = {"amp_px": [amp], "freq_hz": [f_hz], "phase_rad": [2.0]}
     r, static = _pair(n, path)
     _check(r, static, n, path)
+    assert r.mtf_as_imaged_at_nyquist < r.mtf_aligned[100]  # the lines' displacements folded in blur further

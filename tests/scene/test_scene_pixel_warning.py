@@ -80,5 +80,6 @@ def test_a_run_names_its_scene_pixel_key(tmp_path):
     layout = tmp_path / "fine.json"
     layout.write_text(json.dumps(LAYOUT))
     config = RunConfig.from_dict({"scene": {"layout": str(layout), "pixel_m": 0.1}}, base_dir=tmp_path)
-    with pytest.warns(SatchainWarning, match=r"scene\.pixel_m = 0\.1 m: 1 scene item\(s\) .*\(fine_bars"):
+    with pytest.warns(SatchainWarning, match=r"scene\.pixel_m = 0\.1 m: 1 scene item\(s\) .*\(fine_bars") as w:
         _stage_scene(config, lambda *a: None)
+    assert sum("scene.pixel_m" in str(x.message) for x in w) == 1  # named once, by the run's own key
