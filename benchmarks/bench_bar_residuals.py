@@ -53,7 +53,7 @@ def _run(out: Path, noise: bool) -> Path:
     cfg = out / "cfg.toml"
     cfg.write_text(f"[simulation]\nnoise = {'true' if noise else 'false'}\n")
     subprocess.run(
-        [sys.executable, "-m", "satchain.cli", "run", "--config", str(cfg), "-o", str(out / "run"), "--exit-zero"],
+        [sys.executable, "-m", "satchain.cli.main", "run", "--config", str(cfg), "-o", str(out / "run"), "--exit-zero"],
         check=True,
         capture_output=True,
     )

@@ -19,7 +19,7 @@ from satchain import load_preset
 from satchain.engine.distributed import simulate_distributed
 from satchain.engine.simulate import Simulator
 from satchain.engine.sources import SceneSource
-from satchain.io import write_tiff
+from satchain.io.images import write_tiff
 from satchain.scene import ImageScene
 
 

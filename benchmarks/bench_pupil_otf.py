@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from satchain.system import Spiders
+from satchain.config.system import Spiders
 from satchain.tf.optics import PupilOTF, PupilParams, annular_mtf, optical_cutoff_cy_per_mm
 
 REPEAT = 3

@@ -2,7 +2,7 @@
 
 Before: the prediction was the system MTF along each direction and sigma the measured 1-sigma at the point of
 largest |error| (so the estimator's own bias, ~0.02 at the star's outer radii, sat in the error as z ~ +17).
-After: the prediction is the star measured on its noise-free predicted image (satchain.star_prediction), the
+After: the prediction is the star measured on its noise-free predicted image (satchain.prediction.star), the
 error the signed largest difference, sigma that of the largest of the compared points' errors.
 
 Prints, for the default run (the paper scene, ankarasat3): the star row before and after, the estimator's
@@ -21,7 +21,7 @@ import numpy as np
 
 import satchain
 from satchain.comparison import compare
-from satchain.runconfig import RunConfig
+from satchain.config.run import RunConfig
 
 
 def _before(s) -> tuple[float, float | None]:
@@ -76,8 +76,8 @@ def _seeds(result, n: int) -> None:
 
 
 def _timing(result) -> None:
-    from satchain.prediction import WIDE_COMPONENTS, _SystemOTF
-    from satchain.star_prediction import predict_stars
+    from satchain.prediction.core import WIDE_COMPONENTS, _SystemOTF
+    from satchain.prediction.star import predict_stars
 
     otf = result.budget.otf
     otf2d = _SystemOTF(otf, tuple(c for c in WIDE_COMPONENTS if c in otf.component_names))

@@ -32,8 +32,8 @@ def main() -> None:
         "import satchain": [py, "-c", "import satchain"],
         "import satchain; satchain.load_preset(...)": [py, "-c", "import satchain; satchain.load_preset('ankarasat3')"],
         "import numpy (reference)": [py, "-c", "import numpy"],
-        "satchain --help": [py, "-m", "satchain.cli", "--help"],
-        "satchain measure --help": [py, "-m", "satchain.cli", "measure", "--help"],
+        "satchain --help": [py, "-m", "satchain.cli.main", "--help"],
+        "satchain measure --help": [py, "-m", "satchain.cli.main", "measure", "--help"],
         "import typer, rich (reference)": [py, "-c", "import typer, rich.console"],
     }
     print(f"bare interpreter start: {bare * 1e3:.0f} ms (median of {n})")

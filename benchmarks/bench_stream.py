@@ -73,7 +73,7 @@ def worker(args) -> None:
     """One run in this process: prints a JSON line. ``args.warmup``: first a streamed run of that side, untimed
     (the process's one-time costs -- first touch of its working set, FFT plans -- are then paid)."""
     from satchain import load_preset
-    from satchain._memory import keep_freed_memory
+    from satchain.engine._malloc import keep_freed_memory
     from satchain.engine.simulate import SimParams, Simulator
     from satchain.engine.stream import choose_streamed, coarse_store, stream_bytes, write_streamed
 
@@ -100,8 +100,7 @@ def worker(args) -> None:
             write_streamed(out, sim, coarse, pixel_m=sim.system.gsd_act_m, preview=False)
         info["stage1_s"] = t1 - t0
     else:
-        from satchain import io
-
+        from satchain.io import images as io
         sim.check_frame()
         io.write_tiff(out, sim.run(src).astype(np.float32))
     wall = time.perf_counter() - t0
@@ -143,8 +142,7 @@ def _print(name: str, r: dict) -> None:
 
 
 def _difference(a_path: str, b_path: str) -> float:
-    from satchain import io
-
+    from satchain.io import images as io
     a, _ = io.read_image(a_path)
     b, _ = io.read_image(b_path)
     b = b.astype(np.float64)
@@ -154,7 +152,7 @@ def _difference(a_path: str, b_path: str) -> float:
 def make_huge_tiff(path: Path, n: int, *, period: int = 4096) -> None:
     """A ``n x n`` uint8 tiled TIFF: one ``period``-px square of the procedural ground truth, repeated (so it
     is written at disk speed rather than rendered pixel by pixel for hours)."""
-    from satchain import io
+    from satchain.io import images as io
     from satchain.engine.tiling import Window
 
     t = 256

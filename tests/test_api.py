@@ -22,7 +22,8 @@ SRC = ROOT / "src"
 
 
 def test_documented_names_resolve_to_their_objects():
-    from satchain import api, comparison, measure, prediction, runconfig
+    from satchain import api, comparison, measure, prediction
+    from satchain.config import run as runconfig
     from satchain.engine import simulate as engine_simulate
     from satchain.tf import budget as tf_budget
 
@@ -124,7 +125,7 @@ def truth_file(tmp_path_factory):
 
 
 def satchain_cli():
-    from satchain.cli import app
+    from satchain.cli.main import app
 
     return app
 

@@ -10,8 +10,8 @@ import pytest
 
 import satchain
 from satchain.errors import ConfigError, SatchainIOError
-from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, config_to_toml, load_run_config, system_differences
-from satchain.system import load_preset
+from satchain.config.run import DEFAULT_CONFIG_TOML, RunConfig, config_to_toml, load_run_config, system_differences
+from satchain.config.system import load_preset
 
 if sys.version_info >= (3, 11):
     import tomllib

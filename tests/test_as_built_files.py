@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from satchain.runconfig import RunConfig, system_differences
-from satchain.system import ImagingSystem, load_preset
+from satchain.config.run import RunConfig, system_differences
+from satchain.config.system import ImagingSystem, load_preset
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 PRESET = resources.files("satchain.presets").joinpath("ankarasat3.toml")

@@ -16,7 +16,7 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import satchain
-from satchain.runconfig import RunConfig
+from satchain.config.run import RunConfig
 
 BARS_TOML = """
 [[items]]
@@ -111,7 +111,7 @@ def test_every_row_has_the_as_built_prediction_and_it_explains_the_failures(run)
 
 def test_without_as_built_nothing_as_built_is_written(tmp_path, reduced_scene_toml):
     from satchain.comparison import compare
-    from satchain.prediction import predict_from_mtf
+    from satchain.prediction.core import predict_from_mtf
 
     truth = {"items": [{"id": "e", "kind": "slanted_edge", "normal_to_bright": [1.0, 0.0]}]}
     p = predict_from_mtf(lambda fx, fy: np.exp(-(fx**2 + fy**2)), truth, gsd_m=1.0)
@@ -231,7 +231,7 @@ def test_the_edges_overview_marks_the_failing_edge(run, monkeypatch, tmp_path):
 
 
 def test_the_terminal_table_gives_the_as_built_prediction_and_z(run):
-    from satchain import cli
+    from satchain.cli import main as cli
     from satchain.comparison import row_texts
 
     result, res, _, _ = run

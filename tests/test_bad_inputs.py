@@ -12,7 +12,7 @@ import pytest
 import tifffile
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 PRESET = Path(__file__).resolve().parents[1] / "src" / "satchain" / "presets" / "ankarasat3.toml"
 
@@ -217,7 +217,7 @@ def test_bad_inputs_in_a_real_process(files, args):
     """The installed entry point (a real process, a real terminal-less stderr): one line, exit 2."""
     argv = [a.format(**{k: str(v) for k, v in files.items()}) for a in args]
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src"), "SATCHAIN_MEMORY_LIMIT": "2G"}
-    p = subprocess.run([sys.executable, "-m", "satchain.cli", *argv], capture_output=True, text=True, env=env)
+    p = subprocess.run([sys.executable, "-m", "satchain.cli.main", *argv], capture_output=True, text=True, env=env)
     assert p.returncode == 2, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and p.stderr.startswith("error: ")
 

@@ -14,8 +14,8 @@ from scipy.special import ndtr
 from typer.testing import CliRunner
 
 from satchain._deprecate import REMOVED_IN, RENAMED, renamed_json_keys
-from satchain.cli_measure import measure_app
-from satchain.io import write_npy
+from satchain.cli.measure import measure_app
+from satchain.io.images import write_npy
 
 ROOT = Path(__file__).resolve().parents[1]
 CHANGELOG = ROOT / "CHANGELOG.md"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 runner = CliRunner()
 
@@ -90,7 +90,7 @@ def test_scene_then_simulate_through_cli(tmp_path):
     import tifffile
 
     from satchain import load_preset
-    from satchain.io import read_image
+    from satchain.io.images import read_image
 
     r = runner.invoke(
         app, ["scene", "--pixel-m", "0.245", "--window", "0,0,400,300", "-o", str(tmp_path / "s" / "sc.tif")]
@@ -158,9 +158,9 @@ def test_simulate_on_a_local_dask_cluster_equals_in_process(tmp_path):
 
 
 def test_simulate_sets_up_its_own_process_allocator(tmp_path, monkeypatch):
-    """`satchain simulate` runs in a process satchain owns: it keeps freed tile buffers (satchain._memory),
+    """`satchain simulate` runs in a process satchain owns: it keeps freed tile buffers (satchain.engine._malloc),
     which the library never does in a caller's process (nor `satchain run`, whose memory it would only raise)."""
-    import satchain._memory as memory
+    import satchain.engine._malloc as memory
 
     calls = []
     monkeypatch.setattr(memory, "keep_freed_memory", lambda: calls.append(1))

@@ -12,7 +12,7 @@ import typer
 import typer.rich_utils
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 WIDTHS = (80, 200)
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
@@ -100,7 +100,7 @@ def test_measure_edge_reads_as_paragraphs_at_a_wide_terminal(monkeypatch):
 
 
 def test_reflow_joins_the_lines_of_a_paragraph_and_keeps_paragraphs_lists_and_verbatim_blocks():
-    from satchain._cli_common import reflow_help
+    from satchain.cli._common import reflow_help
 
     text = (
         "First line\nof the summary.\n\nA second\nparagraph.\n\n- one\n  item\n- two\n\n\b\nkept\nas is\n\fhidden\nnot"

@@ -9,8 +9,8 @@ import pytest
 from scipy.special import ndtr
 from typer.testing import CliRunner
 
-from satchain.cli_measure import measure_app
-from satchain.io import write_npy, write_png, write_tiff
+from satchain.cli.measure import measure_app
+from satchain.io.images import write_npy, write_png, write_tiff
 from satchain.scene import (
     BarTarget,
     Car,

@@ -1,4 +1,4 @@
-"""The options the ``satchain measure`` commands share are defined once (``satchain.cli_options``, as
+"""The options the ``satchain measure`` commands share are defined once (``satchain.cli.options``, as
 rasterio's ``rio/options.py``): every command uses the same option object, an option name has one meaning
 (flags, help text, type) across the commands, and a bad value gets the same one-line error from each."""
 
@@ -13,9 +13,9 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from satchain.cli import app
-from satchain.cli_measure import COMMANDS, measure_app
-from satchain.cli_options import SHARED_OPTIONS, ImageArg
+from satchain.cli.main import app
+from satchain.cli.measure import COMMANDS, measure_app
+from satchain.cli.options import SHARED_OPTIONS, ImageArg
 
 #: Options that are (rightly) each command's own although two commands have them: ``--direction`` is what the
 #: bars run along (bars: default ACT) or the wedge's resolution direction (wedge: default ALT).
@@ -151,9 +151,9 @@ def test_a_bad_origin_gets_the_same_error_from_wedge_and_auto(inputs):
 
 
 def test_the_old_module_still_offers_its_names():
-    # code written before the split (issue 18) imports these from satchain.cli_measure
-    import satchain.cli_measure as old
-    from satchain import cli_options, cli_output
+    # code written before the split (issue 18) imports these from satchain.cli.measure
+    import satchain.cli.measure as old
+    from satchain.cli import options as cli_options, output as cli_output
 
     assert old.ImageArg is cli_options.ImageArg and old.RoiOpt is cli_options.RoiOpt
     assert old.PixelOpt is cli_options.PixelOpt and old.JsonOpt is cli_options.JsonOpt

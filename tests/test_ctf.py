@@ -1,4 +1,4 @@
-"""Tests of satchain.ctf: Coltman's series both ways, the paper's Fourier-synthesis CTF, Table 1."""
+"""Tests of satchain.tf.ctf: Coltman's series both ways, the paper's Fourier-synthesis CTF, Table 1."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy.ndimage import gaussian_filter1d
 from scipy.special import ndtr, sici
 
-from satchain.ctf import (
+from satchain.tf.ctf import (
     band_limited,
     coltman_ctf,
     ctf_fourier_synthesis,

@@ -8,7 +8,7 @@ import pytest
 from satchain.engine.sensor import sensor_from_system
 from satchain.engine.simulate import simulate
 from satchain.measure.auto import measure_auto
-from satchain.prediction import predict
+from satchain.prediction.core import predict
 from satchain.scene import Scene
 from satchain.scene.targets import HyperbolicWedge
 from satchain.tf.budget import SystemOTF

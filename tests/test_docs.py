@@ -7,7 +7,7 @@ import tomllib
 from typer.testing import CliRunner
 
 from satchain import ImagingSystem
-from satchain.cli import app
+from satchain.cli.main import app
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

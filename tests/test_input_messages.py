@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import ConfigError, InputError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent / "measure"))
 from _render_jitter import render_wobbly_edge  # noqa: E402
@@ -100,7 +100,7 @@ def test_an_unknown_key_nested_in_an_array_of_tables_and_the_python_api():
                 },
             }
         )
-    from satchain.sections import Optics
+    from satchain.config.sections import Optics
 
     with pytest.raises(ConfigError, match=r"wavelength_m: unknown key; did you mean wavelengths_m\?") as err:
         Optics(aperture_diameter_m=0.5, f_number=10.0, wavelength_m=[6e-7])

@@ -39,7 +39,7 @@ def test_signal_during_run_removes_staging_and_keeps_previous_results(tmp_path, 
     out = tmp_path / "res"
     before = _previous_results(out)
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
-    cmd = [sys.executable, "-m", "satchain.cli", "run", "--config", str(tmp_path / "run.toml"), "-o", str(out)]
+    cmd = [sys.executable, "-m", "satchain.cli.main", "run", "--config", str(tmp_path / "run.toml"), "-o", str(out)]
     # SIGTERM's default action in the child, whatever the harness running the tests ignores (SIG_IGN is inherited)
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                          preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))  # fmt: skip

@@ -9,7 +9,7 @@ import pytest
 import tifffile
 
 from satchain.errors import InputError, SatchainIOError
-from satchain.io import atomic_path, read_image, write_npy, write_png, write_tiff, write_tiff_tiles
+from satchain.io.images import atomic_path, read_image, write_npy, write_png, write_tiff, write_tiff_tiles
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.uint16])

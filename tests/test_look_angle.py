@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from satchain import ConfigError
-from satchain.system import EARTH_RADIUS_M
+from satchain.config.system import EARTH_RADIUS_M
 
 
 @given(eta=st.floats(0.0, 60.0))
@@ -43,7 +43,7 @@ def test_ground_sampling_off_nadir(ankarasat3):
 
 
 def test_niirs_falls_off_nadir(ankarasat3):
-    from satchain.quality import predict_quality
+    from satchain.prediction.quality import predict_quality
 
     q0 = predict_quality(ankarasat3)
     q30 = predict_quality(ankarasat3.replace({"orbit.off_nadir_deg": 30.0}))

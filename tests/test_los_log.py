@@ -12,7 +12,7 @@ from scipy.special import j0
 import satchain
 from satchain import load_preset
 from satchain.errors import ConfigError, SatchainIOError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
 from satchain.tf.pushbroom import PushbroomTerms
 
@@ -36,7 +36,7 @@ def test_a_csv_log_beside_the_system_file_is_read_and_kept_in_the_system(tmp_pat
     rows = "\n".join(f"{a:.9g},{0.3 * math.sin(40 * a):.9g}" for a in t)
     (tmp_path / "logs").mkdir()
     (tmp_path / "logs" / "att.csv").write_text("# attitude log, satchain test\ntime_s,act_px\n" + rows + "\n")
-    preset = (satchain.system.resources.files("satchain.presets") / "ankarasat3.toml").read_text()
+    preset = (satchain.config.system.resources.files("satchain.presets") / "ankarasat3.toml").read_text()
     (tmp_path / "sys.toml").write_text(
         preset + '\n[motion.line_of_sight]\nfile = "logs/att.csv"\ntime_offset_s = 0.01\n'
     )

@@ -9,7 +9,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 
 def strict_loads(text: str):

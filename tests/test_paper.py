@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from satchain import ctf
+from satchain.tf import ctf as ctf
 from satchain.presets.paper import read_table1
 from satchain.report.budget import DirectionalMTF
 from satchain.tf.budget import SystemOTF, mtf_budget

@@ -9,9 +9,9 @@ import pytest
 from typer.testing import CliRunner
 
 import satchain
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.pipeline import run_pipeline
-from satchain.runconfig import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
+from satchain.config.run import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
 
 
 def strict_loads(text: str):
@@ -63,7 +63,7 @@ def test_run_outputs_complete(reduced_run):
         assert section in html
     assert html.count("<img") == len(images)
     assert 'src="http' not in html and "<script" not in html
-    from satchain.io import read_image
+    from satchain.io.images import read_image
 
     fp, meta = read_image(out / "images" / "focal_plane.tif")  # the coarse focal plane covers the scene
     assert fp.shape[0] * meta["pixel_m"] == pytest.approx(140.0, abs=meta["pixel_m"])
@@ -132,7 +132,7 @@ def test_in_memory_run_writes_nothing_and_matches_the_run_directory(reduced_run,
     cfg = load_run_config(out.parent / "run.toml")
     result = satchain.run(cfg)
     assert not list(tmp_path.iterdir())
-    from satchain.io import read_image
+    from satchain.io.images import read_image
 
     on_disk, _ = read_image(out / "images" / "simulated.tif")
     assert np.array_equal(on_disk, result.simulation.image.astype(np.uint16))

@@ -15,7 +15,7 @@ from scipy.special import j0
 from typer.testing import CliRunner
 
 from satchain import load_preset
-from satchain.cli import app
+from satchain.cli.main import app
 
 runner = CliRunner()
 BASE = load_preset("ankarasat3")

@@ -11,7 +11,7 @@ import pytest
 
 import satchain
 from satchain import load_preset
-from satchain.runconfig import RunConfig
+from satchain.config.run import RunConfig
 from satchain.tf.pushbroom import PushbroomTerms
 
 EARTH = {"orbit.latitude_deg": 0.0, "orbit.inclination_deg": 97.6, "orbit.earth_rotation": True}

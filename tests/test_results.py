@@ -35,12 +35,12 @@ TYPE_NAMES = {
     "Simulator": "satchain.engine.simulate",
     "AutoResult": "satchain.measure.auto",
     "SnrResult": "satchain.measure.snr",
-    "Predictions": "satchain.prediction",
-    "RunConfig": "satchain.runconfig",
+    "Predictions": "satchain.prediction.core",
+    "RunConfig": "satchain.config.run",
     "ImageScene": "satchain.scene",
     "Scene": "satchain.scene",
     "Truth": "satchain.scene.truth",
-    "ImagingSystem": "satchain.system",
+    "ImagingSystem": "satchain.config.system",
     "SystemOTF": "satchain.tf.budget",
 }
 
@@ -61,7 +61,7 @@ def test_every_field_has_a_real_type(cls):
 def test_the_field_types_are_the_classes_the_stages_produce():
     from satchain.measure.auto import AutoResult
     from satchain.measure.snr import SnrResult
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
     from satchain.tf.budget import SystemOTF
 
     assert resolved_hints(results.BudgetResult)["system"] is ImagingSystem

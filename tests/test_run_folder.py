@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from satchain._runfolder import swap_in, written_files
+from satchain.io.runfolder import swap_in, written_files
 from satchain._safety import MARKER, OWNER
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import SatchainIOError
 
 ONE_EDGE_SCENE = """

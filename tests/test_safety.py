@@ -13,9 +13,9 @@ import pytest
 import tifffile
 from typer.testing import CliRunner
 
-from satchain import io
+from satchain.io import images as io
 from satchain._safety import MARKER, OWNER, check_distinct_paths, check_run_dir, clean_stale
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import ConfigError, SatchainIOError
 
 runner = CliRunner()
@@ -205,7 +205,7 @@ def test_integer_inputs_are_scaled_to_reflectance(tmp_path, dtype, top):
 def test_unexpected_errors_are_one_line_and_debug_shows_the_traceback(tmp_path):
     import typer
 
-    from satchain._cli_common import handle_errors, set_debug
+    from satchain.cli._common import handle_errors, set_debug
 
     errors = {
         "dir": IsADirectoryError(21, "Is a directory", str(tmp_path)),
@@ -239,7 +239,7 @@ def test_unexpected_errors_are_one_line_and_debug_shows_the_traceback(tmp_path):
 
 
 def test_brackets_survive_the_terminal_library():
-    from satchain._cli_common import handle_errors
+    from satchain.cli._common import handle_errors
 
     @handle_errors
     def boom():
@@ -321,7 +321,7 @@ def test_killed_run_leftovers_are_removed_by_the_next_run(tmp_path):
 
 
 def test_warnings_and_written_paths_keep_their_brackets(tmp_path):
-    from satchain._cli_common import print_warning
+    from satchain.cli._common import print_warning
 
     runner_app = __import__("typer").Typer()
     runner_app.command()(lambda: print_warning("pip install satchain[dask] for [scene] in [min, max]"))

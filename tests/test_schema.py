@@ -14,7 +14,7 @@ import pytest
 import tomllib
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
@@ -102,7 +102,7 @@ def test_print_config_validates_against_the_run_schema():
 @pytest.fixture(scope="module")
 def results_json(tmp_path_factory, reduced_scene_toml):
     import satchain
-    from satchain.runconfig import load_run_config
+    from satchain.config.run import load_run_config
 
     d = tmp_path_factory.mktemp("run")
     (d / "scene.toml").write_text(reduced_scene_toml)

@@ -1,7 +1,7 @@
 """The Siemens-star prediction: the measured MTF on the star's noise-free predicted image (issue 18).
 
 The images here are the test's own: the scene rendered at a fine pixel, filtered by a sampled Gaussian
-(scipy.ndimage) and block-averaged to the detector pixel -- not the FFT model of satchain.target_image.
+(scipy.ndimage) and block-averaged to the detector pixel -- not the FFT model of satchain.prediction.target_image.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from scipy import ndimage
 import satchain
 from satchain.comparison import compare, max_error_sigma
 from satchain.measure.auto import measure_auto
-from satchain.prediction import predict_from_mtf
-from satchain.runconfig import RunConfig, Tolerances
+from satchain.prediction.core import predict_from_mtf
+from satchain.config.run import RunConfig, Tolerances
 from satchain.scene import HyperbolicWedge, Scene, SiemensStar, SlantedEdge
-from satchain.target_image import TargetImageModel, item_from_truth
+from satchain.prediction.target_image import TargetImageModel, item_from_truth
 
 GSD = 0.5
 D = 8  # fine pixels per detector pixel
@@ -149,8 +149,7 @@ def test_far_apart_targets_calibrate_on_the_background_and_no_prediction_falls_b
     """Stars and edges too far apart for one canvas: each star is formed alone, calibrated on the background (the
     prediction says so); a star whose predicted image cannot be measured is compared with the system MTF, and
     the detail says why."""
-    from satchain import star_prediction
-
+    from satchain.prediction import star as star_prediction
     _, truth, pred, img = setup
     monkeypatch.setattr(star_prediction, "MAX_CANVAS_PX", 100)
     p = predict_from_mtf(_otf(SIGMA_PX), truth, gsd_m=GSD).stars["s"]

@@ -6,7 +6,7 @@ import json
 import subprocess
 import sys
 
-HEAVY = ("numpy", "scipy", "pydantic", "matplotlib", "satchain.system", "satchain.engine")
+HEAVY = ("numpy", "scipy", "pydantic", "matplotlib", "satchain.config.system", "satchain.engine")
 
 
 def _loaded(code: str, heavy=HEAVY) -> list[str]:
@@ -23,7 +23,7 @@ def test_import_satchain_loads_no_heavy_module():
 def test_the_help_screens_load_no_heavy_module():
     for argv in (["--help"], ["measure", "--help"]):
         code = (
-            "import sys\nfrom satchain.cli import app\nsys.argv = ['satchain', *" + repr(argv) + "]\n"
+            "import sys\nfrom satchain.cli.main import app\nsys.argv = ['satchain', *" + repr(argv) + "]\n"
             "try:\n    app()\nexcept SystemExit:\n    pass"
         )
         # typer itself imports pydantic for a sub-command group's help (typer._adapters): not ours to avoid
@@ -32,7 +32,7 @@ def test_the_help_screens_load_no_heavy_module():
 
 def test_the_lazy_names_resolve_to_the_real_objects():
     import satchain
-    from satchain.system import ImagingSystem, load_preset
+    from satchain.config.system import ImagingSystem, load_preset
 
     assert satchain.ImagingSystem is ImagingSystem and satchain.load_preset is load_preset
     assert set(satchain.__all__) <= set(dir(satchain))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from satchain import ConfigError, ImagingSystem, SatchainIOError, load_preset, load_system
-from satchain.system import EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, preset_names
+from satchain.config.system import EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, preset_names
 
 BASE = {
     "orbit": {"altitude_m": 500e3},

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from satchain.comparison import compare
-from satchain.prediction import predict_from_mtf
-from satchain.runconfig import Tolerances
+from satchain.prediction.core import predict_from_mtf
+from satchain.config.run import Tolerances
 from satchain.scene import HyperbolicWedge, Scene
-from satchain.wedge_prediction import predict_wedge, wedge_model_image
+from satchain.prediction.wedge import predict_wedge, wedge_model_image
 
 GSD = 0.5
 D = 8  # truth pixels per detector pixel
@@ -130,7 +130,7 @@ def test_noise_sigma_of_the_crossing_agrees_with_repeated_noisy_measurements():
     """The parametric bootstrap's 1-sigma (16 noisy copies, fixed seed) against 40 independent noisy copies of
     the same predicted image measured by measure_auto; more noise, a wider spread; no noise, none."""
     from satchain.measure.auto import measure_auto
-    from satchain.wedge_prediction import _WedgeModel
+    from satchain.prediction.wedge import _WedgeModel
 
     _, truth = _truth()
     (it,) = truth["items"]

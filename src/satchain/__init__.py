@@ -43,25 +43,29 @@ from satchain.errors import (
 
 __version__ = "0.1.0"
 
+from satchain import _moved  # noqa: E402 (the regrouped modules' old names still import, with a warning)
+
+_moved.install()
+
 #: public name -> module it lives in (imported on first use, PEP 562).
 _LAZY = {
-    "ImagingSystem": "satchain.system",
-    "load_preset": "satchain.system",
-    "load_system": "satchain.system",
+    "ImagingSystem": "satchain.config.system",
+    "load_preset": "satchain.config.system",
+    "load_system": "satchain.config.system",
     "run": "satchain.api",
     "RunResult": "satchain.api",
-    "RunConfig": "satchain.runconfig",
-    "Tolerances": "satchain.runconfig",
-    "load_run_config": "satchain.runconfig",
-    "predict": "satchain.prediction",
-    "Predictions": "satchain.prediction",
+    "RunConfig": "satchain.config.run",
+    "Tolerances": "satchain.config.run",
+    "load_run_config": "satchain.config.run",
+    "predict": "satchain.prediction.core",
+    "Predictions": "satchain.prediction.core",
     "compare": "satchain.comparison",
     "Comparison": "satchain.comparison",
     "CheckRow": "satchain.comparison",
     "SystemOTF": "satchain.tf.budget",
-    "coltman_ctf": "satchain.ctf",
-    "mtf_from_ctf": "satchain.ctf",
-    "predict_quality": "satchain.quality",
+    "coltman_ctf": "satchain.tf.ctf",
+    "mtf_from_ctf": "satchain.tf.ctf",
+    "predict_quality": "satchain.prediction.quality",
     "simulate": "satchain.engine.simulate",
     "simulate_image": "satchain.engine.degrade",
     "SimulatedImage": "satchain.engine.degrade",
@@ -117,7 +121,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.api import RunResult, run  # noqa: F401
     from satchain.comparison import CheckRow, Comparison, compare  # noqa: F401
-    from satchain.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
+    from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
     from satchain.engine.simulate import simulate  # noqa: F401
     from satchain.geometry import Rect  # noqa: F401
     from satchain.measure.auto import measure_auto  # noqa: F401
@@ -128,10 +132,10 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.snr import measure_snr  # noqa: F401
     from satchain.measure.star import measure_star  # noqa: F401
     from satchain.measure.wedge import measure_wedge  # noqa: F401
-    from satchain.prediction import Predictions, predict  # noqa: F401
-    from satchain.quality import predict_quality  # noqa: F401
-    from satchain.runconfig import RunConfig, Tolerances, load_run_config  # noqa: F401
+    from satchain.prediction.core import Predictions, predict  # noqa: F401
+    from satchain.prediction.quality import predict_quality  # noqa: F401
+    from satchain.config.run import RunConfig, Tolerances, load_run_config  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
-    from satchain.system import ImagingSystem, load_preset, load_system  # noqa: F401
+    from satchain.config.system import ImagingSystem, load_preset, load_system  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401

@@ -104,7 +104,7 @@ def _by_name(name: str, value: Any) -> str | None:
     elif name == "truth" and not isinstance(value, Mapping) and not hasattr(value, "to_dict"):
         return "must be a scene truth record (a dict, or satchain.read_truth(path) for a .truth.json file)"
     elif name == "system":
-        from satchain.system import ImagingSystem
+        from satchain.config.system import ImagingSystem
 
         if not isinstance(value, ImagingSystem):
             return "must be an ImagingSystem (satchain.load_system(path) or satchain.load_preset(name))"

@@ -130,7 +130,7 @@ def _check_array_like(name: str, value) -> None:
     if value is None or isinstance(value, (str, bytes, os.PathLike, Mapping, bool)):
         shown = repr(value) if not isinstance(value, Mapping) else f"a {type(value).__name__}"
         path = isinstance(value, (str, os.PathLike)) and "image" in name
-        hint = " (read a file with satchain.io.read_image first)" if path else ""
+        hint = " (read a file with satchain.io.images.read_image first)" if path else ""
         raise InputError(f"{name} = {shown[:80]}: must be an array of numbers{hint}")
     kind = getattr(getattr(value, "dtype", None), "kind", None)
     if kind is not None and kind not in "biuf":

@@ -29,7 +29,7 @@ from satchain.results import (
     SimulationResult,
     strict_json,
 )
-from satchain.runconfig import RunConfig
+from satchain.config.run import RunConfig
 
 __all__ = [
     "NULL_MEANING",
@@ -52,7 +52,7 @@ def as_run_config(config: RunConfig | Mapping[str, Any] | str | Path | None) -> 
     import os
 
     from satchain.errors import ParameterTypeError
-    from satchain.runconfig import load_run_config
+    from satchain.config.run import load_run_config
 
     if isinstance(config, RunConfig):
         return config

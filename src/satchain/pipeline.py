@@ -34,9 +34,9 @@ from satchain.results import BudgetResult, Measurements, RunResult, SceneResult,
 
 if TYPE_CHECKING:
     from satchain.comparison import Comparison
-    from satchain.prediction import Predictions
-    from satchain.runconfig import RunConfig
-    from satchain.system import ImagingSystem
+    from satchain.prediction.core import Predictions
+    from satchain.config.run import RunConfig
+    from satchain.config.system import ImagingSystem
 
 __all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
@@ -135,8 +135,8 @@ def _stage_measure(
 def _row_offsets(system: ImagingSystem, scene: SceneResult, sim: SimulationResult) -> dict:
     """``{"row_offsets_px": (du, dv)}`` when the line of sight moves the image's rows (oscillations, jitter, a log):
     row ``i`` sees the mean map's point of image pixel ``(j + du_i, i + dv_i)``
-    (:class:`~satchain.image_geometry.ImageGeometry`; the star aligns its rows with them), else {}."""
-    from satchain.image_geometry import run_geometry
+    (:class:`~satchain.prediction.image_geometry.ImageGeometry`; the star aligns its rows with them), else {}."""
+    from satchain.prediction.image_geometry import run_geometry
 
     g = run_geometry(system, scene.truth_dict, sim.simulator, sim.image.shape)
     if g is None or not g.moves:
@@ -187,10 +187,10 @@ def _with_as_built(config: RunConfig, budget: BudgetResult, truth, sim: Simulati
 
 def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResult) -> Predictions:
     """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
-    in time (:func:`satchain.image_geometry.run_geometry`: the edges' angles are predicted through it, the
+    in time (:func:`satchain.prediction.image_geometry.run_geometry`: the edges' angles are predicted through it, the
     wedges' widths in metres on the image's own ground steps, an along-track scale included)."""
-    from satchain.image_geometry import run_geometry
-    from satchain.prediction import predict
+    from satchain.prediction.image_geometry import run_geometry
+    from satchain.prediction.core import predict
 
     truth_d = truth if isinstance(truth, dict) else truth.to_dict()
     geo = run_geometry(sim.system or budget.system, truth_d, sim.simulator, sim.image.shape)
@@ -386,8 +386,7 @@ def write_images(d: Path, image: np.ndarray, focal_plane: np.ndarray, *, units: 
                  focal_plane_pixel_m: float, metadata: dict) -> None:  # fmt: skip
     """The simulated image (TIFF, PNG preview) and the focal-plane image (TIFF, PNG) into ``d``: plain data, so
     that a figure helper writes them while the run measures."""
-    from satchain import io
-
+    from satchain.io import images as io
     io.write_simulated(d / "simulated.tif", image, units=units, bit_depth=bit_depth, pixel_m=pixel_m, metadata=metadata)
     fp_meta = {"units": "scene reflectance filtered by the optics and motion", "system": metadata["system"]}
     io.write_tiff(d / "focal_plane.tif", focal_plane.astype(np.float32), pixel_m=focal_plane_pixel_m, metadata=fp_meta)
@@ -420,7 +419,7 @@ def write_run_directory(
     from satchain.report.gallery import assemble_thumbnail, thumbnail_crops
     from satchain.report.kinds import EDGES
     from satchain.report.summary_csv import write_summary_csv
-    from satchain.runconfig import config_to_toml
+    from satchain.config.run import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
@@ -519,7 +518,7 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
     Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
     or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
     """
-    from satchain._runfolder import swap_in, written_files
+    from satchain.io.runfolder import swap_in, written_files
     from satchain._safety import terminate_as_interrupt
 
     out = Path(out_dir).resolve()

@@ -30,11 +30,11 @@ if TYPE_CHECKING:
     from satchain.engine.simulate import Simulator
     from satchain.measure.auto import AutoResult
     from satchain.measure.snr import SnrResult
-    from satchain.prediction import Predictions
-    from satchain.runconfig import RunConfig
+    from satchain.prediction.core import Predictions
+    from satchain.config.run import RunConfig
     from satchain.scene import ImageScene, Scene
     from satchain.scene.truth import Truth
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
     from satchain.tf.budget import SystemOTF
 
 __all__ = [
@@ -213,13 +213,13 @@ class RunResult:
             },
             "quality_predicted": b["quality"],
         }
-        from satchain.runconfig import system_differences
+        from satchain.config.run import system_differences
 
         out["as_built_differences"] = system_differences(s, self.simulation.system) if self.config.as_built else []
         out.update(c.to_dict())
         out["skipped"] = list(self.measurements.auto.skipped)
         out["tolerances"] = self.config.tolerances.model_dump()
-        from satchain.image_geometry import geometry_table
+        from satchain.prediction.image_geometry import geometry_table
 
         geometry = geometry_table(self.simulation.system or s)  # pushbroom motion: its inputs and geometry
         if geometry:

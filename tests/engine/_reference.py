@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from satchain import units
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
 
 

@@ -135,7 +135,7 @@ def test_workers_keep_freed_tile_buffers_despite_dasks_trim_setting():
             del a
             return libc.mallinfo2().fordblks >= 2**24
         before = kept_after_free()
-        from satchain._memory import keep_freed_memory
+        from satchain.engine._malloc import keep_freed_memory
         keep_freed_memory()
         print(before, kept_after_free())
         """

@@ -10,7 +10,7 @@ import rasterio
 from rasterio import Affine
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 runner = CliRunner()
 T_IN = Affine(0.07, 0.0, 500000.0, 0.0, -0.07, 4400000.0)

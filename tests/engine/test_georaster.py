@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 import satchain
 from satchain import load_preset
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.engine import georaster
 from satchain.engine.files import simulate_file
 from satchain.errors import ConfigError

@@ -13,7 +13,7 @@ from rasterio import Affine
 from scipy import ndimage
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 runner = CliRunner()
 PX, N = 0.07, 600
@@ -94,7 +94,7 @@ def test_outputs_place_each_spot_on_its_ground_coordinates(tmp_path, geometry):
         assert t_out == T_IN @ Affine.scale(k, k) and t_fp == T_IN
     else:
         assert t_out.b != 0 or t_out.d != 0  # the map is turned or sheared, not a plain scale
-        from satchain.io import read_image
+        from satchain.io.images import read_image
 
         _, meta = read_image(out)  # measurements still read the detector pixel's ground size, the GSD
         assert meta["pixel_m"] == pytest.approx(0.49) and "pixel_m_xy" not in meta and "invalid_pixel_m" not in meta

@@ -37,7 +37,7 @@ def hooked(*a, **k):
         os.kill(os.getpid(), sig)
     return orig(*a, **k)
 setattr(owner, leaf, hooked)
-from satchain.cli import app
+from satchain.cli.main import app
 app(sys.argv[3:], prog_name="satchain")
 """
 
@@ -92,7 +92,7 @@ def test_a_signal_before_the_commit_replaces_none_of_the_outputs(tmp_path, targe
 def test_a_signal_during_the_renames_waits_until_every_output_is_in(tmp_path):
     (tmp_path / "o").mkdir()
     src = _raster(tmp_path / "in.tif", 0.7)
-    p, outs = _run(tmp_path, src, "satchain._commit:os.replace@OUT.tif")  # the commit's rename
+    p, outs = _run(tmp_path, src, "satchain.io._commit:os.replace@OUT.tif")  # the commit's rename
     assert p.returncode == 128 + signal.SIGTERM, (p.returncode, p.stderr[-800:])
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "had finished" in lines[0] and "were written" in lines[0], p.stderr
@@ -114,7 +114,7 @@ def test_a_signal_while_the_command_line_starts_is_answered_in_one_line(tmp_path
         sys.executable,
         str(script),
         str(int(signal.SIGTERM)),
-        "satchain.cli:_system",
+        "satchain.cli.main:_system",
         "simulate",
         str(_raster(tmp_path / "in.tif", 0.7)),
         "--preset",
@@ -131,7 +131,7 @@ def test_a_signal_while_the_command_line_starts_is_answered_in_one_line(tmp_path
 
 
 def test_importing_the_command_line_leaves_sigterm_alone_in_another_program():
-    import satchain.cli  # noqa: F401
+    import satchain.cli.main  # noqa: F401
 
     assert signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None) or "satchain" not in str(
         getattr(signal.getsignal(signal.SIGTERM), "__module__", "")

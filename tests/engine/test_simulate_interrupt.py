@@ -26,7 +26,7 @@ def _form_band(*a, **k):
     os.kill(os.getpid(), sig)
     return form(*a, **k)
 g._form_band = _form_band
-from satchain.cli import app
+from satchain.cli.main import app
 app(sys.argv[2:], prog_name="satchain")
 """
 

@@ -13,7 +13,7 @@ from rasterio import Affine
 from typer.testing import CliRunner
 
 import satchain
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import ConfigError
 
 runner = CliRunner()

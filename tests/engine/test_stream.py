@@ -124,9 +124,8 @@ def test_huge_input_streams_and_is_planned_without_allocating():
 def test_cli_streams_when_the_full_frame_does_not_fit(tmp_path, monkeypatch):
     """`satchain simulate` on the streamed path: says so, writes the TIFF (equal to the full-frame result)
     and its preview, and leaves no scratch folder."""
-    import satchain.cli as cli
-    from satchain import io
-
+    import satchain.cli.main as cli
+    from satchain.io import images as io
     img = make_scene((700, 840), np.random.default_rng(3), rectangles=6).astype(np.float32)
     inp = tmp_path / "in.tif"
     io.write_tiff(inp, img, pixel_m=PIXEL_M)

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from satchain import io, load_preset
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.engine import files
 from satchain.engine.files import simulate_file
 from satchain.engine.sweep import case_seed, parse_sweep, plan_sweep, read_manifest, simulate_sweep

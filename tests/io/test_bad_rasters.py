@@ -15,7 +15,7 @@ from _forged import forge_size
 from scipy.special import ndtr
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 
 rasterio = pytest.importorskip("rasterio")
 from rasterio.transform import Affine  # noqa: E402

@@ -12,9 +12,9 @@ import rasterio
 from rasterio import Affine
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import SatchainIOError
-from satchain.raster import open_raster
+from satchain.io.raster import open_raster
 
 runner = CliRunner()
 N = 256

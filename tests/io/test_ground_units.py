@@ -15,7 +15,7 @@ import pytest
 from scipy.special import ndtr
 from typer.testing import CliRunner
 
-from satchain.cli_measure import measure_app
+from satchain.cli.measure import measure_app
 
 rasterio = pytest.importorskip("rasterio")
 from rasterio.transform import Affine  # noqa: E402

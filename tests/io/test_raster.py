@@ -1,4 +1,4 @@
-"""satchain.raster and satchain.io on rasters this test writes with rasterio: GTiff, COG, JP2, NITF, VRT; UTM and
+"""satchain.io.raster and satchain.io.images on rasters this test writes with rasterio: GTiff, COG, JP2, NITF, VRT; UTM and
 geographic; multiband; nodata, alpha; window reads against the array written; bad files refused in one line."""
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from hypothesis import strategies as st
 rasterio = pytest.importorskip("rasterio")
 from rasterio import Affine  # noqa: E402
 
-from satchain import io  # noqa: E402
+from satchain.io import images as io  # noqa: E402
 from satchain.errors import ConfigError, InputError, SatchainIOError, SatchainWarning  # noqa: E402
-from satchain.raster import open_raster  # noqa: E402
+from satchain.io.raster import open_raster  # noqa: E402
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 UTM = "EPSG:32636"
@@ -277,7 +277,7 @@ def test_header_claiming_1e10_pixels_is_refused_before_reading(tmp_path):
     with pytest.raises(SatchainIOError, match=r"claims 100000 x 100000 px .* damaged or forged header") as e:
         open_raster(path)
     _one_line(e, "huge.tif")
-    p = subprocess.run([sys.executable, "-m", "satchain.cli", "measure", "edge", str(path), "--pixel-m", "1"],
+    p = subprocess.run([sys.executable, "-m", "satchain.cli.main", "measure", "edge", str(path), "--pixel-m", "1"],
                        capture_output=True, text=True, env={"PYTHONPATH": SRC, "PATH": ""})  # fmt: skip
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "damaged or forged" in p.stderr
 
@@ -295,7 +295,7 @@ def test_one_window_of_a_large_tiled_file_does_not_load_the_file(tmp_path):
             d.write(ramp[:h], 1, window=((r0, r0 + h), (0, 8000)))
     code = textwrap.dedent(f"""
         import numpy as np
-        from satchain.raster import open_raster
+        from satchain.io.raster import open_raster
         def kb(key):
             return int(next(l for l in open("/proc/self/status") if l.startswith(key)).split()[1])
         r = open_raster({str(path)!r})

@@ -1,5 +1,5 @@
 """Issue 29, item 12: a pushbroom run predicts a bar group's CTF by measuring a noise-free image of the target
-formed where the image geometry puts each row (:mod:`satchain.bar_prediction`).
+formed where the image geometry puts each row (:mod:`satchain.prediction.bars`).
 
 Checked against the independent exact bar renderer (:mod:`_render`: the ESF of a Gaussian x pixel system by
 quadrature, exact at pixel centres), with rows displaced by known sub-pixel amounts as a slow line-of-sight
@@ -11,8 +11,8 @@ import numpy as np
 from _render import _GAUSS_CUT, bar_esf, bar_mtf
 from affine import Affine
 
-from satchain.bar_prediction import predict_bar_ctf, target_model_image
-from satchain.image_geometry import ImageGeometry
+from satchain.prediction.bars import predict_bar_ctf, target_model_image
+from satchain.prediction.image_geometry import ImageGeometry
 from satchain.measure.bars import measure_bars
 
 SIGMA = 0.45  # Gaussian blur, px

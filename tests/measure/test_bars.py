@@ -61,9 +61,9 @@ def test_inverse_series_round_trip_on_samples():
 
 
 def test_against_satchain_ctf_if_present():
-    ctf = pytest.importorskip("satchain.ctf")
+    ctf = pytest.importorskip("satchain.tf.ctf")
     if not hasattr(ctf, "mtf_from_ctf"):
-        pytest.skip("satchain.ctf.mtf_from_ctf not available")
+        pytest.skip("satchain.tf.ctf.mtf_from_ctf not available")
     f = np.linspace(0.02, 0.5, 25)
     ref = np.asarray(ctf.mtf_from_ctf(f, _ctf_true))
     fine = np.linspace(0.005, 3.0, 3000)

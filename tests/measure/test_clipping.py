@@ -262,7 +262,7 @@ def test_measure_auto_names_pixels_at_the_full_scale_in_every_target():
 def test_cli_full_scale_option(tmp_path):
     from typer.testing import CliRunner
 
-    from satchain.cli_measure import measure_app
+    from satchain.cli.measure import measure_app
 
     edge = _edge(8.0, 0.01, (0.0, 0.2), lo=0.0, hi=1.0)  # pixel-sharp: only the full scale tells the clip
     path = tmp_path / "dn.npy"

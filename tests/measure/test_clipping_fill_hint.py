@@ -12,7 +12,7 @@ from _render_audit import render_gauss_edge
 from rasterio import Affine
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.measure._clipping import find_clipping
 
 runner = CliRunner()

@@ -9,7 +9,7 @@ import pytest
 from _render_edge import render_iso_edge, truth_mtf
 from typer.testing import CliRunner
 
-from satchain.cli_measure import measure_app
+from satchain.cli.measure import measure_app
 
 runner = CliRunner()
 

@@ -106,8 +106,8 @@ def test_run_comparison_like_with_like():
     from affine import Affine
 
     from satchain.comparison.edge import edge_checks
-    from satchain.image_geometry import ImageGeometry
-    from satchain.prediction import EdgePrediction, Predictions
+    from satchain.prediction.image_geometry import ImageGeometry
+    from satchain.prediction.core import EdgePrediction, Predictions
 
     cycles, n = 0.3, 100
     path = {"amp_px": [1.0], "freq_hz": [cycles / (N * DT)], "phase_rad": [np.pi / 2]}
@@ -130,7 +130,7 @@ def test_run_comparison_like_with_like():
 def test_cli_json_and_table_give_both_mtfs(tmp_path):
     from typer.testing import CliRunner
 
-    from satchain.cli_measure import measure_app
+    from satchain.cli.measure import measure_app
 
     path = {"amp_px": [1.0], "freq_hz": [0.5 / (N * DT)], "phase_rad": [0.0]}
     img = render_tdi_edge(100, 50, angle_deg=ANGLE, x0=18.3, line_time_s=DT, stages=N, blur_px=0.35, **path)
@@ -153,8 +153,8 @@ def test_run_flags_an_alt_edge_whose_rows_move():
     from affine import Affine
 
     from satchain.comparison.edge import edge_checks
-    from satchain.image_geometry import ImageGeometry
-    from satchain.prediction import EdgePrediction, Predictions
+    from satchain.prediction.image_geometry import ImageGeometry
+    from satchain.prediction.core import EdgePrediction, Predictions
 
     kw = {"amp_px": [1.0], "freq_hz": [0.3 / (N * DT)], "phase_rad": [np.pi / 2], "line_time_s": DT, "stages": N}
     img, shift = render_tdi_alt_edge(60, 100, angle_deg=ANGLE, **kw)

@@ -179,7 +179,7 @@ def test_any_rotation_and_offset(rot, dx, dy):
 def test_cli_find_writes_json_csv_png(chart, tmp_path):
     from typer.testing import CliRunner
 
-    from satchain.cli import app
+    from satchain.cli.main import app
 
     np.save(tmp_path / "chart.npy", chart)
     out = tmp_path / "out"
@@ -198,7 +198,7 @@ def test_cli_find_writes_json_csv_png(chart, tmp_path):
 def test_cli_find_refuses_blank_image_with_exit_2(tmp_path):
     from typer.testing import CliRunner
 
-    from satchain.cli import app
+    from satchain.cli.main import app
 
     np.save(tmp_path / "blank.npy", np.full((200, 200), 0.3))
     r = CliRunner().invoke(app, ["measure", "find", str(tmp_path / "blank.npy")])
@@ -235,7 +235,7 @@ def test_close_neighbours_narrow_the_roi_or_reject(gap_px, n_found):
 def test_cli_find_bad_options_exit_2(tmp_path, opt, val):
     from typer.testing import CliRunner
 
-    from satchain.cli import app
+    from satchain.cli.main import app
 
     np.save(tmp_path / "x.npy", np.zeros((64, 64)))
     r = CliRunner().invoke(app, ["measure", "find", str(tmp_path / "x.npy"), opt, val])

@@ -101,7 +101,7 @@ def test_bad_axis_is_refused():
 
 @pytest.mark.parametrize("command", ["edge", "find"])
 def test_cli_frequency_axis(tmp_path, command):
-    from satchain.cli_measure import measure_app
+    from satchain.cli.measure import measure_app
 
     path = tmp_path / "edge.npy"
     np.save(path, _render(16.8, n=100))

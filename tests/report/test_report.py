@@ -21,7 +21,7 @@ from satchain.pipeline import run_pipeline
 from satchain.report import _save, compare_plots, curves, figures, gallery, radiometry_plot, run_figures
 from satchain.report.compare_plots import PRINT_WIDTH_IN
 from satchain.report.html import SECTIONS
-from satchain.runconfig import load_run_config
+from satchain.config.run import load_run_config
 
 #: The reduced end-to-end scene (tests/conftest.py) plus a bar target.
 BARS_TOML = """

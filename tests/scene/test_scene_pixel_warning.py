@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from satchain.cli import app
+from satchain.cli.main import app
 from satchain.errors import SatchainWarning
 from satchain.scene.layout import check_scene_pixel, layout_from_dict, paper_layout
 
@@ -75,7 +75,7 @@ def test_a_run_names_its_scene_pixel_key(tmp_path):
     import json
 
     from satchain.pipeline import _stage_scene
-    from satchain.runconfig import RunConfig
+    from satchain.config.run import RunConfig
 
     layout = tmp_path / "fine.json"
     layout.write_text(json.dumps(LAYOUT))

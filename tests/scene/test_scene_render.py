@@ -9,7 +9,7 @@ import pytest
 import tifffile
 
 from satchain.errors import ConfigError, InputError
-from satchain.io import read_image, write_png, write_tiff
+from satchain.io.images import read_image, write_png, write_tiff
 from satchain.scene import ImageScene, paper_layout, parse_cli_window, render_scene_to_file
 
 

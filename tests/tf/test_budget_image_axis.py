@@ -10,7 +10,7 @@ import pytest
 
 from satchain import load_preset, simulate_image
 from satchain.measure.edge import measure_edge
-from satchain.prediction import AxisMTF, system_mtf_cy_per_px
+from satchain.prediction.core import AxisMTF, system_mtf_cy_per_px
 from satchain.tf.budget import SystemOTF
 
 BASE = load_preset("ankarasat3")

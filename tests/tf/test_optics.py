@@ -12,7 +12,7 @@ from scipy.integrate import quad
 from scipy.special import j0, j1
 
 from satchain.errors import ConfigError, InputError, ResourceLimitError
-from satchain.system import Optics, Spiders
+from satchain.config.system import Optics, Spiders
 from satchain.tf.optics import (
     PupilOTF,
     PupilParams,

@@ -10,7 +10,7 @@ import pytest
 from scipy import integrate, special
 
 from satchain import load_preset
-from satchain.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
+from satchain.config.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
 from satchain.tf.budget import SystemOTF, mtf_at_nyquist
 from satchain.tf.pushbroom import (
     PushbroomTerms,

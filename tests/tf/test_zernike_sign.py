@@ -11,7 +11,7 @@ import pytest
 
 from satchain.engine.degrade import simulate_image
 from satchain.errors import ConfigError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.optics import make_diffraction_otf
 from satchain.tf.pupil import PupilParams
 

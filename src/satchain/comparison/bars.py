@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from satchain import ctf as _ctf
+from satchain.tf import ctf as _ctf
 from satchain.comparison._common import finite, floats, sigma_or_why, within
 from satchain.comparison.records import BarCheck, CheckRow
 from satchain.measure._keys import AT_NOISE_FLOOR
-from satchain.prediction import Predictions
+from satchain.prediction.core import Predictions
 
 __all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "bar_checks"]
 
@@ -85,7 +85,7 @@ def bar_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[B
     return [BarCheck.from_dict(d) for d in details], rows
 
 
-#: What the bars' check compares on a pushbroom image (:mod:`satchain.bar_prediction`).
+#: What the bars' check compares on a pushbroom image (:mod:`satchain.prediction.bars`).
 PLACEMENT_NOTE = (
     "the prediction is the bar measurement on a noise-free image of the target formed where the pushbroom "
     "geometry puts each row (its line-of-sight displacement: the group's sampling phase and the rows' "
@@ -97,7 +97,7 @@ PLACEMENT_NOTE = (
 
 def _at_placement(b: dict, pred: Predictions, n: int) -> np.ndarray | None:
     """The CTF of each of the ``n`` groups measured on the noise-free image of the target at the image's own
-    placement (:func:`satchain.bar_prediction.predict_bar_ctf`) for a pushbroom run's image (``pred.geometry``)
+    placement (:func:`satchain.prediction.bars.predict_bar_ctf`) for a pushbroom run's image (``pred.geometry``)
     whose line of sight moves the rows along the bars' modulation axis (the rows' displacements and their own
     blur, not the budget's expectation, are what a group a few rows tall shows); None otherwise (Coltman's CTF
     of the system MTF is compared)."""
@@ -105,7 +105,7 @@ def _at_placement(b: dict, pred: Predictions, n: int) -> np.ndarray | None:
     d = None if geo is None else geo.dy_px if str(b.get("direction", "ACT")).upper() == "ALT" else geo.dx_px
     if d is None or float(np.ptp(np.asarray(d, float))) <= 1e-6:
         return None
-    from satchain.bar_prediction import predict_bar_ctf
+    from satchain.prediction.bars import predict_bar_ctf
 
     ctf = predict_bar_ctf(geo, b, pred.mtf_along, geo.background)
     return None if ctf is None or ctf.size != n else ctf

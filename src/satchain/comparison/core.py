@@ -12,7 +12,7 @@ from satchain.comparison.niirs import niirs_check
 from satchain.comparison.records import CheckRow, Comparison, result_key
 from satchain.comparison.star import star_checks
 from satchain.comparison.wedge import wedge_checks
-from satchain.prediction import Predictions
+from satchain.prediction.core import Predictions
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
 __all__ = ["CHECKS", "TargetChecks", "compare"]
@@ -115,10 +115,10 @@ def compare(measured: Any, predicted: Predictions, tolerances: Any) -> Compariso
         ``hyperbolic_wedge``, ``skipped``: each skipped target gets an n/a row); an optional ``"snr"``
         entry (``measure_snr(...).to_dict()``) feeds the NIIRS check.
     predicted : Predictions
-        From :func:`satchain.prediction.predict` (or :func:`~satchain.prediction.predict_from_mtf`).
+        From :func:`satchain.prediction.core.predict` (or :func:`~satchain.prediction.core.predict_from_mtf`).
     tolerances : Tolerances
         Any object with ``edge_mtf_at_nyquist``, ``edge_angle_deg``, ``star_mtf``, ``bar_ctf``,
-        ``wedge_resolution_rel`` and ``niirs`` (see :class:`satchain.runconfig.Tolerances`).
+        ``wedge_resolution_rel`` and ``niirs`` (see :class:`satchain.config.run.Tolerances`).
 
     Returns
     -------

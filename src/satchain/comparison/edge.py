@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from satchain.check_sigma import edge_angle_sigma
+from satchain.comparison.sigma import edge_angle_sigma
 from satchain.comparison._common import finite, sigma_or_why, within
 from satchain.comparison.records import CheckRow, EdgeCheck
-from satchain.prediction import Predictions
+from satchain.prediction.core import Predictions
 from satchain.tf.pushbroom_roi import rows_blur_otf
 
 __all__ = ["edge_checks"]
@@ -212,7 +212,7 @@ def _as_imaged_note(d: dict) -> str | None:
 
 def _angle_through_rows(e: dict, pred: Predictions) -> float | None:
     """The angle the measurement should give of edge ``e`` on a pushbroom image whose rows the line of sight
-    displaces (``pred.geometry``, :class:`satchain.image_geometry.ImageGeometry`): its fit of the positions the
+    displaces (``pred.geometry``, :class:`satchain.prediction.image_geometry.ImageGeometry`): its fit of the positions the
     geometry predicts on the lines it measured; None without that geometry or those lines."""
     geo = getattr(pred, "geometry", None)
     if geo is None or not geo.moves or not e.get("lines") or e.get("direction_truth", e["direction"]) != e["direction"]:

@@ -7,10 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from satchain.check_sigma import SNR_REL_SIGMA, niirs_sigma, rer_sigma_bound
+from satchain.comparison.sigma import SNR_REL_SIGMA, niirs_sigma, rer_sigma_bound
 from satchain.comparison._common import finite, within
 from satchain.comparison.records import CheckRow, EdgeCheck, NiirsCheck
-from satchain.prediction import Predictions
+from satchain.prediction.core import Predictions
 
 __all__ = ["niirs_check"]
 
@@ -52,9 +52,9 @@ def niirs_check(
 ) -> tuple[NiirsCheck, CheckRow]:
     """GIQE 5 from the measured edges' mean RER per axis and the image SNR vs the predicted GIQE 5; sigma
     the RER and SNR sigmas through GIQE 5 (the SNR's its measured ``snr_sigma``; without one, an assumed
-    :data:`~satchain.check_sigma.SNR_REL_SIGMA` of it, and the row's ``note`` says so)."""
+    :data:`~satchain.comparison.sigma.SNR_REL_SIGMA` of it, and the row's ``note`` says so)."""
     from satchain import units
-    from satchain.quality import giqe5, giqe5_rer
+    from satchain.prediction.quality import giqe5, giqe5_rer
 
     r_act, r_alt = _mean_rer(edges, "ACT"), _mean_rer(edges, "ALT")
     snr_m = finite(snr.get("snr"))

@@ -181,7 +181,7 @@ class EdgeCheck(_Detail):
 @dataclass(frozen=True)
 class StarCheck(_Detail):
     """A Siemens star: per direction (ACT, ALT, D45, D135, in ``directions``) the predicted MTF at ``f_cy_per_px``
-    (``mtf_predicted``: the star measured on its noise-free predicted image, :mod:`satchain.star_prediction`;
+    (``mtf_predicted``: the star measured on its noise-free predicted image, :mod:`satchain.prediction.star`;
     the system MTF when there is no such prediction) and the system MTF (``mtf_model``), the largest absolute
     error over 0.05..0.5 cy/px with its sign, frequency and the measurement's 1-sigma there, and the
     estimator's systematic (``mtf_predicted - mtf_model``) at its largest. Over all directions:
@@ -251,7 +251,7 @@ class BarCheck(_Detail):
     worst_group: int | None = None
     as_built: dict | None = None
     # a pushbroom run: each group's CTF measured on the noise-free image of the target at the image's placement
-    # (satchain.bar_prediction), what ``max_abs_error`` is taken against (written only when made)
+    # (satchain.prediction.bars), what ``max_abs_error`` is taken against (written only when made)
     ctf_predicted_at_placement: list | None = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -266,7 +266,7 @@ class WedgeCheck(_Detail):
     """A hyperbolic wedge: resolvable line width (ground m) measured and predicted across the stripes along
     ``axis``, the GSD (m), their ratios, and the contrast scan (``position_m`` along the wedge from its wide end,
     ``line_width_m``) measured (``contrast``) and predicted (``contrast_predicted``: the same scan on the wedge's
-    noise-free predicted image, :mod:`satchain.wedge_prediction`). 1-sigma: ``resolution_m_std`` (the measured
+    noise-free predicted image, :mod:`satchain.prediction.wedge`). 1-sigma: ``resolution_m_std`` (the measured
     crossing's, from the image noise: the predicted image re-measured with the sensor's noise added; the
     measurement's own, larger, slope-based estimate is ``resolution_m_std_measure``), ``relative_error_sigma``
     (of ``relative_error``: ``resolution_m_std / resolution_predicted_m``) and, reported beside them,

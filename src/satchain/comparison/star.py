@@ -1,7 +1,7 @@
 """Siemens-star checks: the measured MTF per direction vs the same measurement on the noise-free predicted image.
 
-The prediction is :class:`satchain.star_prediction.StarPrediction` (the star measured on its noise-free predicted
-image); without one (a :class:`~satchain.prediction.Predictions` made without a truth star) the system MTF
+The prediction is :class:`satchain.prediction.star.StarPrediction` (the star measured on its noise-free predicted
+image); without one (a :class:`~satchain.prediction.core.Predictions` made without a truth star) the system MTF
 along each direction is compared, as before the prediction was measured. The system MTF is kept beside the
 prediction (``mtf_model``): their difference is the estimator's systematic, reported, not part of the error.
 
@@ -19,7 +19,7 @@ from scipy.special import erf
 
 from satchain.comparison._common import PREDICTION_SIGMA_NOTE, finite, floats, within
 from satchain.comparison.records import CheckRow, StarCheck
-from satchain.prediction import NYQUIST_CY_PER_PX, Predictions
+from satchain.prediction.core import NYQUIST_CY_PER_PX, Predictions
 
 __all__ = ["STAR_F_MIN_CY_PER_PX", "max_error_sigma", "star_checks"]
 

@@ -6,7 +6,7 @@ from typing import Any
 
 from satchain.comparison._common import finite, within
 from satchain.comparison.records import CheckRow, WedgeCheck
-from satchain.prediction import WEDGE_AXES, Predictions
+from satchain.prediction.core import WEDGE_AXES, Predictions
 
 __all__ = ["wedge_checks"]
 

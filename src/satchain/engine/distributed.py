@@ -32,7 +32,7 @@ from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import as_ground_truth
 from satchain.engine.tiling import Tile
 from satchain.errors import ConfigError, SatchainIOError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 
 __all__ = ["decimate_distributed", "simulate_distributed", "write_zarr"]
 
@@ -56,11 +56,11 @@ def _require(module: str):
 
 def _decimate_tile(sim: Simulator, source, tile: Tile, keep_memory: bool = False) -> tuple[Tile, np.ndarray]:
     """One stage-1 task (module-level, so process workers can import it); ``keep_memory``: first
-    :func:`satchain._memory.keep_freed_memory` in the worker process it runs in (Dask starts its workers with
+    :func:`satchain.engine._malloc.keep_freed_memory` in the worker process it runs in (Dask starts its workers with
     ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes glibc's mmap threshold at 128 KiB: every tile buffer was a
     fresh mapping faulted in again on each task, a stage-1 tile up to twice as slow as in one process)."""
     if keep_memory:
-        from satchain._memory import keep_freed_memory
+        from satchain.engine._malloc import keep_freed_memory
 
         keep_freed_memory()
     return tile, sim.decimate_tile(source, tile)

@@ -43,13 +43,13 @@ from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import Simulator
 from satchain.engine.stream import choose_streamed
 from satchain.errors import ConfigError
-from satchain.io import GDAL_SUFFIXES, committed_together
+from satchain.io.images import GDAL_SUFFIXES, committed_together
 
 if TYPE_CHECKING:
     from satchain.engine.sensor import SensorModel
     from satchain.engine.sources import SceneSource
     from satchain.scene import Scene
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -174,7 +174,7 @@ def simulate_file(
     ----------
     input_ : str or path
         ``"paper"``, a scene layout (.toml / .json), or an image of reflectance: a GDAL raster (GeoTIFF, COG,
-        JP2, NITF, VRT: :data:`satchain.io.GDAL_SUFFIXES`), a PNG or an NPY. A GDAL raster goes through
+        JP2, NITF, VRT: :data:`satchain.io.images.GDAL_SUFFIXES`), a PNG or an NPY. A GDAL raster goes through
         :func:`satchain.engine.georaster.simulate_raster`: every band (or ``band``), its georeference, nodata
         and scale kept, written as a Cloud-Optimized GeoTIFF.
     out : path
@@ -311,8 +311,7 @@ def _write_in_memory(sim: Simulator, src: SceneSource, coarse: np.ndarray, out: 
                      meta: dict[str, Any]) -> tuple[tuple[int, int], float | None]:  # fmt: skip
     """The second stage in memory; write the image and the focal-plane image. Returns the image's shape and
     the focal-plane sample size (None without one)."""
-    from satchain import io
-
+    from satchain.io import images as io
     s = sim.system
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)
     io.write_simulated(out, img, units=units, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)
@@ -332,7 +331,7 @@ def _simulate_streamed(sim: Simulator, src: SceneSource, out: Path, *, sensor: S
     """For an input whose coarse frame does not fit in memory: the coarse grid on disk beside ``out``, stage 2
     tile by tile, the image written band by band (:mod:`satchain.engine.stream`). Returns the image's shape."""
     from satchain.engine.stream import coarse_store, stream_bytes, stream_tile_px, write_streamed
-    from satchain.io import simulated_dtype
+    from satchain.io.images import simulated_dtype
 
     ny, nx = sim.n_coarse
     oy, ox = sim.output_shape

@@ -29,7 +29,7 @@ Memory
     tiles sized to fit), so a 20000^2 input needs well under 2 GB (``benchmarks/bench_georaster.py``). Each band
     is written by windows into a tiled staging GeoTIFF, which GDAL's COG driver turns into the output
     (DEFLATE, 512-px tiles, averaged overviews). The image, its preview and the focal plane are committed
-    together (:func:`satchain.io.committed_together`): an error or an interruption replaces none of them.
+    together (:func:`satchain.io.images.committed_together`): an error or an interruption replaces none of them.
 Focal plane
     ``focal_plane``: also the focal-plane image (every band; float32 reflectance, in memory only) as a GeoTIFF
     in the input's CRS. On the input grid its transform is the input's; on the coarse grid (every D-th pixel)
@@ -68,7 +68,7 @@ from satchain.engine.raster_input import (  # noqa: F401 (the input side, named 
 )
 from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError, SatchainError
-from satchain.io import committed_together
+from satchain.io.images import committed_together
 
 __all__ = ["WORK_BYTES", "RasterBandSource", "check_scales", "invalid_cells", "output_transform", "simulate_raster"]
 
@@ -135,7 +135,7 @@ def focal_plane_transform(transform, sim, pixel_m: float, d: int):
 def _nodata_for(units: str, bits: int | None) -> tuple[np.dtype, float, float]:
     """(file dtype, nodata value, the lowest valid value) of the output; ``bits`` (the camera's ADC bits) is
     needed for DN only."""
-    from satchain.io import simulated_dtype
+    from satchain.io.images import simulated_dtype
 
     dt = simulated_dtype(units, bits)
     if dt.kind == "f":
@@ -336,7 +336,7 @@ def _check_output_disk(plan: _Plan, system, n_bands: int, units: str, out: Path)
     """Refuse, from the sizes alone, an output (staging and COG) larger than the free disk: a header that
     claims 10^12 px is refused at once, before a plan whose cost grows with the input is made."""
     from satchain._safety import check_disk
-    from satchain.io import simulated_dtype
+    from satchain.io.images import simulated_dtype
 
     (iy, ix), px = plan.shape, plan.pixel_m
     oy, ox = int(iy * px / system.gsd_alt_m), int(ix * px / system.gsd_act_m)
@@ -423,7 +423,7 @@ class _Writer:
 
 @contextlib.contextmanager
 def _open_staging(path: Path, plan: _Plan, shape, count: int, dtype, nodata: float, transform, meta):
-    from satchain.raster import _gdal_env, _rasterio
+    from satchain.io.raster import _gdal_env, _rasterio
 
     rasterio = _rasterio()
     profile = dict(driver="GTiff", width=int(shape[1]), height=int(shape[0]), count=count, dtype=np.dtype(dtype).name,
@@ -475,8 +475,8 @@ def _form_band(sim, src, write: _Writer, scratch: Path, streamed: bool, tag: str
 def _write_cog(stage: Path, out: Path) -> None:
     """The staging GeoTIFF as a Cloud-Optimized GeoTIFF at ``out`` (atomically)."""
     from satchain.errors import SatchainIOError
-    from satchain.io import atomic_path
-    from satchain.raster import _gdal_env, _one_line, _rasterio
+    from satchain.io.images import atomic_path
+    from satchain.io.raster import _gdal_env, _one_line, _rasterio
 
     _rasterio()
     import rasterio.shutil
@@ -493,9 +493,9 @@ def _write_cog(stage: Path, out: Path) -> None:
 
 def _write_preview(out: Path, nodata: float) -> Path:
     """A PNG of band 1 beside ``out`` (from the COG's overviews; at most :data:`_PREVIEW_MAX_PX` a side)."""
-    from satchain import io
-    from satchain.io import staged
-    from satchain.raster import open_raster
+    from satchain.io import images as io
+    from satchain.io.images import staged
+    from satchain.io.raster import open_raster
 
     with open_raster(staged(out), band=1) as r:  # the COG, committed with the preview
         values, valid = r.overview(_PREVIEW_MAX_PX)
@@ -530,8 +530,8 @@ class _FocalPlane:
         self.bands.append(a)
 
     def write(self) -> None:
-        from satchain.io import atomic_path
-        from satchain.raster import _gdal_env, _rasterio
+        from satchain.io.images import atomic_path
+        from satchain.io.raster import _gdal_env, _rasterio
 
         rasterio = _rasterio()
         ny, nx = self.bands[0].shape

@@ -54,7 +54,7 @@ class RasterBandSource:
 
     def _open(self):
         if self._reader is None:
-            from satchain.raster import open_raster
+            from satchain.io.raster import open_raster
 
             self._reader = open_raster(self.path, band=self.band)
         return self._reader
@@ -143,8 +143,8 @@ class _Plan:
 
 
 def _plan_input(path: Path, band: int | None, scene_pixel_m: float | None, name: Callable[[str], str]) -> _Plan:
-    from satchain._imagemeta import _gdal_meta
-    from satchain.raster import open_raster
+    from satchain.io.imagemeta import _gdal_meta
+    from satchain.io.raster import open_raster
 
     with open_raster(path) as r:
         if band is not None and (isinstance(band, bool) or not isinstance(band, int) or not 1 <= band <= r.count):
@@ -188,7 +188,7 @@ def check_pixel_m(path: str | os.PathLike, scene_pixel_m: float | None, name: Ca
     """Refuse a ``scene_pixel_m`` that contradicts the pixel size the georeference of the raster ``path``
     states (see :func:`_given_pixel_m`; e.g. ``measure --pixel-m``); returns the pixel size to use (the file's
     where they agree), None when none is given."""
-    from satchain.raster import open_raster
+    from satchain.io.raster import open_raster
 
     if scene_pixel_m is None:
         return None
@@ -231,8 +231,8 @@ def _check_grid(r, path: Path, scene_pixel_m: float | None, name: Callable[[str]
 def _band_source(plan: _Plan, band: int, input_scale: float | None) -> RasterBandSource:
     """The band as reflectance: the file's scale/offset when it has them (then ``input_scale`` defaults to 1),
     else ``input_scale`` (default ``1 / (2**bits - 1)`` for integers); the fill is its valid mean."""
-    from satchain.io import integer_scale
-    from satchain.raster import open_raster
+    from satchain.io.images import integer_scale
+    from satchain.io.raster import open_raster
 
     path = plan.path
     with open_raster(path, band=band) as r:

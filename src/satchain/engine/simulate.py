@@ -31,7 +31,7 @@ from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
 from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
 
 __all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]

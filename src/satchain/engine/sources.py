@@ -72,7 +72,7 @@ def reflectance_gain(dtype, input_scale: float | None = None) -> float:
     >>> reflectance_gain(np.uint8), reflectance_gain(np.float32), reflectance_gain(np.int64, 1e-3)
     (0.00392156862745098, 1.0, 0.001)
     """
-    from satchain.io import integer_scale
+    from satchain.io.images import integer_scale
 
     if input_scale is not None:
         return check_positive("input_scale", input_scale)

@@ -331,10 +331,9 @@ def write_streamed(
     progress: Progress | None = None,
 ) -> Path | None:
     """Stage 2 + sensor streamed into a tiled (Big)TIFF at ``path`` (atomically), band by band of output
-    tiles, with the file type and metadata of :func:`satchain.io.write_simulated`; and a PNG preview of a
+    tiles, with the file type and metadata of :func:`satchain.io.images.write_simulated`; and a PNG preview of a
     strided subsample (at most :data:`PREVIEW_MAX_PX` a side) beside it. Returns the preview path."""
-    from satchain import io
-
+    from satchain.io import images as io
     t = stream_tile_px(sim)
     ny, nx = sim.output_shape
     dtype = io.simulated_dtype(units, bit_depth)

@@ -8,7 +8,7 @@ runs :func:`satchain.engine.files.simulate_file` once per case into one director
 ``manifest.json`` / ``manifest.csv`` there up to date (written atomically before the first case and after
 each one), so the manifest records what was written even when a case fails or the run is interrupted. The
 directory is built as a staging folder beside ``out_dir`` and swapped in as a run folder is
-(:func:`satchain._runfolder.swap_in`): an earlier sweep's cases are replaced, the user's files kept.
+(:func:`satchain.io.runfolder.swap_in`): an earlier sweep's cases are replaced, the user's files kept.
 
 Seeds
 -----
@@ -65,7 +65,7 @@ from satchain._safety import (
 from satchain.errors import ConfigError, SatchainError, SatchainIOError
 
 if TYPE_CHECKING:
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
 
 __all__ = [
     "MANIFEST_FORMAT",
@@ -113,7 +113,7 @@ class Case:
 def _field_kinds(key: str) -> set[str] | None:
     """What the system key takes: a subset of {"number", "bool", "string", "none"}; None for an unknown key
     (:meth:`ImagingSystem.replace` names it)."""
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
 
     section, _, field = key.partition(".")
     model = getattr(ImagingSystem.model_fields.get(section), "annotation", None)
@@ -383,14 +383,14 @@ def _run_cases(cases: list[Case], systems: list[ImagingSystem], stage: Path, hea
 @contextlib.contextmanager
 def _sweep_staging(out: Path, notify: Callable[[str], None] | None = None):
     """A staging folder beside ``out`` that replaces it as ``satchain run`` replaces its folder
-    (:func:`satchain._runfolder.swap_in`: the files satchain did not write are kept, an earlier sweep's
+    (:func:`satchain.io.runfolder.swap_in`: the files satchain did not write are kept, an earlier sweep's
     cases are not), once the manifest is in it: after the last case, or after a failed or interrupted one
     (its manifest says which were written). Before the manifest is written, nothing is changed. The user's files
     kept are named to ``notify``."""
     import shutil
     import tempfile
 
-    from satchain._runfolder import swap_in
+    from satchain.io.runfolder import swap_in
     from satchain._safety import claim, clean_stale
 
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -439,7 +439,7 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
     valid output; any other input: each case's simulator)."""
     from satchain.engine.files import IMAGE_SUFFIXES, check_case, ground_truth_source
     from satchain.engine.georaster import simulate_raster
-    from satchain.io import GDAL_SUFFIXES
+    from satchain.io.images import GDAL_SUFFIXES
 
     opt_out = name("out_dir", name("out", "out_dir"))
     if out.exists() and not out.is_dir():
@@ -456,7 +456,7 @@ def _check_outputs(cases: list[Case], out: Path, options: Mapping[str, Any], nam
     if not (out / MARKER).exists():  # in a sweep's own directory, its files may be replaced
         check_sidecars({**previews, **manifests})
     else:  # but not a file of the user's there (the folder is replaced as a run's: see _sweep_staging)
-        from satchain._runfolder import check_user_files
+        from satchain.io.runfolder import check_user_files
 
         check_user_files(out, {p.name for p in every.values()} | {MARKER})
     raster = {k: options[k] for k in ("band", "scene_pixel_m", "input_scale", "units", "noise") if k in options}
@@ -518,11 +518,11 @@ def _record(case: Case, out: Path) -> dict[str, Any]:
 def _write_manifest(out: Path, header: dict[str, Any], cases: list[Case]) -> None:
     """``manifest.json`` (the header and one record per case) and ``manifest.csv`` (one row per case), each
     written atomically; output paths are file names in the manifest's directory."""
-    from satchain.io import atomic_path
+    from satchain.io.images import atomic_path
 
     records = [_record(c, out) for c in cases]
     done = [n for r in records if r["status"] == "written" for n in (r["image"], r["preview"])]
-    files = sorted({*done, MARKER, "manifest.json", "manifest.csv"})  # satchain's (see satchain._runfolder)
+    files = sorted({*done, MARKER, "manifest.json", "manifest.csv"})  # satchain's (see satchain.io.runfolder)
     text = json.dumps({**header, "files": files, "cases": records}, indent=2, allow_nan=False) + "\n"
     keys = list(header["sweep"])
     buf = _io.StringIO()

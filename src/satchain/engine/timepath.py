@@ -1,7 +1,7 @@
 """Pushbroom TDI imaging in time: each output row integrates the scene over its TDI window at the line of sight of
 each instant (issue 20, point 2).
 
-Conventions (README, "Pushbroom TDI motion"; :mod:`satchain.sections_motion`): ``t = 0`` is the start of row 0's
+Conventions (README, "Pushbroom TDI motion"; :mod:`satchain.config.sections_motion`): ``t = 0`` is the start of row 0's
 TDI window; row ``i`` integrates over ``[i dt, i dt + N dt]`` (``dt`` the line time, ``N`` the TDI stages). The
 charge packet of row ``i`` sees, at time ``t``, the ground point
 

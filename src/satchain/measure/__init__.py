@@ -1,7 +1,7 @@
 """Image-quality measurement from images: slanted edge, Siemens star, bar targets, hyperbolic wedge, and the
 line-of-sight motion (jitter) seen by a long straight edge.
 
-Independent of the prediction path (``satchain.tf``, ``satchain.ctf``): agreement between the two is the
+Independent of the prediction path (``satchain.tf``, ``satchain.tf.ctf``): agreement between the two is the
 project's check of correctness.
 
 The names below are imported on first use (PEP 562), so that a module that needs one small part of the package

@@ -182,7 +182,7 @@ def measure_auto(
         module docstring for what each target kind does with it.
     row_offsets_px : (du, dv), optional
         Per image row, the offsets a line of sight moving in time gives whole rows (``satchain run`` passes
-        :class:`satchain.image_geometry.ImageGeometry`): a Siemens star is measured with its rows
+        :class:`satchain.prediction.image_geometry.ImageGeometry`): a Siemens star is measured with its rows
         aligned (``row_offsets_px`` of :func:`~satchain.measure.star.measure_star`).
 
     Returns

@@ -48,7 +48,7 @@ true response the residuals are +0.001 to +0.003, the bar targets' 2-D geometry 
 
 The MTF at the group frequencies follows from Coltman (1954)'s inverse series, applied here to the measured,
 discrete CTF (linear interpolation between groups, zero above the highest measured frequency; so the groups
-should reach the frequency where the CTF vanishes). ``satchain.ctf`` has the same series for continuous CTF
+should reach the frequency where the CTF vanishes). ``satchain.tf.ctf`` has the same series for continuous CTF
 functions; this module keeps its own so measurement stays independent of prediction.
 """
 

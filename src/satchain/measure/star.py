@@ -305,7 +305,7 @@ def measure_star(
         as if circular: its phase drifts around each circle and the MTF is wrong (or the star is refused).
     row_offsets_px : (du, dv), optional
         Per row of ``image`` (before ``roi``), the image-pixel offsets that a line of sight moving in time gives
-        whole rows (oscillations, jitter; :class:`satchain.image_geometry.ImageGeometry`): row
+        whole rows (oscillations, jitter; :class:`satchain.prediction.image_geometry.ImageGeometry`): row
         ``i``, column ``j`` sees the star where the mean map (``image_affine``, or the plain grid) puts ``(j +
         du_i, i + dv_i)``.  Each pixel is placed there, so the rows are aligned and the MTF is the blur about each
         row's mean position (what the budget's motion terms give); without them a star over rows displaced

@@ -1,4 +1,4 @@
-"""The radiometric budget of a whole :class:`~satchain.system.ImagingSystem`: signal, noise, SNR, GIQE SNR.
+"""The radiometric budget of a whole :class:`~satchain.config.system.ImagingSystem`: signal, noise, SNR, GIQE SNR.
 
 Chains :mod:`satchain.radiometry.source` (sun, atmosphere, surface), :mod:`satchain.radiometry.focal_plane`
 (camera equation, electrons) and :mod:`satchain.radiometry.noise` over the system's band, stages and
@@ -34,7 +34,7 @@ from satchain.radiometry.source import (
 )
 
 if TYPE_CHECKING:
-    from satchain.system import ImagingSystem
+    from satchain.config.system import ImagingSystem
 
 __all__ = [
     "GIQE_REFLECTANCES",

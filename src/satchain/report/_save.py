@@ -1,10 +1,10 @@
-"""Atomic saving of report artefacts (text, figures), on top of :func:`satchain.io.atomic_path`."""
+"""Atomic saving of report artefacts (text, figures), on top of :func:`satchain.io.images.atomic_path`."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from satchain.io import PNG_COMPRESS_LEVEL, atomic_path
+from satchain.io.images import PNG_COMPRESS_LEVEL, atomic_path
 
 __all__ = ["PNG_COLOURS", "atomic_path", "save_figure", "write_text"]
 

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from satchain import ctf as _ctf
+from satchain.tf import ctf as _ctf
 from satchain import units
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_at_nyquist, mtf_budget, mtfa
 
 __all__ = ["DirectionalMTF", "budget_results", "square_wave_figure_data", "write_budget_outputs"]
@@ -70,7 +70,7 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
     geometry = otf.pushbroom.geometry() if getattr(otf, "pushbroom", None) is not None else None
     if geometry is not None:
         out["motion_geometry"] = geometry  # line displacement, TDI drift, Earth-rotation shear/scale/rotation
-    from satchain.quality import predict_quality
+    from satchain.prediction.quality import predict_quality
     from satchain.radiometry import radiometric_budget
 
     out["radiometry"] = radiometric_budget(system).to_dict()

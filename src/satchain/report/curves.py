@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from satchain import ctf as _ctf
+from satchain.tf import ctf as _ctf
 from satchain import units
-from satchain.prediction import WIDE_COMPONENTS
+from satchain.prediction.core import WIDE_COMPONENTS
 from satchain.report._save import write_text
 from satchain.report.kinds import BARS, EDGES, STARS, WEDGES
 
@@ -152,7 +152,7 @@ def _edge_as_built(e: dict, n: int) -> dict:
 
 
 def _wedge_curves(ctx, res: dict) -> list[dict]:
-    from satchain.prediction import AxisMTF, system_mtf_cy_per_px
+    from satchain.prediction.core import AxisMTF, system_mtf_cy_per_px
 
     by_id = {w["id"]: w for w in (ctx.measured or {}).get(WEDGES.key, [])}
     out = []

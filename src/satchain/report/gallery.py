@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon, Rectangle
 
-from satchain.io import PNG_COMPRESS_LEVEL
+from satchain.io.images import PNG_COMPRESS_LEVEL
 from satchain.report._save import save_figure
 from satchain.report._style import axis_band_in, place_grid, title_band_in
 from satchain.report.compare_plots import rc_for

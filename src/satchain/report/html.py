@@ -17,7 +17,7 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 import satchain
-from satchain import ctf as _ctf
+from satchain.tf import ctf as _ctf
 from satchain.report import tables
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
@@ -200,7 +200,7 @@ def _bar_limit(res: dict) -> float:
 
 def _snr_rel_sigma() -> float:
     """The SNR's 1-sigma (relative) the NIIRS check assumes when the SNR measurement gives none."""
-    from satchain.check_sigma import SNR_REL_SIGMA
+    from satchain.comparison.sigma import SNR_REL_SIGMA
 
     return float(SNR_REL_SIGMA)
 

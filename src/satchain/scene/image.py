@@ -16,7 +16,7 @@ import numpy as np
 from satchain._safety import check_memory
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import ConfigError, InputError
-from satchain.io import integer_scale, open_image
+from satchain.io.images import integer_scale, open_image
 from satchain.scene.shapes import Window, check_window
 
 __all__ = ["ImageScene"]
@@ -44,7 +44,7 @@ class ImageScene:
         ModelPixelScale, satchain description, PNG text/pHYs). Required for arrays and NPY.
     scale : multiply stored values by this to get reflectance. Default (None): integer images are
         scaled by ``1 / (2**bits - 1)`` (8-bit 0..255 and 16-bit 0..65535 -> 0..1; ``bits`` from the
-        file's ``bit_depth`` metadata or BitsPerSample, see :func:`satchain.io.integer_scale`), floats by 1.
+        file's ``bit_depth`` metadata or BitsPerSample, see :func:`satchain.io.images.integer_scale`), floats by 1.
     valid_range : (lo, hi) reflectance allowed after scaling; a window outside it is an InputError
         (``satchain simulate`` uses (-0.5, 4): values of 255 or 65535 are not reflectance).
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from satchain._validate import check_positive
 from satchain.errors import ConfigError
-from satchain.io import atomic_path, write_png, write_tiff_tiles
+from satchain.io.images import atomic_path, write_png, write_tiff_tiles
 from satchain.scene.layout import Scene, check_scene_pixel, load_layout
 from satchain.scene.shapes import Window, check_window
 
@@ -78,7 +78,7 @@ def render_scene_to_file(
     Notes
     -----
     The TIFF is float32 reflectance, tiled, BigTIFF above 2 GB, with GeoTIFF pixel-scale/tie-point tags
-    placing the window's top-left corner at model ``(col0 * p, -row0 * p)`` (see :mod:`satchain.io`).
+    placing the window's top-left corner at model ``(col0 * p, -row0 * p)`` (see :mod:`satchain.io.images`).
     """
     scene = layout if isinstance(layout, Scene) else load_layout(layout)
     p = scene.pixel_m if pixel_m is None else check_positive("pixel_m", pixel_m)

@@ -1,7 +1,7 @@
 """The MTF budget: the system OTF as a product of named physical components, its ACT/ALT cuts,
 MTF at Nyquist and MTF area.
 
-The components of an :class:`~satchain.system.ImagingSystem`, in order:
+The components of an :class:`~satchain.config.system.ImagingSystem`, in order:
 
 ``diffraction``
     polychromatic diffraction of the (obscured, possibly aberrated) pupil (:mod:`satchain.tf.optics`)
@@ -37,7 +37,7 @@ import numpy as np
 
 from satchain._validate import as_float_array, check_choice
 from satchain.errors import ConfigError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf import detector as _det
 from satchain.tf import motion as _mot
 from satchain.tf import optics as _opt

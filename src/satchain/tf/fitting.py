@@ -1,6 +1,6 @@
 """Estimate unknown system parameters from a measured MTF curve by least squares.
 
-The model is the modulus of the system OTF of an :class:`~satchain.system.ImagingSystem` cut along
+The model is the modulus of the system OTF of an :class:`~satchain.config.system.ImagingSystem` cut along
 one axis; the unknowns are addressed by dotted keys (``"optics.obscuration_ratio"``,
 ``"motion.smear_px"``; ``"optics.wavelength_m"`` sets a single effective wavelength). Uncertainties
 come from the Jacobian at the solution, ``cov = s^2 (J^T J)^-1`` with ``s^2 = SSR / (n - p)`` (or
@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 
 from satchain._validate import as_float_array, check_choice
 from satchain.errors import ConfigError, InputError
-from satchain.system import ImagingSystem
+from satchain.config.system import ImagingSystem
 from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_budget
 
 __all__ = ["DEFAULT_BOUNDS", "MTFFit", "fit_mtf"]

@@ -52,7 +52,7 @@ __all__ = [
 
 
 class DiffractionOTF:
-    """Polychromatic optics OTF of a :class:`satchain.system.Optics`, precomputed and callable at (fx, fy).
+    """Polychromatic optics OTF of a :class:`satchain.config.system.Optics`, precomputed and callable at (fx, fy).
 
     ``OTF(f) = sum_i w_i OTF_i(f) ATF_i(f)`` over the optics' wavelengths with normalised weights ``w_i``.
     ``OTF_i`` is the closed form :func:`annular_mtf` when ``optics.needs_pupil_fft`` is False, else a
@@ -64,7 +64,7 @@ class DiffractionOTF:
 
     Examples
     --------
-    >>> from satchain.system import load_preset
+    >>> from satchain.config.system import load_preset
     >>> otf = make_diffraction_otf(load_preset("ankarasat3").optics)
     >>> round(float(otf(0.0, 0.0)), 6), float(otf(0.0, 200.0))
     (1.0, 0.0)
@@ -132,11 +132,11 @@ def _radial_rows(fx: np.ndarray, fy: np.ndarray):
 
 
 def make_diffraction_otf(optics, *, params: PupilParams = PupilParams()) -> DiffractionOTF:  # noqa: B008
-    """Precompute the polychromatic optics OTF of ``optics`` (a :class:`satchain.system.Optics`).
+    """Precompute the polychromatic optics OTF of ``optics`` (a :class:`satchain.config.system.Optics`).
 
     Examples
     --------
-    >>> from satchain.system import load_preset
+    >>> from satchain.config.system import load_preset
     >>> otf = make_diffraction_otf(load_preset("ankarasat3").optics)
     >>> otf(np.zeros(3), np.array([0.0, 50.0, 100.0])).shape
     (3,)
@@ -149,7 +149,7 @@ def diffraction_otf(fx_cy_per_mm, fy_cy_per_mm, optics, *, params: PupilParams =
 
     Examples
     --------
-    >>> from satchain.system import Optics
+    >>> from satchain.config.system import Optics
     >>> o = Optics(aperture_diameter_m=0.1, f_number=10.0, wavelengths_m=(500e-9,))
     >>> round(float(diffraction_otf(100.0, 0.0, o)), 6)  # v = 0.5 of the clear circular pupil
     0.391002

@@ -6,7 +6,7 @@ p)``; :func:`pupil_psf` samples that PSF. The pupil is sampled by exact area cov
 carries ``exp(+2 pi i W)`` with ``W`` in waves (:mod:`satchain.tf.zernike`) and is transformed with the kernel
 ``exp(-2 pi i u.x / (lambda f))``: a positive Noll Z2 (Z3) moves the PSF by ``4 c lambda F#`` towards +x (+y).
 Zemax OpticStudio and GalSim use the kernel of the other sign (``W -> -W``: the PSF rotated by 180 degrees), which
-:class:`satchain.system.Optics` accepts as ``zernike_sign = "zemax"``. Accuracy and memory knobs travel
+:class:`satchain.config.system.Optics` accepts as ``zernike_sign = "zemax"``. Accuracy and memory knobs travel
 in :class:`PupilParams`. Part of :mod:`satchain.tf.optics`, which re-exports every public name.
 
 Examples
@@ -164,7 +164,7 @@ class PupilOTF:
         Wavelength, working F-number and aperture diameter (m); ``focal_length = F# * D``.
     obscuration_ratio : float
         Central obscuration diameter ratio in [0, 1).
-    spiders : satchain.system.Spiders, optional
+    spiders : satchain.config.system.Spiders, optional
         ``count`` radial vanes of ``width_m`` from the centre outwards, equally spaced by ``360 / count``
         degrees, the first at ``angle_deg`` from +x (ACT).
     zernike_rms_waves : mapping of int to float, optional

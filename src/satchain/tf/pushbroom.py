@@ -316,7 +316,7 @@ def on_one_axis(values: np.ndarray, fn: Callable[[np.ndarray], np.ndarray]) -> n
 
 
 class PushbroomTerms:
-    """The pushbroom motion of an :class:`~satchain.system.ImagingSystem` over its TDI window: the transfer
+    """The pushbroom motion of an :class:`~satchain.config.system.ImagingSystem` over its TDI window: the transfer
     function of each term (:meth:`components`, focal-plane cy/mm like every SystemOTF component) and the
     geometry the terms leave in the image (:meth:`geometry`). Empty (no components, no geometry) for a system
     without ``motion.line_rate_error``, ``[[motion.oscillation]]``, ``[motion.jitter_psd]`` or
@@ -532,8 +532,8 @@ def _earth_rotation(system) -> dict:
     moves ``(sigma, 1 + eps)`` px (ACT, ALT) with ``sigma = dt v_e cos(Az) / gsd_act`` and ``eps = -omega R cos(i) /
     v_g``; ``x`` (ACT, the columns) points left of the ground track seen from above, so the image is the ground
     seen from above, unmirrored, with the track running down the rows."""
-    from satchain.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
-    from satchain.sections_motion import cos_heading
+    from satchain.config.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
+    from satchain.config.sections_motion import cos_heading
 
     orb = system.orbit
     v_g, dt = orb.ground_speed_m_per_s, system.line_time_s

@@ -1,0 +1,502 @@
+"""The sections of an ImagingSystem (``[orbit]``, ``[optics]``, ``[detector]``, ``[motion]``, ``[radiometry]``,
+``[illumination]``, ``[atmosphere]``): frozen pydantic models whose validation errors name key, value and range.
+:mod:`satchain.config.system` assembles them and re-exports them."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from satchain.config._base import (  # noqa: F401  (re-exported: other modules import them from here)
+    _allowed,
+    _config_error,
+    _Frozen,
+    _not_a_number,
+    _number_kinds,
+    _StrictNumbers,
+)
+from satchain.config.sections_motion import JitterPSD, LineOfSightLog, Oscillation, as_tables, check_earth_rotation
+
+EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
+EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
+EARTH_ROTATION_RAD_PER_S = 7.292115e-5  # IERS nominal mean angular velocity
+
+__all__ = [
+    "EARTH_GM_M3_PER_S2",
+    "EARTH_RADIUS_M",
+    "EARTH_ROTATION_RAD_PER_S",
+    "Atmosphere",
+    "Band",
+    "Detector",
+    "Illumination",
+    "JitterPSD",
+    "Motion",
+    "Optics",
+    "Orbit",
+    "Oscillation",
+    "Radiometry",
+    "Spiders",
+]
+
+
+class Orbit(_Frozen):
+    """Circular orbit; the camera looks ``off_nadir_deg`` across-track (a roll) from ``altitude_m``.
+
+    Spherical Earth: the incidence angle at the ground is ``asin((R + h) / R * sin(eta))``, the slant range
+    ``(R + h) cos(eta) - sqrt(R^2 - (R + h)^2 sin^2(eta))`` (Wertz & Larson, *Space Mission Analysis and
+    Design*, sec. 5.3). Off nadir the along-track GSD grows with the range and the across-track GSD also by
+    the foreshortening ``1 / cos(incidence)``.
+    """
+
+    altitude_m: float = Field(gt=0, le=1e8, description="height above the ground, m")
+    off_nadir_deg: float = Field(default=0.0, ge=0, lt=90, description="look angle across-track at the satellite")
+    # --- the Earth's rotation under a pushbroom scan (satchain.config.sections_motion, README "Pushbroom TDI motion")
+    latitude_deg: float | None = Field(default=None, ge=-90, le=90, description="latitude of the scene")
+    inclination_deg: float | None = Field(default=None, ge=0, le=180, description="orbit inclination")
+    earth_rotation: bool = Field(default=False, description="the ground moves east under the satellite")
+    yaw_steering: bool = Field(default=False, description="detector line kept across the ground's relative motion")
+    pass_direction: Literal["descending", "ascending"] = "descending"
+
+    @model_validator(mode="after")
+    def _below_horizon(self) -> Orbit:
+        limit = math.degrees(math.asin(EARTH_RADIUS_M / (EARTH_RADIUS_M + self.altitude_m)))
+        if self.off_nadir_deg >= limit - 1e-6:
+            raise ValueError(
+                f"orbit.off_nadir_deg = {self.off_nadir_deg!r}: must be below {limit:.2f} deg (the Earth's limb "
+                f"seen from {self.altitude_m:g} m)"
+            )
+        check_earth_rotation(self)
+        return self
+
+    @property
+    def incidence_deg(self) -> float:
+        """Angle between the line of sight and the local vertical at the ground."""
+        r, h = EARTH_RADIUS_M, self.altitude_m
+        return math.degrees(math.asin((r + h) / r * math.sin(math.radians(self.off_nadir_deg))))
+
+    @property
+    def elevation_deg(self) -> float:
+        """Elevation of the satellite seen from the ground target (90 at nadir; the GIQE's angle)."""
+        return 90.0 - self.incidence_deg
+
+    @property
+    def range_m(self) -> float:
+        """Camera-to-ground distance along the line of sight (m); the altitude at nadir."""
+        r, h, eta = EARTH_RADIUS_M, self.altitude_m, math.radians(self.off_nadir_deg)
+        if eta == 0:
+            return h
+        return (r + h) * math.cos(eta) - math.sqrt(r * r - ((r + h) * math.sin(eta)) ** 2)
+
+    @property
+    def orbital_speed_m_per_s(self) -> float:
+        """Circular orbital speed ``sqrt(GM / (R + h))``."""
+        return math.sqrt(EARTH_GM_M3_PER_S2 / (EARTH_RADIUS_M + self.altitude_m))
+
+    @property
+    def ground_speed_m_per_s(self) -> float:
+        """Speed of the nadir point over a non-rotating Earth: ``v_orbit * R / (R + h)``."""
+        return self.orbital_speed_m_per_s * EARTH_RADIUS_M / (EARTH_RADIUS_M + self.altitude_m)
+
+
+class Spiders(_Frozen):
+    """Secondary-mirror support vanes: ``count`` straight vanes of ``width_m`` through the pupil centre."""
+
+    count: int = Field(ge=0, le=16)
+    width_m: float = Field(gt=0)
+    angle_deg: float = Field(default=0.0, ge=-360, le=360, description="angle of the first vane from +x (ACT)")
+
+
+class Optics(_Frozen):
+    """Telescope: aperture, focal length or F#, central obscuration, spectral band, aberrations.
+
+    ``zernike_rms_waves`` is the wavefront ``W = sum_j c_j Z_j`` (Noll's order and unit-rms normalisation,
+    :mod:`satchain.tf.zernike`; ``Z_2 = 2 rho cos(theta)``, ``theta`` from +x = ACT towards +y = ALT), in waves at
+    the effective wavelength. Sign: the pupil carries ``exp(+2 pi i W)`` and the PSF is
+    ``|FT{p}|^2`` with the kernel ``exp(-2 pi i u.x / (lambda f))`` (Goodman's), so with
+    ``zernike_sign = "satchain"`` (the default) a positive Z2 (Z3) moves the image towards +x, ACT, increasing
+    column (+y, ALT, increasing row) by ``4 c lambda F#`` in the focal plane (``4 c lambda / D`` rad), and a
+    positive Z8 (Z7) moves its centroid the same way (``sqrt 2`` times as far per wave for a clear pupil, more
+    with an obscuration) while its core stays. ``zernike_sign = "zemax"`` reads coefficients in the opposite
+    convention, the kernel ``exp(+2 pi i ...)`` of Zemax OpticStudio's FFT PSF and of GalSim's default
+    (``fft_sign = "+"``): a positive Z2 moves the image towards -x. The change of convention is ``W -> -W``,
+    which for a real pupil transmission is exactly ``PSF(x) -> PSF(-x)`` (a 180-degree rotation; the OTF
+    becomes its complex conjugate): even terms (defocus, astigmatism, spherical) alone are unchanged, odd ones
+    (tilt, coma, trefoil) move the other way. :attr:`wavefront_zernikes_waves` gives the coefficients in
+    satchain's convention.
+    """
+
+    aperture_diameter_m: float = Field(gt=0, le=100)
+    focal_length_m: float = Field(gt=0, le=1e3)
+    f_number: float = Field(gt=0, le=1e3)
+    obscuration_ratio: float = Field(default=0.0, ge=0, lt=1, description="central obscuration diameter ratio")
+    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="wavelengths for the polychromatic MTF")
+    wavelength_weights: tuple[float, ...] | None = None
+    transmission: float = Field(default=1.0, gt=0, le=1)
+    wfe_rms_waves: float = Field(default=0.0, ge=0, le=0.25, description="random wavefront error, rms waves")
+    zernike_rms_waves: dict[int, float] = Field(
+        default_factory=dict,
+        description="Noll index -> rms coefficient in waves (defocus is 4); sign as zernike_sign says",
+    )
+    zernike_sign: Literal["satchain", "zemax"] = Field(
+        default="satchain",
+        description="convention of zernike_rms_waves: 'satchain' (a positive Z2 moves the image +x, ACT) or "
+        "'zemax' (Zemax OpticStudio's and GalSim's: -x); 'zemax' is W -> -W, the PSF rotated by 180 deg",
+    )
+    spiders: Spiders | None = None
+    diffraction_model: Literal["auto", "analytic", "pupil_fft"] = "auto"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _focal_or_f_number(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        d = dict(data)
+        D = d.get("aperture_diameter_m")
+        f, n = d.get("focal_length_m"), d.get("f_number")
+        try:
+            D = float(D) if D is not None else None
+        except (TypeError, ValueError):
+            return d  # field validation reports it
+        if D is None or D <= 0:
+            return d
+        if f is None and n is None:
+            raise ValueError("give optics.focal_length_m or optics.f_number (got neither)")
+        try:
+            if f is None:
+                d["focal_length_m"] = float(n) * D
+            elif n is None:
+                d["f_number"] = float(f) / D
+            elif abs(float(f) / D - float(n)) > 1e-3 * float(n):
+                raise ValueError(
+                    f"optics.focal_length_m = {f!r} and optics.f_number = {n!r} disagree: "
+                    f"focal_length_m / aperture_diameter_m = {float(f) / D:.6g}; give one of them"
+                )
+        except (TypeError, ValueError) as exc:
+            if "disagree" in str(exc):
+                raise
+        return d
+
+    @field_validator("wavelengths_m")
+    @classmethod
+    def _wavelengths(cls, v: tuple[float, ...]) -> tuple[float, ...]:
+        for i, w in enumerate(v):
+            if not (1e-8 <= w <= 1e-4):
+                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
+        return v
+
+    @field_validator("zernike_rms_waves")
+    @classmethod
+    def _zernikes(cls, v: dict[int, float]) -> dict[int, float]:
+        for j, c in v.items():
+            if not 1 <= j <= 66:
+                raise ValueError(f"zernike_rms_waves key {j!r}: Noll index must be in [1, 66]")
+            if not (math.isfinite(c) and abs(c) <= 1.0):
+                raise ValueError(f"zernike_rms_waves[{j}] = {c!r}: must be in [-1, 1] waves rms")
+        return v
+
+    @model_validator(mode="after")
+    def _weights(self) -> Optics:
+        w = self.wavelength_weights
+        if w is not None:
+            if len(w) != len(self.wavelengths_m):
+                raise ValueError(
+                    f"wavelength_weights has {len(w)} entries but wavelengths_m has {len(self.wavelengths_m)}"
+                )
+            if any((not math.isfinite(x)) or x < 0 for x in w) or sum(w) <= 0:
+                raise ValueError(f"wavelength_weights = {list(w)!r}: must be >= 0 with a positive sum")
+        if self.spiders is not None and self.spiders.count and self.spiders.width_m >= self.aperture_diameter_m:
+            raise ValueError(
+                f"spiders.width_m = {self.spiders.width_m!r}: must be < aperture_diameter_m "
+                f"({self.aperture_diameter_m!r})"
+            )
+        return self
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Normalised polychromatic weights (uniform when none are given)."""
+        w = np.ones(len(self.wavelengths_m)) if self.wavelength_weights is None else np.array(self.wavelength_weights)
+        return w / w.sum()
+
+    @property
+    def effective_wavelength_m(self) -> float:
+        """Weight-averaged wavelength."""
+        return float(np.dot(self.weights, self.wavelengths_m))
+
+    @property
+    def wavefront_zernikes_waves(self) -> dict[int, float]:
+        """``zernike_rms_waves`` in satchain's sign convention (negated, ``W -> -W``, for ``zernike_sign =
+        "zemax"``): the wavefront the pupil FFT uses."""
+        flip = -1.0 if self.zernike_sign == "zemax" else 1.0
+        return {j: flip * c for j, c in self.zernike_rms_waves.items()}
+
+    @property
+    def needs_pupil_fft(self) -> bool:
+        """True when the pupil has features the closed-form (O'Neill) OTF cannot describe."""
+        if self.diffraction_model != "auto":
+            return self.diffraction_model == "pupil_fft"
+        spiders = self.spiders is not None and self.spiders.count > 0
+        return spiders or any(c != 0 for c in self.zernike_rms_waves.values())
+
+
+class Detector(_Frozen):
+    """Detector line / TDI array. Give ``pitch_m`` or both ``pitch_x_m`` and ``pitch_y_m``; the active
+    area by ``fill_factor`` (area fraction, square active area centred in the pixel) or by
+    ``active_width_x_m`` / ``active_width_y_m``."""
+
+    _input_keys: ClassVar[tuple[str, ...]] = ("pitch_m", "fill_factor")  # turned into fields by _pitch_and_fill
+
+    pitch_x_m: float = Field(gt=0, le=1e-3)
+    pitch_y_m: float = Field(gt=0, le=1e-3)
+    active_width_x_m: float = Field(gt=0)
+    active_width_y_m: float = Field(gt=0)
+    charge_diffusion_length_m: float = Field(default=0.0, ge=0, le=1e-3)
+    tdi_stages: int = Field(default=1, ge=1, le=1024)
+    tdi_sync_error: float = Field(
+        default=0.0, ge=-0.5, le=0.5, description="fractional along-track line-rate mismatch of TDI clocking"
+    )
+    # --- radiometric properties (satchain.radiometry). Defaults describe an ideal detector: QE 1, no
+    # read or dark noise, no full-well limit, no quantisation.
+    qe: float | tuple[float, ...] = Field(
+        default=1.0, description="quantum efficiency, e-/photon: a number, or a table on qe_wavelengths_m"
+    )
+    qe_wavelengths_m: tuple[float, ...] | None = Field(default=None, description="wavelengths of a qe table")
+    full_well_e: float | None = Field(default=None, gt=0, le=1e9, description="charge capacity, electrons")
+    read_noise_e: float = Field(default=0.0, ge=0, le=1e4, description="read noise per read, electrons rms")
+    dark_current_e_per_s: float = Field(default=0.0, ge=0, le=1e9, description="dark current, e-/s per pixel")
+    bit_depth: int | None = Field(default=None, ge=1, le=32, description="ADC bits, range = full_well_e")
+    readout: Literal["ccd", "cmos"] = Field(
+        default="ccd",
+        description="TDI accumulation: 'ccd' sums charge (one read), 'cmos' sums digitally (one per stage)",
+    )
+    prnu: float = Field(default=0.0, ge=0, le=1, description="photo-response non-uniformity, fraction rms")
+    dsnu_e: float = Field(default=0.0, ge=0, le=1e6, description="dark-signal non-uniformity, electrons rms")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _pitch_and_fill(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        d = dict(data)
+        p = d.pop("pitch_m", None)
+        if p is not None:
+            for k in ("pitch_x_m", "pitch_y_m"):
+                if k in d and d[k] != p:
+                    raise ValueError(f"detector.pitch_m = {p!r} conflicts with detector.{k} = {d[k]!r}; give one")
+                d[k] = p
+        elif "pitch_x_m" not in d or "pitch_y_m" not in d:
+            raise ValueError("give detector.pitch_m, or both detector.pitch_x_m and detector.pitch_y_m")
+        ff = d.pop("fill_factor", None)
+        if ff is not None:
+            if "active_width_x_m" in d or "active_width_y_m" in d:
+                raise ValueError("give detector.fill_factor or detector.active_width_x_m/_y_m, not both")
+            why = _not_a_number(ff)
+            if why is not None:
+                raise ValueError(f"detector.fill_factor = {ff!r}: {why}")
+            try:
+                ffv = float(ff)
+            except (TypeError, ValueError):
+                raise ValueError(f"detector.fill_factor = {ff!r}: must be a number in (0, 1]") from None
+            if not 0 < ffv <= 1:
+                raise ValueError(f"detector.fill_factor = {ff!r}: must be in (0, 1]")
+            try:
+                d["active_width_x_m"] = float(d["pitch_x_m"]) * math.sqrt(ffv)
+                d["active_width_y_m"] = float(d["pitch_y_m"]) * math.sqrt(ffv)
+            except (TypeError, ValueError):
+                return d
+        else:
+            d.setdefault("active_width_x_m", d.get("pitch_x_m"))
+            d.setdefault("active_width_y_m", d.get("pitch_y_m"))
+        return d
+
+    @model_validator(mode="after")
+    def _active_within_pitch(self) -> Detector:
+        for ax in ("x", "y"):
+            a, p = getattr(self, f"active_width_{ax}_m"), getattr(self, f"pitch_{ax}_m")
+            if a > p * (1 + 1e-12):
+                raise ValueError(f"active_width_{ax}_m = {a!r}: must be <= pitch_{ax}_m ({p!r})")
+        return self
+
+    @field_validator("qe")
+    @classmethod
+    def _qe_values(cls, v: float | tuple[float, ...]) -> float | tuple[float, ...]:
+        if isinstance(v, tuple):
+            for i, q in enumerate(v):
+                if not (math.isfinite(q) and 0 <= q <= 1):
+                    raise ValueError(f"qe[{i}] = {q!r}: must be in [0, 1] (electrons per photon)")
+        elif not (math.isfinite(v) and 0 < v <= 1):
+            raise ValueError("must be in (0, 1] (electrons per photon)")
+        return v
+
+    @model_validator(mode="after")
+    def _qe_table_and_adc(self) -> Detector:
+        w, q = self.qe_wavelengths_m, self.qe
+        if isinstance(q, tuple):
+            if w is None or len(w) != len(q) or len(q) < 2:
+                raise ValueError(
+                    f"detector.qe is a table of {len(q)} values: give detector.qe_wavelengths_m with the "
+                    f"same number (>= 2) of wavelengths (got {None if w is None else len(w)})"
+                )
+            increasing = all(b > a for a, b in zip(w[:-1], w[1:], strict=True))
+            if not increasing or any(not 1e-8 <= x <= 1e-4 for x in w):
+                raise ValueError(
+                    f"detector.qe_wavelengths_m = {list(w)!r}: must be strictly increasing, in [1e-08, 0.0001] m"
+                )
+            if max(q) <= 0:
+                raise ValueError("detector.qe: a tabulated QE must be > 0 somewhere")
+        elif w is not None:
+            raise ValueError("detector.qe_wavelengths_m is given but detector.qe is a single number; give a qe table")
+        if self.bit_depth is not None and self.full_well_e is None:
+            raise ValueError(
+                f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is "
+                "mapped to the full well, which sets electrons per DN)"
+            )
+        return self
+
+    def qe_at(self, wavelength_m) -> np.ndarray:
+        """Quantum efficiency at the given wavelengths (linear interpolation of the table, 0 outside it)."""
+        lam = np.asarray(wavelength_m, dtype=float)
+        if isinstance(self.qe, tuple):
+            return np.interp(lam, self.qe_wavelengths_m, self.qe, left=0.0, right=0.0)
+        return np.full_like(lam, float(self.qe))
+
+    @property
+    def active_area_m2(self) -> float:
+        """Photosensitive area of one pixel (m^2): what collects light in the radiometric budget."""
+        return self.active_width_x_m * self.active_width_y_m
+
+    @property
+    def fill_factor(self) -> float:
+        """Active area / pixel area."""
+        return self.active_width_x_m * self.active_width_y_m / (self.pitch_x_m * self.pitch_y_m)
+
+
+class Motion(_Frozen):
+    """Platform motion during one exposure: linear along-track smear and random jitter (detector pixels)."""
+
+    smear_px: float = Field(default=0.0, ge=0, le=100, description="along-track (ALT, y) linear smear length")
+    smear_act_px: float = Field(default=0.0, ge=0, le=100, description="across-track (ACT, x) smear, e.g. yaw")
+    jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
+    # --- pushbroom TDI motion in time (satchain.config.sections_motion, satchain.tf.pushbroom)
+    line_rate_error: float = Field(
+        default=0.0, ge=-0.5, le=0.5, description="image motion per line period / one line, minus 1 (TDI mismatch)"
+    )
+    oscillation: tuple[Oscillation, ...] = Field(default=(), max_length=64, description="[[motion.oscillation]]")
+    jitter_psd: tuple[JitterPSD, ...] = Field(default=(), max_length=16, description="[motion.jitter_psd] table(s)")
+    line_of_sight: LineOfSightLog | None = Field(default=None, description="[motion.line_of_sight]: a measured log")
+
+    @field_validator("jitter_psd", mode="before")
+    @classmethod
+    def _one_or_more(cls, v: Any) -> Any:
+        return as_tables(v)
+
+    @field_validator("oscillation", mode="before")
+    @classmethod
+    def _array_of_tables(cls, v: Any) -> Any:
+        # [motion.oscillation] (one table), oscillation = "act", a list of strings ...: [[motion.oscillation]] is meant
+        if not isinstance(v, (list, tuple)) or not all(isinstance(o, (dict, Oscillation)) for o in v):
+            raise ValueError(
+                "motion.oscillation must be an array of tables: write [[motion.oscillation]] (one per oscillation) "
+                "with axis, amplitude_px, frequency_hz (and phase_deg)"
+            )
+        return v
+
+    @property
+    def time_varying(self) -> bool:
+        """True when the motion has terms that change during a TDI window (oscillations, a jitter PSD, a log)."""
+        return bool(self.oscillation or self.jitter_psd or self.line_of_sight is not None)
+
+
+class Radiometry(_Frozen):
+    """Spectral band and exposure for the radiometric budget (:mod:`satchain.radiometry`).
+
+    ``band_m`` is the sensor's spectral band (the signal is integrated over it); it is distinct from
+    ``optics.wavelengths_m``, the wavelengths at which the polychromatic MTF is evaluated. The default band,
+    450-900 nm, is a typical silicon panchromatic band. ``integration_time_s`` is the exposure of one TDI
+    stage; when omitted it is the line time, ``gsd_alt_m / ground_speed_m_per_s``.
+    """
+
+    band_m: tuple[float, float] = Field(default=(4.5e-7, 9.0e-7), description="spectral band [min, max], m")
+    integration_time_s: float | None = Field(default=None, gt=0, le=10, description="exposure per TDI stage")
+
+    @field_validator("band_m")
+    @classmethod
+    def _band(cls, v: tuple[float, float]) -> tuple[float, float]:
+        lo, hi = v
+        if not (2.8e-7 <= lo < hi <= 4.0e-6):
+            raise ValueError(
+                f"must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m (the solar table spans "
+                f"280-4000 nm), got {list(v)}"
+            )
+        return v
+
+
+class Atmosphere(_Frozen):
+    """Atmospheric blur (:mod:`satchain.tf.atmosphere`); off by default (the reference paper has none)."""
+
+    turbulence: bool = Field(default=False, description="include the turbulence OTF")
+    r0_m: float | None = Field(
+        default=None, gt=0, description="Fried parameter; default: Hufnagel-Valley, down-looking"
+    )
+    hv_wind_m_per_s: float = Field(default=21.0, ge=0, le=200)
+    hv_ground_cn2: float = Field(default=1.7e-14, ge=0, le=1e-10)
+    view_zenith_deg: float = Field(default=0.0, ge=0, le=80)
+    aerosol_scattered_fraction: float = Field(default=0.0, ge=0, lt=1)
+    aerosol_psf_scale_m: float = Field(default=200.0, gt=0, le=1e5)
+
+
+class Illumination(_Frozen):
+    """Sun, surface and atmosphere for the radiometric budget (:mod:`satchain.radiometry`).
+
+    ``atmosphere_absorption`` is the fraction absorbed on *one* pass through the atmosphere (transmission
+    ``T = 1 - absorption``); ``atmosphere_path`` says where it applies: ``"down"`` (sun to ground: lowers
+    the surface radiance), ``"up"`` (ground to sensor) or ``"both"``. The default -- 23 % on both paths --
+    is the reading of the reference paper's Figure 2: its "surface" curve is the radiance leaving an
+    albedo-0.2 surface lit through a 23 %-absorbing atmosphere, and its TOA curve (MODTRAN "ground
+    reflected") is that radiance attenuated again on the way up. ``path_radiance_w_per_m2_sr_per_um`` is a
+    spectrally flat radiance added at the top of the atmosphere (default 0, as MODTRAN's ground-reflected
+    term excludes path radiance).
+    """
+
+    sun_zenith_deg: float = Field(default=30.0, ge=0, lt=90)
+    reflectance: float = Field(default=0.2, ge=0, le=1, description="Lambertian surface reflectance (albedo)")
+    atmosphere_absorption: float = Field(default=0.23, ge=0, lt=1, description="absorbed fraction per pass")
+    atmosphere_path: Literal["both", "down", "up"] = "both"
+    path_radiance_w_per_m2_sr_per_um: float = Field(default=0.0, ge=0, le=1e4)
+    solar_spectrum: Literal["astm_g173_etr", "planck_5778k"] = "astm_g173_etr"
+
+
+class Band(_Frozen):
+    """One spectral band of a multiband camera (a ``[[bands]]`` table of a system file), in the order of the
+    bands of a multiband input: ``satchain simulate`` forms band i of the input with the system's optics at
+    this band's ``wavelengths_m`` (and ``wavelength_weights``) and, when given, integrates its signal over
+    ``band_m`` instead of ``radiometry.band_m``. Without ``[[bands]]`` every band uses the system's own optics.
+
+    Examples
+    --------
+    >>> Band(name="red", wavelengths_m=(6.5e-7,)).name
+    'red'
+    """
+
+    name: str = Field(default="", max_length=64)
+    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="effective wavelengths of the band, m")
+    wavelength_weights: tuple[float, ...] | None = None
+    band_m: tuple[float, float] | None = Field(default=None, description="spectral band [min, max], m")
+
+    @model_validator(mode="after")
+    def _check(self) -> Band:
+        for i, w in enumerate(self.wavelengths_m):
+            if not (1e-8 <= w <= 1e-4):
+                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
+        w = self.wavelength_weights
+        if w is not None and (len(w) != len(self.wavelengths_m) or min(w) < 0 or sum(w) <= 0):
+            raise ValueError(
+                f"wavelength_weights = {list(w)!r}: must give one weight >= 0 per wavelength "
+                f"({len(self.wavelengths_m)}), with a positive sum"
+            )
+        if self.band_m is not None and not (2.8e-7 <= self.band_m[0] < self.band_m[1] <= 4.0e-6):
+            raise ValueError(f"band_m = {list(self.band_m)!r}: must be [min, max] with 2.8e-07 <= min < max <= 4e-06 m "
+                             "(the solar table spans 280-4000 nm)")  # fmt: skip
+        return self
