@@ -1,5 +1,6 @@
-"""Modules moved when the package root was regrouped (0.1 -> 0.2, issue 30): the old dotted names still import,
-with a :class:`~satchain.errors.SatchainDeprecationWarning` naming the new one, until :data:`~satchain._deprecate.REMOVED_IN`.
+"""Modules moved when the package root was regrouped (issue 30): the old dotted names still import, with a
+:class:`~satchain.errors.SatchainDeprecationWarning` naming the new one, until
+:data:`~satchain._deprecate.REMOVED_IN`.
 
 An old name imports as a thin module that reads and writes through to the new one (``satchain.quality.giqe5`` is
 ``satchain.prediction.quality.giqe5``; a test's ``monkeypatch.setattr("satchain.system.X", ...)`` patches the new
