@@ -104,9 +104,9 @@ def _by_name(name: str, value: Any) -> str | None:
     elif name == "truth" and not isinstance(value, Mapping) and not hasattr(value, "to_dict"):
         return "must be a scene truth record (a dict, or satchain.read_truth(path) for a .truth.json file)"
     elif name == "system":
-        from satchain.config.system import ImagingSystem
-
-        if not isinstance(value, ImagingSystem):
+        # by the class's home, not by importing it: config.system (a layer above) decorates with @checked
+        home = ("satchain.config.system", "ImagingSystem")
+        if not any((c.__module__, c.__qualname__) == home for c in type(value).__mro__):
             return "must be an ImagingSystem (satchain.load_system(path) or satchain.load_preset(name))"
     elif name == "progress" and value is not None and not callable(value):
         return "must be a function progress(...) or None"
@@ -169,5 +169,5 @@ def checked(fn: F) -> F:
                 check_argument(fn.__name__, name, value, param.annotation)
         return fn(*args, **kwargs)
 
-    wrapper.__satchain_checked__ = True
+    wrapper.__dict__["__satchain_checked__"] = True  # the marker getattr() reads above
     return wrapper  # type: ignore[return-value]
