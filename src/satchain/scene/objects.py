@@ -47,6 +47,9 @@ def ellipse_arc(cu: float, cv: float, au: float, av: float, a0: float, a1: float
 class _Placed(Item):
     """Mixin: local polygons placed at ``origin_m`` turned by ``rotation_deg``."""
 
+    origin_m: tuple[float, float]
+    rotation_deg: float
+
     def _place(self, rings_local) -> list[np.ndarray]:
         return [place(r, self.origin_m, self.rotation_deg) for r in rings_local]
 
