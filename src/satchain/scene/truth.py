@@ -77,7 +77,7 @@ class TruthItem:
             missing = [k for k in typed if k not in d and k not in cls._optional()]
             if missing:
                 raise KeyError(missing[0])
-            base = {"kind": str(d["kind"]), "id": str(d["id"]), "bbox_m": _bbox(d["bbox_m"])}
+            base: dict[str, Any] = {"kind": str(d["kind"]), "id": str(d["id"]), "bbox_m": _bbox(d["bbox_m"])}
         except KeyError as exc:
             raise InputError(f"truth item {d.get('id', '?')!r} ({d.get('kind', '?')}): missing key {exc}") from None
         bbox_px = Rect.from_window(d["bbox_px"]) if "bbox_px" in d else None
@@ -167,7 +167,7 @@ class BarGroupTruth:
                    tuple(_bbox(b) for b in d["bars_m"]), extra)  # fmt: skip
 
     def to_dict(self) -> dict[str, Any]:
-        out = {"period_m": self.period_m}
+        out: dict[str, Any] = {"period_m": self.period_m}
         out.update({k: v for k, v in self.extra.items() if k == "f_cy_per_m_ground"})
         out.update({"bar_width_m": self.bar_width_m, "bar_length_m": self.bar_length_m,
                     "bbox_m": list(self.bbox_m), "bars_m": [list(b) for b in self.bars_m]})  # fmt: skip
@@ -297,10 +297,13 @@ def read_truth(source: str | Path | Mapping[str, Any] | Truth) -> Truth:
     """Read a truth record from a ``.truth.json`` path or its dict into a typed :class:`Truth`."""
     if isinstance(source, Truth):
         return source
-    if not isinstance(source, Mapping):
+    data: Mapping[str, Any]
+    if isinstance(source, Mapping):
+        data = source
+    else:
         p = Path(source)
         try:
-            source = json.loads(p.read_text())
+            data = json.loads(p.read_text())
         except FileNotFoundError:
             raise SatchainIOError(f"truth file {str(p)!r}: not found") from None
         except json.JSONDecodeError as exc:
@@ -309,7 +312,7 @@ def read_truth(source: str | Path | Mapping[str, Any] | Truth) -> Truth:
             from satchain._safety import not_utf8
 
             raise not_utf8(p, exc, "truth file") from None
-    d = dict(source)
+    d = dict(data)
     fmt = str(d.get("format", ""))
     if not fmt.startswith(_FORMAT_PREFIX):
         raise InputError(f"truth format = {fmt!r}: must be {_FORMAT_PREFIX}N (a satchain scene truth record)")
