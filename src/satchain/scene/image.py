@@ -16,7 +16,7 @@ import numpy as np
 from satchain._safety import check_memory
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import ConfigError, InputError
-from satchain.io.images import integer_scale, open_image
+from satchain.io.images import ImageReader, integer_scale, open_image
 from satchain.scene.shapes import Window, check_window
 
 __all__ = ["ImageScene"]
@@ -70,6 +70,7 @@ class ImageScene:
         valid_range: tuple[float, float] | None = None,
     ):
         meta: dict = {}
+        self._reader: ImageReader | _ArrayReader
         if isinstance(source, (str, os.PathLike)):
             self._reader = open_image(source)
             meta = self._reader.meta
