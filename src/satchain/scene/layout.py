@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -295,7 +296,7 @@ def layout_to_dict(scene: Scene) -> dict[str, Any]:
     return _jsonable({"scene": head, "items": items})
 
 
-def load_layout(source: str | Path) -> Scene:
+def load_layout(source: str | os.PathLike) -> Scene:
     """``"paper"`` for :func:`paper_layout`, else a ``.toml`` or ``.json`` scene file."""
     if str(source) == "paper":
         return paper_layout()
