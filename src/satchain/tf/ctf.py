@@ -201,7 +201,7 @@ def _cutoff_of(tf, name: str) -> float | None:
     if not callable(tf):
         raise ConfigError(f"{name} = {tf!r}: must be a callable {name}(f) -> array")
     cutoff = getattr(tf, "cutoff", None)
-    if cutoff is None or (isinstance(cutoff, numbers.Real) and math.isinf(cutoff) and cutoff > 0):
+    if cutoff is None or (isinstance(cutoff, numbers.Real) and math.isinf(cutoff) and float(cutoff) > 0):
         return None
     return check_positive(f"{name}.cutoff", cutoff)
 
@@ -245,9 +245,9 @@ def _inverse_coefficients(j: np.ndarray) -> np.ndarray:
     for p in range(2, math.isqrt(n) + 1):
         if is_prime[p]:
             is_prime[p * p :: p] = False
-    for p in np.flatnonzero(is_prime[3:]) + 3:  # j is odd: the prime 2 never divides it
-        mu[p::p] *= -1
-        mu[p * p :: p * p] = 0
+    for q in np.flatnonzero(is_prime[3:]) + 3:  # j is odd: the prime 2 never divides it
+        mu[q::q] *= -1
+        mu[q * q :: q * q] = 0
     return mu[j].astype(np.float64) * _coltman_signs(j)
 
 
