@@ -142,8 +142,9 @@ def fit_center(
             search_px = 0.0
         b0 = np.array(best)
         simplex = np.array([b0, b0 + (0.25, 0.0), b0 + (0.0, 0.25)])
-        opts = {"xatol": 1e-3, "fatol": 1e-12, "initial_simplex": simplex}
-        res = minimize(cost, b0, method="Nelder-Mead", options=opts)
+        res = minimize(
+            cost, b0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-12, "initial_simplex": simplex}
+        )
         moved = float(np.hypot(res.x[0] - best[0], res.x[1] - best[1]))
         best = (float(res.x[0]), float(res.x[1]))
         if round_ == 0 and moved < 0.25:  # membership barely changes: no second round needed
