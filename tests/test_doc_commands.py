@@ -231,7 +231,7 @@ def test_the_runner_itself(tmp_path: Path) -> None:
         "```bash\npython -m pip install -e . && echo one > a.txt\npython -m pip install \\\n  x\n"
         "python -m pytest -q\n```\n\n```console\n$ false\n```\n\n  ```bash\n  cd sub 2>/dev/null || mkdir sub\n"
         "  X=2\n  ```\n\n```bash\ncat <<'EOF' > b.txt\n&& python -m pip install no\nEOF\n"
-        'test "$X" = 2 && test "$HOME" = "$(pwd -P)/.."\nls ../a.txt\n```\n'
+        'test "$X" = 2 && test "$HOME" = "$(cd .. && pwd)"\nls ../a.txt\n```\n'
     )
     blocks = bash_blocks(page)
     assert [b.script.splitlines()[0] for b in blocks] == [
