@@ -49,7 +49,7 @@ import numpy as np
 
 from satchain._validate import check_range
 from satchain.errors import InputError
-from satchain.measure._common import robust_sigma
+from satchain.measure._robust import robust_sigma
 
 __all__ = ["Clipping", "find_clipping", "integer_full_scale", "resolve_full_scale"]
 

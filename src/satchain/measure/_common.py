@@ -9,6 +9,8 @@ import numpy as np
 
 from satchain._validate import as_float_array, masked_as_nan, split_mask
 from satchain.errors import InputError
+from satchain.measure._clipping import find_clipping
+from satchain.measure._robust import median, robust_sigma
 from satchain.measure._zero_fill import zero_fill_mask
 
 __all__ = [
@@ -137,63 +139,6 @@ def fill_invalid(a: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     return a[tuple(idx)]
 
 
-def robust_sigma(values, *, overwrite: bool = False) -> float:
-    """Standard deviation estimated from the median absolute deviation (1.4826 MAD); ``overwrite``: a float
-    array of the caller's own that may be reordered and overwritten (no copies).
-
-    Examples
-    --------
-    >>> round(robust_sigma(np.random.default_rng(0).normal(0, 2, 100000)), 1)
-    2.0
-    """
-    if overwrite and isinstance(values, np.ndarray) and values.dtype == np.float64 and values.ndim == 1:
-        v = values
-    else:
-        v = np.asarray(values, dtype=float).ravel()
-        overwrite = False
-    if v.size == 0:
-        return 0.0
-    if overwrite:
-        med = _median_inplace(v)
-        np.abs(np.subtract(v, med, out=v), out=v)
-        return float(1.482602218505602 * _median_inplace(v))
-    dev = np.abs(v - median(v))
-    return float(1.482602218505602 * _median_inplace(dev))
-
-
-def median(values) -> float:
-    """``np.median`` of the flattened ``values`` (the same value: the middle element, or the mean of the two
-    middle ones; NaN where any is NaN), by one partition and without its overhead.
-
-    Examples
-    --------
-    >>> median(np.array([3.0, 1.0, 2.0, 10.0]))
-    2.5
-    """
-    v = np.asarray(values, dtype=float).ravel()
-    return _median_inplace(v.copy())
-
-
-def _median_inplace(v: np.ndarray) -> float:
-    """:func:`median` of a 1-D float array that may be reordered."""
-    n = v.size
-    if n == 0:
-        return float("nan")
-    lo, hi = (n - 1) // 2, n // 2
-    if n <= _SORT_MEDIAN:  # a short array: a sort costs less than a partition, and puts any NaN last
-        v.sort()
-        if np.isnan(v[-1]):
-            return float("nan")
-    elif np.isnan(v).any():
-        return float("nan")
-    else:
-        v.partition([lo, hi] if lo != hi else lo)
-    return float((v[lo] + v[hi]) / 2)
-
-
-_SORT_MEDIAN = 256  # up to this many values the median sorts them (cheaper than np.partition's call)
-
-
 def clipping_flag(data, *, full_scale: float | None = None, noise_std: float | None = None) -> str | None:
     """The one-line flag of :func:`satchain.measure._clipping.find_clipping` (None: no evidence of clipping).
 
@@ -208,8 +153,6 @@ def clipping_flag(data, *, full_scale: float | None = None, noise_std: float | N
     >>> clipping_flag(ramp) is None, clipping_flag(ramp, full_scale=1.0) is None
     (True, True)
     """
-    from satchain.measure._clipping import find_clipping
-
     c = find_clipping(data, full_scale=full_scale, noise_std=noise_std)
     return None if c is None else c.message
 

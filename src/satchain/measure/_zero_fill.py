@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from satchain.measure._robust import estimate_noise
+
 __all__ = ["FillEvidence", "zero_fill_evidence", "zero_fill_mask"]
 
 FILL_MIN_FRACTION = 0.01  # zeros below this share of an image are never taken for a fill
@@ -121,8 +123,6 @@ def zero_fill_evidence(image) -> FillEvidence | None:
         return None
     if not (z[0].any() or z[-1].any() or z[:, 0].any() or z[:, -1].any()):
         return None
-    from satchain.measure.find import estimate_noise
-
     rest = ~z
     if a.size - n < 64:
         return None

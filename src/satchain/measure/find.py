@@ -37,6 +37,7 @@ from scipy import ndimage as ndi
 from satchain._validate import as_float_array, check_positive, check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, fill_invalid, unmask, valid_mask
+from satchain.measure._robust import estimate_noise
 
 __all__ = ["EdgeCandidate", "EdgeSearch", "Rejection", "estimate_noise", "find_edges"]
 
@@ -103,40 +104,6 @@ class EdgeSearch(ResultMixin):
         for r in self.rejected:
             out[r.reason] = out.get(r.reason, 0) + 1
         return out
-
-
-def estimate_noise(image, *, band_rows: int = 512, valid=None) -> float:
-    """Pixel noise standard deviation (image units) from Immerkaer's Laplacian-difference mask, robust (MAD).
-
-    Plateaus and linear ramps give zero response; edges are a small fraction of the pixels and do not move the
-    median.  Computed over bands of rows, so the memory stays O(band).  With ``valid`` (bool, the image's
-    shape) only masks whose 3 x 3 pixels are all valid count.
-
-    Examples
-    --------
-    >>> img = np.random.default_rng(1).normal(10.0, 0.5, (256, 256))
-    >>> round(estimate_noise(img), 2)
-    0.5
-    """
-    a = np.asarray(image)
-    mask = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], dtype=np.float32)
-    meds = []
-    for y0 in range(0, max(a.shape[0] - 2, 1), band_rows):
-        band = np.asarray(a[y0 : y0 + band_rows + 2], dtype=np.float32)
-        if band.shape[0] < 3 or band.shape[1] < 3:
-            continue
-        r = ndi.correlate(band, mask, mode="nearest")[1:-1, 1:-1]
-        if valid is not None:
-            vb = np.asarray(valid[y0 : y0 + band_rows + 2])
-            r = r[ndi.binary_erosion(vb, np.ones((3, 3), bool))[1:-1, 1:-1]]
-            if r.size == 0:
-                continue
-        meds.append((np.median(np.abs(r)), r.size))
-    if not meds:
-        return 0.0
-    m = np.array(meds)
-    med = float(np.average(m[:, 0], weights=m[:, 1]))
-    return 1.482602218505602 * med / 6.0  # ||mask||_2 = 6
 
 
 def _robust_range(a: np.ndarray, valid=None) -> float:
