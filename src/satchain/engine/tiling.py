@@ -113,7 +113,7 @@ class Tile(NamedTuple):
     """One unit of decimation work: a window of the coarse grid and the fine input window (with margins)
     whose low-passed, decimated centre it is."""
 
-    index: tuple[int, int]
+    index: tuple[int, int]  # type: ignore[assignment]  # a field named as tuple.index (public: tile.index), by design
     coarse: Window
     input: Window
 
