@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import mmap
+from collections.abc import Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -147,7 +148,8 @@ class SceneSource:
     def __init__(self, scene, *, pixel_m: float | None = None):
         self.scene = scene
         self.pixel_m = check_positive("pixel_m", scene.pixel_m if pixel_m is None else pixel_m)
-        self.shape_px = tuple(int(v) for v in scene.shape_px(self.pixel_m))
+        rows, cols = (int(v) for v in scene.shape_px(self.pixel_m))
+        self.shape_px = (rows, cols)
 
     def read(self, window: Window) -> np.ndarray:
         return np.asarray(self.read_stored(window), dtype=np.float64)
@@ -270,12 +272,14 @@ class BorderedWindow:
         ny, nx = source.shape_px
         (r0, h), (c0, w) = (window.row0, window.height), (window.col0, window.width)
         self.inside = r0 >= 0 and c0 >= 0 and r0 + h <= ny and c0 + w <= nx
+        self.ry: Sequence[tuple[int, int | None, int, int]]
+        self.rx: Sequence[tuple[int, int | None, int, int]]
         if self.inside or rule == "constant":  # fill runs (source index None) outside the source
             self.ry, self.rx = _clip_runs(r0, h, ny), _clip_runs(c0, w, nx)
             self.fill = not self.inside
         else:
             self.ry, self.rx, self.fill = _runs(r0, h, ny, rule), _runs(c0, w, nx, rule), False
-        spans = [[r for r in runs if r[1] is not None] for runs in (self.ry, self.rx)]
+        spans = [[(d, s, c, t) for d, s, c, t in runs if s is not None] for runs in (self.ry, self.rx)]
         (self.y0, y1), (self.x0, x1) = (_span(r) if r else (0, 0) for r in spans)
         empty = y1 <= self.y0 or x1 <= self.x0
         self.block = None if empty else _read(source, Window(self.y0, self.x0, y1 - self.y0, x1 - self.x0), check)
@@ -283,6 +287,7 @@ class BorderedWindow:
         if len(self.ry) * len(self.rx) > 64:  # a source far smaller than the window: index arrays, once
             iy = _map_indices(r0, h, ny, rule) - self.y0
             ix = _map_indices(c0, w, nx, rule) - self.x0
+            assert self.block is not None  # so many runs: the source continued by a rule, read (not empty)
             self._whole = np.asarray(self.block[np.ix_(iy, ix)], dtype=self.dtype)
 
     def __getitem__(self, rows: slice) -> np.ndarray:
@@ -290,6 +295,7 @@ class BorderedWindow:
         if self._whole is not None:
             return self._whole[a:b]
         if self.inside:
+            assert self.block is not None  # inside the source: read (an empty window has none and failed here before)
             with np.errstate(over="ignore"):
                 return np.asarray(self.block[a:b], dtype=self.dtype)
         out = (
@@ -304,6 +310,7 @@ class BorderedWindow:
             src_rows = _run_slice(sy + ty * (lo - dy), hi - lo, ty, self.y0)
             for dx, sx, cx, tx in self.rx:
                 if sx is not None:
+                    assert self.block is not None  # a run inside the source along both axes: the block was read
                     with np.errstate(over="ignore"):  # beyond float32: inf, refused by require_finite
                         out[lo - a : hi - a, dx : dx + cx] = self.block[src_rows, _run_slice(sx, cx, tx, self.x0)]
         return out
@@ -326,7 +333,7 @@ class BorderedWindow:
 def _clip_runs(start: int, length: int, n: int) -> list[tuple[int, int | None, int, int]]:
     """Runs of ``start .. start + length`` over ``[0, n)``: the part inside the source, fill (None) beyond."""
     lo, hi = min(max(start, 0), start + length), max(min(start + length, n), start)
-    runs = [(0, None, lo - start, 0)] if lo > start else []
+    runs: list[tuple[int, int | None, int, int]] = [(0, None, lo - start, 0)] if lo > start else []
     if hi > lo:
         runs.append((lo - start, lo, hi - lo, 1))
     if start + length > max(hi, lo):
