@@ -166,6 +166,7 @@ class Optics(_Frozen):
             raise ValueError("give optics.focal_length_m or optics.f_number (got neither)")
         try:
             if f is None:
+                assert n is not None  # neither given: raised above
                 d["focal_length_m"] = float(n) * D
             elif n is None:
                 d["f_number"] = float(f) / D
@@ -359,6 +360,7 @@ class Detector(_Frozen):
         """Quantum efficiency at the given wavelengths (linear interpolation of the table, 0 outside it)."""
         lam = np.asarray(wavelength_m, dtype=float)
         if isinstance(self.qe, tuple):
+            assert self.qe_wavelengths_m is not None  # _qe_table_and_adc: a qe table needs its wavelengths
             return np.interp(lam, self.qe_wavelengths_m, self.qe, left=0.0, right=0.0)
         return np.full_like(lam, float(self.qe))
 
@@ -487,9 +489,9 @@ class Band(_Frozen):
 
     @model_validator(mode="after")
     def _check(self) -> Band:
-        for i, w in enumerate(self.wavelengths_m):
-            if not (1e-8 <= w <= 1e-4):
-                raise ValueError(f"wavelengths_m[{i}] = {w!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
+        for i, lam in enumerate(self.wavelengths_m):
+            if not (1e-8 <= lam <= 1e-4):
+                raise ValueError(f"wavelengths_m[{i}] = {lam!r}: must be in [1e-08, 0.0001] m (10 nm to 100 um)")
         w = self.wavelength_weights
         if w is not None and (len(w) != len(self.wavelengths_m) or min(w) < 0 or sum(w) <= 0):
             raise ValueError(
