@@ -156,6 +156,7 @@ class LineOfSightLog(_Frozen):
                 f"{u.min():.6g} .. {u.max():.6g} s (time_offset_s = {self.time_offset_s:g} at row 0's window): "
                 "give a longer log, a smaller scene or another time_offset_s"
             )
+        assert self.act_px is not None and self.alt_px is not None  # _table fills both
         return np.interp(u, t, self.act_px), np.interp(u, t, self.alt_px)
 
 
@@ -184,7 +185,7 @@ def read_los_csv(path: Any) -> dict[str, tuple[float, ...]]:
         raise ConfigError(
             f"motion.line_of_sight.file = {str(p)!r}: {arr.shape[1]} columns, the header names {len(names)}"
         )
-    out = {}
+    out: dict[str, tuple[float, ...]] = {}
     for key in ("time_s", "act_px", "alt_px"):
         if key in names:
             v = arr[:, names.index(key)]
