@@ -381,21 +381,22 @@ def _set(sub: dict[str, Any], field: str, value: Any, key: str) -> None:
     node: Any = sub
     for i, part in enumerate(parts):
         last = i == len(parts) - 1
+        slot: str | int = part
         if part.startswith("["):
             if not (part.endswith("]") and part[1:-1].isdigit()) or not isinstance(node, (list, tuple)):
                 raise ConfigError(f"parameter {key!r}: {part!r} does not index a list of tables")
             idx = int(part[1:-1])
             if idx >= len(node):
                 raise ConfigError(f"parameter {key!r}: index {idx} is beyond the {len(node)} entries")
-            part = idx
+            slot = idx
         elif not isinstance(node, dict) or (i > 0 and part not in node):
             raise ConfigError(f"parameter {key!r}: no field {part!r} there")
         if last:
-            node[part] = value
+            node[slot] = value
         else:
-            child = node[part]
+            child = node[slot]
             if isinstance(child, tuple):
-                child = node[part] = list(child)
+                child = node[slot] = list(child)
             node = child
 
 
