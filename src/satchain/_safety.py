@@ -237,7 +237,7 @@ def _leftover_name(directory: Path) -> tuple[str | None, str]:
 def clean_stale_temp_files(final: str | os.PathLike) -> list[Path]:
     """Remove ``atomic_path`` temporary files of ``final`` (``.NAME.<pid>.*.tmp``) whose process is gone."""
     final = Path(final)
-    removed = []
+    removed: list[Path] = []
     if not final.parent.is_dir():
         return removed
     for f in final.parent.glob(f".{final.name}.*.tmp"):
