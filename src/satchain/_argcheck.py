@@ -41,6 +41,8 @@ F = TypeVar("F", bound=Callable[..., Any])
 _NUMBER_TYPES = {"float", "int"}
 #: annotation names checked by isinstance (paths, mappings) and the project's classes that appear beside them
 _TYPES = {"str": (str,), "Path": (str, os.PathLike), "Mapping": (Mapping,), "dict": (dict,)}
+#: spellings of a path annotation, checked (and named in messages) as ``Path``
+_PATH_ALIASES = {"os.PathLike": "Path", "PathLike": "Path"}
 _CLASSES = {"Truth", "RunConfig", "ImagingSystem", "Predictions"}
 
 
@@ -59,7 +61,8 @@ def _parts(annotation: Any) -> set[str]:
         else:
             cur += ch
     parts.add(cur.strip())
-    return {p.split("[", 1)[0] for p in parts if p}
+    bare = (p.split("[", 1)[0] for p in parts if p)
+    return {_PATH_ALIASES.get(p, p) for p in bare}
 
 
 def _kind(value: Any) -> str:
