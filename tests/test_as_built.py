@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import satchain
-from satchain.errors import ConfigError, SatchainIOError
 from satchain.config.run import DEFAULT_CONFIG_TOML, RunConfig, config_to_toml, load_run_config, system_differences
 from satchain.config.system import load_preset
+from satchain.errors import ConfigError, SatchainIOError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -210,7 +210,7 @@ def test_as_built_at_another_altitude_draws_the_image_at_its_own_gsd(tmp_path_fa
     """Built to fly 8 % higher (or the focal length off): the image's pixels are the as-built GSD, and the
     report's thumbnails, overlays and edge curves place the targets with it, not with the design's GSD."""
     from satchain.pipeline import ReportInputs
-    from satchain.report.overlays import overlay_svg
+    from satchain.report.kinds import overlay_svg
 
     design = load_preset("ankarasat3")
     r = _run(tmp_path_factory, "higher", {"as_built": {"orbit": {"altitude_m": 1.08 * design.orbit.altitude_m}}})

@@ -14,8 +14,7 @@ import pytest
 from satchain.measure._auto_common import AutoItem
 from satchain.measure.auto import MEASURERS, OBJECT_KINDS, Measurer, measure_auto
 from satchain.report import measure_plots, tables
-from satchain.report.kinds import REPORT_KINDS, RESULT_KEYS, ReportKind, measured_entries
-from satchain.report.overlays import overlay_svg
+from satchain.report.kinds import REPORT_KINDS, RESULT_KEYS, ReportKind, measured_entries, overlay_svg
 from satchain.scene import ITEM_KINDS, TARGET_KINDS
 from satchain.scene.truth import _KINDS as TRUTH_KINDS
 

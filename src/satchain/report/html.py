@@ -17,11 +17,11 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 import satchain
-from satchain.tf import ctf as _ctf
 from satchain.report import tables
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
 from satchain.report.kinds import BARS, WEDGES, measured_entries
+from satchain.tf import ctf as _ctf
 
 __all__ = ["SECTIONS", "table1_rows", "write_report"]
 
@@ -123,7 +123,7 @@ def _zoom_img(panel: dict, alt: str, display_w: float) -> Markup:
 def _thumbs_with_overlays(ctx, thumbs: list[dict], lim: float) -> list[dict]:
     """The gallery's targets with their display width (CSS px) and each panel's region overlay."""
     from satchain.report.gallery import mapped_box, panel_maps
-    from satchain.report.overlays import overlay_svg
+    from satchain.report.kinds import overlay_svg
 
     items = {it["id"]: it for it in ctx.truth["items"]}
     meas = ctx.measured or {}

@@ -17,7 +17,17 @@ from satchain.measure._keys import RESULT_KEY
 from satchain.report import overlays
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
-__all__ = ["BARS", "EDGES", "REPORT_KINDS", "RESULT_KEYS", "STARS", "WEDGES", "ReportKind", "measured_entries"]
+__all__ = [
+    "BARS",
+    "EDGES",
+    "REPORT_KINDS",
+    "RESULT_KEYS",
+    "STARS",
+    "WEDGES",
+    "ReportKind",
+    "measured_entries",
+    "overlay_svg",
+]
 
 
 @dataclass(frozen=True)
@@ -63,3 +73,25 @@ def measured_entries(res: dict | None) -> Iterator[tuple[ReportKind, dict]]:
     for e in REPORT_KINDS.values():
         for x in (res or {}).get(e.key) or []:
             yield e, x
+
+
+def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_m=(0.0, 0.0),
+                compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0, to_image=None,
+                panel=None) -> str:  # fmt: skip
+    """The overlay of truth item ``it`` (with its measurement ``measured``, or None) over a thumbnail of
+    ``box_m`` (in the panel's coordinates), as an ``<svg>`` element string ('' for kinds without one). Text is
+    about 12 CSS px when the thumbnail is shown ``display_px`` wide. ``to_image`` (the image map, truth metres ->
+    pixels) and ``panel`` (truth metres -> the panel's coordinates), each an ``affine.Affine`` or 6 numbers: see
+    the module docstring."""
+    x0, y0, x1, y1 = (float(v) for v in box_m)
+    size = 12.0 * (x1 - x0) / max(display_px, 1.0)
+    entry = REPORT_KINDS.get(str(it.get("kind")))
+    if entry is None:
+        return ""
+    geo, pan = (None if m is None else tuple(float(c) for c in tuple(m)[:6]) for m in (to_image, panel))
+    view = overlays.OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px), geo, pan)
+    body = entry.overlay(it, measured or {}, view)
+    return (
+        f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
+        f'xmlns="http://www.w3.org/2000/svg" aria-hidden="true">{"".join(body)}</svg>'
+    )

@@ -33,7 +33,6 @@ __all__ = [
     "bars_overlay",
     "edge_line_points",
     "edge_overlay",
-    "overlay_svg",
     "star_overlay",
     "wedge_overlay",
 ]
@@ -294,27 +293,3 @@ def wedge_overlay(it: dict, m: dict, v: OverlayView) -> list[str]:
         label = f"{100 * float(m.get('threshold') or 0.15):.0f} % at {res * 100:.1f} cm"
         out.append(_text(*xy(s, (2 * n) * w + 1.6 * size), label, size, "#ff4040", rotate=rot))
     return out
-
-
-def overlay_svg(it: dict, measured: dict | None, box_m, *, gsd_m: float, origin_m=(0.0, 0.0),
-                compared_up_to_cy_per_px: float = 0.4, display_px: float = 360.0, to_image=None,
-                panel=None) -> str:  # fmt: skip
-    """The overlay of truth item ``it`` (with its measurement ``measured``, or None) over a thumbnail of
-    ``box_m`` (in the panel's coordinates), as an ``<svg>`` element string ('' for kinds without one). Text is
-    about 12 CSS px when the thumbnail is shown ``display_px`` wide. ``to_image`` (the image map, truth metres ->
-    pixels) and ``panel`` (truth metres -> the panel's coordinates), each an ``affine.Affine`` or 6 numbers: see
-    the module docstring."""
-    x0, y0, x1, y1 = (float(v) for v in box_m)
-    size = 12.0 * (x1 - x0) / max(display_px, 1.0)
-    from satchain.report.kinds import REPORT_KINDS  # the registry names this module's overlays
-
-    entry = REPORT_KINDS.get(str(it.get("kind")))
-    if entry is None:
-        return ""
-    geo, pan = (None if m is None else tuple(float(c) for c in tuple(m)[:6]) for m in (to_image, panel))
-    view = OverlayView(float(gsd_m), tuple(origin_m), size, float(compared_up_to_cy_per_px), geo, pan)
-    body = entry.overlay(it, measured or {}, view)
-    return (
-        f'<svg class="ov" viewBox="{x0:.3f} {y0:.3f} {x1 - x0:.3f} {y1 - y0:.3f}" preserveAspectRatio="none" '
-        f'xmlns="http://www.w3.org/2000/svg" aria-hidden="true">{"".join(body)}</svg>'
-    )
