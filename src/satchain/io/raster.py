@@ -245,7 +245,7 @@ class RasterReader:
         return {"path": self.path, "band": self._band_arg}
 
     def __setstate__(self, state: dict) -> None:
-        self.__init__(state["path"], band=state["band"])
+        type(self).__init__(self, state["path"], band=state["band"])
 
     def close(self) -> None:
         if getattr(self, "_ds", None) is not None:
