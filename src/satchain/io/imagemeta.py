@@ -1,6 +1,7 @@
 """What an image file says about itself, checked: the pixel size (georeference, satchain description, TIFF
 resolution tags, PNG pHYs), the number of pages and bands (files read through :mod:`satchain.io.raster`).
-Whatever is not used as it stands warns with a :class:`~satchain.errors.SatchainWarning` (see :mod:`satchain.io.images`)."""
+Whatever is not used as it stands warns with a :class:`~satchain.errors.SatchainWarning` (see
+:mod:`satchain.io.images`)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import contextlib
 import json
 import math
 import warnings
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -108,8 +109,9 @@ def _grey_mode(r: RasterReader) -> str:
 def _read_grey(r: RasterReader, mode: str, row0: int, col0: int, height: int, width: int) -> np.ndarray:
     if mode == "band":
         return r.read(row0, col0, height, width)
-    grey = sum(w * r.read(row0, col0, height, width, band=b).astype(np.float64)
-               for b, w in ((1, 0.299), (2, 0.587), (3, 0.114)))  # fmt: skip
+    # the sum of three weighted band arrays is an array (sum() types it ndarray | Literal[0])
+    grey = cast(np.ndarray, sum(w * r.read(row0, col0, height, width, band=b).astype(np.float64)
+                                for b, w in ((1, 0.299), (2, 0.587), (3, 0.114))))  # fmt: skip
     return grey.astype(np.float32) if r.dtype.kind == "f" else np.rint(grey).astype(r.dtype)
 
 
