@@ -41,6 +41,9 @@ import numpy as np
 import tifffile
 from PIL import Image, PngImagePlugin
 
+from satchain._safety import check_memory, clean_stale_temp_files
+from satchain._validate import check_positive
+from satchain.errors import ConfigError, InputError, SatchainIOError
 from satchain.io._commit import committed_together, defer_rename, staged  # noqa: F401 (named here too)
 from satchain.io.imagemeta import (  # the checks of what a file says of itself
     _GEO_KEY_DIRECTORY,
@@ -53,9 +56,6 @@ from satchain.io.imagemeta import (  # the checks of what a file says of itself
     _read_grey,
     _warn,
 )
-from satchain._safety import check_memory, clean_stale_temp_files
-from satchain._validate import check_positive
-from satchain.errors import ConfigError, InputError, SatchainIOError
 from satchain.io.raster import RasterReader, open_raster
 
 __all__ = [
@@ -411,7 +411,7 @@ class ImageReader:
         self.path = path
         self.band = band
         self.raster: RasterReader | None = None
-        self._array = None
+        self._array: np.ndarray | None = None
         self.segments_read = 0  # blocks (tiles or strips) the window reads touched: what GDAL decodes
         suffix = path.suffix.lower()
         if suffix == ".npy":
@@ -430,7 +430,8 @@ class ImageReader:
                 raise InputError(f"image = {str(path)!r}: values must be real numbers, got dtype {self._array.dtype}")
             if self._array.ndim != 2:
                 raise InputError(f"image = {str(path)!r}: must be 2-D (one band), got shape {self._array.shape}")
-            self.shape, self.dtype = tuple(int(v) for v in self._array.shape), self._array.dtype
+            rows, cols = self._array.shape
+            self.shape, self.dtype = (int(rows), int(cols)), self._array.dtype
 
     def _check(self, row0, col0, height, width) -> None:
         rows, cols = self.shape
@@ -441,6 +442,7 @@ class ImageReader:
         self._check(row0, col0, height, width)
         if self._array is not None:
             return np.array(self._array[row0 : row0 + height, col0 : col0 + width])
+        assert self.raster is not None  # no array: a GDAL raster
         self.segments_read += self.raster.blocks_touched(row0, col0, height, width)
         return _read_grey(self.raster, self._mode, row0, col0, height, width)
 
@@ -455,7 +457,7 @@ class ImageReader:
         return {"path": self.path, "band": self.band}
 
     def __setstate__(self, state: dict) -> None:
-        self.__init__(state["path"], band=state.get("band"))
+        type(self).__init__(self, state["path"], band=state.get("band"))
 
     def close(self) -> None:
         if self.raster is not None:
