@@ -126,7 +126,8 @@ def swap_in(staging: Path, out: Path) -> tuple[str, ...]:
     SatchainIOError
         A file of the user's where this run writes one; nothing changed (the caller removes ``staging``).
     """
-    old, kept = None, ()
+    old: Path | None = None
+    kept: tuple[str, ...] = ()
     if out.exists():
         users = _users(out, set(written_files(staging)))
         _carry(out, staging, users)
