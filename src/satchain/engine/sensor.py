@@ -224,7 +224,7 @@ def sensor_from_system(system) -> SensorModel:
     from satchain import radiometry
 
     det = system.detector
-    n0, n1 = (float(v) for v in radiometry.signal_electrons(system, [0.0, 1.0]))
+    n0, n1 = (float(v) for v in np.asarray(radiometry.signal_electrons(system, [0.0, 1.0])))
     l0, l1 = (radiometry.radiometric_budget(system, reflectance=r).radiance_toa_band_w_per_m2_sr for r in (0.0, 1.0))
     stages = det.tdi_stages
     read = det.read_noise_e * (math.sqrt(stages) if det.readout == "cmos" else 1.0)
