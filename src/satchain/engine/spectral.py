@@ -18,10 +18,15 @@ Transforms are real FFTs along x (columns) and complex FFTs along y (rows) of th
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import scipy.fft as sfft
 
 from satchain.engine.tiling import footprint_weights
+
+if TYPE_CHECKING:
+    from satchain.engine.sources import BorderedWindow
 
 __all__ = [
     "BandSpectrum",
@@ -69,7 +74,7 @@ class BandSpectrum:
         self.cx = np.where((mx == 0) | ((nx % 2 == 0) & (mx == nx // 2)), 1.0, 2.0)
 
 
-def tile_band_spectrum(tile: np.ndarray, *, by: int, bx: int, workers: int = 1) -> BandSpectrum:
+def tile_band_spectrum(tile: np.ndarray | BorderedWindow, *, by: int, bx: int, workers: int = 1) -> BandSpectrum:
     """DFT of ``tile`` restricted to ``|my| <= by``, ``0 <= mx <= bx``."""
     ny, nx = tile.shape
     # real FFTs of row chunks, keeping only the band's columns (a small, contiguous array for the column FFTs)
@@ -85,7 +90,9 @@ def tile_band_spectrum(tile: np.ndarray, *, by: int, bx: int, workers: int = 1) 
     return BandSpectrum(vals, my, np.arange(bx + 1), (ny, nx))
 
 
-def decimate_tile(tile: np.ndarray, *, D: int, f_pass: float, f_stop: float, workers: int = 1) -> np.ndarray:
+def decimate_tile(
+    tile: np.ndarray | BorderedWindow, *, D: int, f_pass: float, f_stop: float, workers: int = 1
+) -> np.ndarray:
     """Low-pass ``tile`` with :func:`lowpass` and sample it at the centres of its ``D x D`` blocks (input pixel
     ``D j + (D - 1) / 2``), so that mirroring coarse samples about a block boundary is mirroring the input.
 
