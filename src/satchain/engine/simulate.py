@@ -22,17 +22,21 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from satchain._validate import check_choice, check_range
+from satchain.config.system import ImagingSystem
 from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
 from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.errors import ConfigError, ResourceLimitError
-from satchain.config.system import ImagingSystem
 from satchain.tf.budget import SystemOTF
+
+if TYPE_CHECKING:
+    from satchain.engine.timepath import TimePath
 
 __all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
 
@@ -166,7 +170,8 @@ class Simulator:
                 f"({system.gsd_alt_m:.4g} x {system.gsd_act_m:.4g} m)"
             )
         self.otf = SystemOTF(system) if otf is None else otf
-        self.time_path, self._transfer = None, {}  # pushbroom motion in time (set_time_path); band_values' transfer
+        self.time_path: TimePath | None = None  # pushbroom motion in time (set_time_path)
+        self._transfer: dict[tuple, np.ndarray] = {}  # band_values' transfer
         self._exclude: tuple[str, ...] = ("detector",)
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
@@ -175,6 +180,7 @@ class Simulator:
 
         self.yaw_deg = yaw_rotation_deg(system)  # the detector turned: the ground truth rotated (engine.yaw)
         self._yaw_cache: tuple[np.ndarray, np.ndarray] | None = None
+        self.yaw_store: Callable[[tuple[int, int]], np.ndarray] | None = None  # set by engine.stream.coarse_store
         self._plan_decimation()
         self._plan_frame()
         if has_pushbroom_motion(system):  # rows formed in time along the line of sight (engine.timepath)
@@ -207,7 +213,8 @@ class Simulator:
             0 if periodic else int(math.ceil(min(p.exact_border_px, p.far_margin_px) * kk / self.D))
             for kk in (self.ys.k, self.xs.k)
         )
-        self.n_coarse = tuple(-(-n // self.D) + 2 * e for n, e in zip(self.input_shape, self.coarse_ext, strict=True))
+        ny, nx = (-(-n // self.D) + 2 * e for n, e in zip(self.input_shape, self.coarse_ext, strict=True))
+        self.n_coarse = (ny, nx)
         side = math.sqrt(p.max_tile_bytes / _TILE_BYTES_PER_PX) - 2 * self.margin_fine
         tile_coarse = int(side // self.D)
         if tile_coarse < 16:
@@ -238,9 +245,10 @@ class Simulator:
             )
         if p.border == "periodic":  # the coarse scene is itself the period: no extension
             self.frame_ext, self.frame_shape = (0, 0), self.n_coarse
-            self.k_int = tuple(
+            ky, kx = (
                 ki if ki and (nc * D) % ki == 0 else None for ki, nc in zip(self.k_int, self.n_coarse, strict=True)
             )
+            self.k_int = (ky, kx)
             return
         for ax, (kk, ki, nc) in enumerate(zip(self.k, self.k_int, self.n_coarse, strict=True)):
             nc -= 2 * self.coarse_ext[ax]  # the ground truth's own coarse samples
@@ -250,7 +258,7 @@ class Simulator:
             n = q * spectral_len(-(-(nc + 2 * e) // q))  # a multiple of q with a fast cofactor
             ext.append(e)
             length.append(n)
-        self.frame_ext, self.frame_shape = tuple(ext), tuple(length)
+        self.frame_ext, self.frame_shape = (ext[0], ext[1]), (length[0], length[1])
 
     @property
     def frame_bytes(self) -> float:
@@ -488,6 +496,7 @@ class Simulator:
         my = spectral.sampling_matrix(self.ys.centres(*rows) - start[0] * D, self.ys.width_px, 0, ny_f, spec.my)
         mx = spectral.sampling_matrix(self.xs.centres(*cols) - start[1] * D, self.xs.width_px, 0, nx_f, spec.mx)
         fy, fx = spec.my * self.k[0] / ny_f, spec.mx * self.k[1] / nx_f  # cycles per detector pixel
+        assert self.time_path is not None  # form_spectrum calls this only along a time path
         return form_rows(self.time_path, rows, my, vals * spec.cx[None, :], mx, fy, fx)
 
     def focal_plane(self, coarse: np.ndarray, *, grid: str = "input") -> np.ndarray:
