@@ -65,7 +65,8 @@ def harmonics_for(period: float, n_samples: int) -> tuple[int, ...]:
     principle be separated by their locked phases, but the fit becomes ill-conditioned: tried and dropped).
     The ones left out alias onto kept ones -- a bias for sharp systems, which a flag reports.
     """
-    out, folded = [], []
+    out: list[int] = []
+    folded: list[float] = []
     tol = 0.5 / n_samples
     k = 1
     while k / period <= F_HARMONIC_MAX and len(out) + 4 <= n_samples:
