@@ -277,7 +277,7 @@ def refit_with_prior(profile, period: float, fit: GroupFit, model: MtfModel, noi
     grad = np.zeros(jac.shape[1])
     grad[0] = -total / a**2
     grad[1 : 1 + kk.size] = 1 / a
-    var = max(grad @ cov @ grad, 0.0)
+    var = max(float(grad @ cov @ grad), 0.0)
     for k, sr in held_sig.items():  # a held harmonic moved by its 1-sigma: the modulation's change
         moved = prior.copy()
         j = pk.index(k)
