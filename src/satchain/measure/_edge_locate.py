@@ -164,7 +164,9 @@ _IRLS_TOL_PX = 1e-6  # robust_polyfit stops when the fit moves by less (px)
 _FIRST_TOL_PX = 1e-3  # ... for the first line through the whole-pixel peaks (only where to search)
 
 
-def robust_polyfit(t, y, deg: int, scale_floor: float = 0.05, tol: float = _IRLS_TOL_PX):
+def robust_polyfit(
+    t, y, deg: int, scale_floor: float = 0.05, tol: float = _IRLS_TOL_PX
+) -> tuple[np.ndarray, np.ndarray]:
     """Polynomial fit with Tukey-bisquare iteratively reweighted least squares; returns (coef, weights).
 
     Up to 10 reweightings; it stops once the fit moves by < ``tol`` (1e-6 px): the reweighting converges
@@ -272,7 +274,8 @@ def locate_edge(work: np.ndarray, deg: int | None, valid=None):
     coef, _ = robust_polyfit(rows[seen], peaks, 1, scale_floor=1.0, tol=_FIRST_TOL_PX)
     half = max(4, min(12, nx // 6))
     cur = deg or 1
-    last = r_prev = cen_prev = bounds = None
+    last: int | None = None
+    r_prev = cen_prev = bounds = np.empty(0)  # compared only once ``last`` is set (from the second pass on)
     for it in range(4):
         if cur > 1 and len(coef) < cur + 1:
             coef = np.concatenate([np.zeros(cur + 1 - len(coef)), coef])
