@@ -233,7 +233,7 @@ def measure_groups(image, periods, group_rois, direction, full_scale: float | No
     period (or too short, or without a significant modulation) is refused alone (its reason kept) and the others
     measured; the call is refused when none is left, or for a lone group."""
     g = Groups()
-    deferred = {} if periods.size >= 3 else None
+    deferred: dict[int, str] | None = {} if periods.size >= 3 else None
     for i, (p, roi) in enumerate(zip(periods, group_rois, strict=True)):
         fl = []
         try:
