@@ -485,7 +485,7 @@ def _accept(ok, x, start, fit, half: int):
     pos = np.where(ok, x, np.nan)
     if jtj is None:
         return pos, None
-    n_ok = np.count_nonzero(ok)
+    n_ok = int(np.count_nonzero(ok))
     noise2 = float(np.sum(rss[ok])) / max(n_ok * (n_px - 3), 1)
     return pos, np.where(ok, np.sqrt(noise2 * _inv22(jtj, ok)), np.nan)
 
