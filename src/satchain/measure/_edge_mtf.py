@@ -119,7 +119,7 @@ def _gradient(f: np.ndarray, step: float) -> np.ndarray:
     return out
 
 
-def _tukey(x: np.ndarray, half_width: float) -> np.ndarray:
+def _tukey(x: np.ndarray, half_width: float | np.ndarray) -> np.ndarray:
     """Tukey window: 1 for |x| <= W/2, cosine taper to 0 at |x| = W."""
     a = np.clip((np.abs(x) - 0.5 * half_width) / (0.5 * half_width), 0.0, 1.0)
     return 0.5 * (1.0 + np.cos(np.pi * a))
