@@ -60,7 +60,7 @@ def smooth_positions(pos: np.ndarray, sigma_px: float) -> tuple[np.ndarray, floa
     m = max(int(np.count_nonzero(ok)), 1)
     base = _penalty_bands(n)
     mu = (2.0 - 2.0 * np.cos(np.pi * np.arange(n) / n)) ** 2
-    best = None
+    best: tuple[float, np.ndarray, float] | None = None
     for lam in _LAMBDAS:
         ab = base * lam
         ab[2] += w
@@ -70,6 +70,7 @@ def smooth_positions(pos: np.ndarray, sigma_px: float) -> tuple[np.ndarray, floa
         risk = rss / m + 2.0 * sigma_px**2 * tr / m
         if best is None or risk < best[0]:
             best = (risk, z, lam)
+    assert best is not None  # _LAMBDAS is not empty: the first trial always sets it
     return best[1], float(best[2])
 
 
