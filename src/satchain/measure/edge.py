@@ -424,9 +424,9 @@ def _curvature_flags(work, fit, opts, f, mtf, *, forced: bool, valid=None):
     with a first estimate from its spread; where that is not negligible the ESF is measured along the
     higher-degree edge and :func:`curvature_shift` gives the exact shift for this region.
     """
-    rows, coef, ridge = fit
+    rows, coef, (lines, pos) = fit
     os_, sigma, half_w = opts
-    found = unfitted_curvature(*ridge, coef, f, mtf)
+    found = unfitted_curvature(lines, pos, coef, f, mtf)
     if found is None or found[0] <= _CURVE_SCREEN * _CURVE_MTF_SHIFT:
         return []
     _, _, spread, k = found
