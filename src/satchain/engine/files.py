@@ -37,8 +37,9 @@ from satchain._safety import (
     memory_limit_bytes,
 )
 from satchain._validate import check_choice
-from satchain.engine.georaster import check_scales
+from satchain.engine.georaster import _decimate, check_scales
 from satchain.engine.memory import check_simulation_memory
+from satchain.engine.raster_input import MIN_INPUT_PX
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import Simulator
 from satchain.engine.stream import choose_streamed
@@ -46,10 +47,10 @@ from satchain.errors import ConfigError
 from satchain.io.images import GDAL_SUFFIXES, committed_together
 
 if TYPE_CHECKING:
+    from satchain.config.system import ImagingSystem
     from satchain.engine.sensor import SensorModel
     from satchain.engine.sources import SceneSource
     from satchain.scene import Scene
-    from satchain.config.system import ImagingSystem
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -64,8 +65,6 @@ __all__ = [
 IMAGE_SUFFIXES = (*GDAL_SUFFIXES, ".png", ".npy")
 #: Reflectance an image input may hold after scaling (glints above 1 allowed; 255 or 65535 are not reflectance).
 REFLECTANCE_RANGE = (-0.5, 4.0)
-#: The smallest ground truth (px a side) worth simulating.
-MIN_INPUT_PX = 8
 
 Progress = Callable[[str, int, int], None]
 
@@ -293,25 +292,13 @@ def _plan(system: ImagingSystem, src: SceneSource, fp_grid: str | None, seed: in
     return sim, streamed
 
 
-def _decimate(sim: Simulator, src: SceneSource, scheduler: str | None, stage: str, report: Progress, **kw):
-    """The first stage (the coarse grid), in process or on a Dask cluster."""
-
-    def update(done: int, total: int) -> None:
-        report(stage, done, total)
-
-    if scheduler is not None:
-        from satchain.engine.distributed import decimate_distributed
-
-        return decimate_distributed(sim, src, scheduler=scheduler, progress=update, **kw)
-    return sim.decimate(src, progress=update, **kw)
-
-
 def _write_in_memory(sim: Simulator, src: SceneSource, coarse: np.ndarray, out: Path, fp_path: Path | None,
                      fp_grid: str, *, sensor: SensorModel | None, units: str, noise: bool, seed: int, bits,
                      meta: dict[str, Any]) -> tuple[tuple[int, int], float | None]:  # fmt: skip
     """The second stage in memory; write the image and the focal-plane image. Returns the image's shape and
     the focal-plane sample size (None without one)."""
     from satchain.io import images as io
+
     s = sim.system
     img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=seed, coarse=coarse)
     io.write_simulated(out, img, units=units, bit_depth=bits, pixel_m=s.gsd_act_m, metadata=meta)

@@ -51,11 +51,12 @@ import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from satchain.engine.raster_input import (  # noqa: F401 (the input side, named here as before)
+    MIN_INPUT_PX,
     PIXEL_RTOL,
     REFLECTANCE_RANGE,
     RasterBandSource,
@@ -69,6 +70,10 @@ from satchain.engine.raster_input import (  # noqa: F401 (the input side, named 
 from satchain.engine.tiling import Window
 from satchain.errors import ConfigError, InputError, SatchainError
 from satchain.io.images import committed_together
+
+if TYPE_CHECKING:
+    from satchain.engine.simulate import Simulator
+    from satchain.engine.sources import SceneSource
 
 __all__ = ["WORK_BYTES", "RasterBandSource", "check_scales", "invalid_cells", "output_transform", "simulate_raster"]
 
@@ -199,8 +204,6 @@ def simulate_raster(
     path, out = Path(input_), Path(out)
     check_scales(scene_pixel_m, input_scale, name)
     plan = _plan_input(path, band, scene_pixel_m, name)
-    from satchain.engine.files import MIN_INPUT_PX
-
     if min(plan.shape) < MIN_INPUT_PX:
         raise ConfigError(
             f"{name('input')} {str(path)!r} at {plan.pixel_m:g} m per pixel is only {plan.shape[0]} x "
@@ -346,6 +349,19 @@ def _check_output_disk(plan: _Plan, system, n_bands: int, units: str, out: Path)
                fix="crop or resample it first (e.g. gdal_translate -srcwin, gdalwarp -tr)")  # fmt: skip
 
 
+def _decimate(sim: Simulator, src: SceneSource, scheduler: str | None, stage: str, report: Progress, **kw):
+    """The first stage (the coarse grid), in process or on a Dask cluster."""
+
+    def update(done: int, total: int) -> None:
+        report(stage, done, total)
+
+    if scheduler is not None:
+        from satchain.engine.distributed import decimate_distributed
+
+        return decimate_distributed(sim, src, scheduler=scheduler, progress=update, **kw)
+    return sim.decimate(src, progress=update, **kw)
+
+
 def _in_memory(sim, budget: float) -> bool:
     """Whether the whole band's work fits ``budget`` in memory (else it streams)."""
     from satchain.engine.memory import simulation_bytes
@@ -438,7 +454,6 @@ def _form_band(sim, src, write: _Writer, scratch: Path, streamed: bool, tag: str
                units: str, noise: bool, seed: int, scheduler: str | None, fp=None) -> None:  # fmt: skip
     """Both stages and the sensor for one band, in memory or streamed (stage 1 on a Dask ``scheduler`` when
     given); rows go to ``write``, the band's focal plane (in memory only) to ``fp``."""
-    from satchain.engine.files import _decimate
     from satchain.engine.stream import FarField, coarse_store, stream_tile_px, stream_tiles
 
     def stage(text: str):

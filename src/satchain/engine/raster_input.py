@@ -20,6 +20,7 @@ from satchain.errors import ConfigError, InputError
 
 __all__ = [
     "DARKEST_GROUND",
+    "MIN_INPUT_PX",
     "PIXEL_RTOL",
     "REFLECTANCE_RANGE",
     "RasterBandSource",
@@ -29,6 +30,8 @@ __all__ = [
     "invalid_cells",
 ]
 
+#: the smallest ground truth (px a side) worth simulating
+MIN_INPUT_PX = 8
 #: reflectance an input may hold after scaling (as for every image input of ``satchain simulate``)
 REFLECTANCE_RANGE = (-0.5, 4.0)
 #: the largest reflectance an input's valid values must reach (unless all are 0): real ground is brighter
