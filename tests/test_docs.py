@@ -1,4 +1,5 @@
-"""The README's examples stay true: its system file is valid and its commands exist."""
+"""The documentation's examples stay true: the README's first lines and tour, the system file of
+docs/guide/budget.md, the Python API block of docs/guide/python-api.md and the tutorial."""
 
 import re
 from pathlib import Path
@@ -9,11 +10,20 @@ from typer.testing import CliRunner
 from satchain import ImagingSystem
 from satchain.cli.main import app
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+BUDGET = ROOT / "docs" / "guide" / "budget.md"
+PYTHON_API = ROOT / "docs" / "guide" / "python-api.md"
 
 
-def test_readme_system_file_is_valid():
-    toml = re.search(r"```toml\n(.*?)```", README.read_text(), re.S).group(1)
+def system_file_example() -> str:
+    """The system file of docs/guide/budget.md ("A system file"), written there by ``cat > mycamera.toml``."""
+    section = BUDGET.read_text().split("### A system file", 1)[1]
+    return re.search(r"^cat > mycamera\.toml <<'EOF'\n(.*?)^EOF$", section, re.S | re.M).group(1)
+
+
+def test_system_file_example_is_valid():
+    toml = system_file_example()
     s = ImagingSystem.from_dict(tomllib.loads(toml))
     assert s.gsd_alt_m == 567e3 * 5.88e-6 / (0.70 * 9.72)
     assert s.optics.needs_pupil_fft  # spiders and Zernike terms ask for the pupil FFT
@@ -38,7 +48,7 @@ def test_every_command_in_the_tour_exists():
         assert CliRunner().invoke(app, [cmd, "--help"]).exit_code == 0, cmd
 
 
-TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial.md"
+TUTORIAL = ROOT / "docs" / "tutorial.md"
 
 
 def test_tutorial_runs_end_to_end(monkeypatch, tmp_path, capsys):
@@ -54,13 +64,16 @@ def test_tutorial_runs_end_to_end(monkeypatch, tmp_path, capsys):
     assert "MTF@Nyquist" in capsys.readouterr().out
 
 
-def test_readme_python_api_example_runs(monkeypatch, tmp_path, capsys, reduced_scene_toml):
-    """The README's Python API block, on the reduced scene as its my_scene.toml: every check printed."""
-    (block,) = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
-    (tmp_path / "my_scene.toml").write_text(reduced_scene_toml)
+def test_python_api_example_runs(monkeypatch, tmp_path, capsys, reduced_scene_toml):
+    """The Python API page's block, on its my_scene.toml (the reduced scene): every check printed."""
+    text = PYTHON_API.read_text()
+    (block,) = re.findall(r"```python\n(.*?)```", text, re.S)
+    scene = re.search(r"^cat > my_scene\.toml <<'EOF2'\n(.*?)^EOF2$", text, re.S | re.M).group(1)
+    assert tomllib.loads(scene) == tomllib.loads(reduced_scene_toml)
+    (tmp_path / "my_scene.toml").write_text(scene)
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": "readme"}
-    exec(compile(block, "README.md[python]", "exec"), namespace)  # noqa: S102
+    exec(compile(block, "python-api.md[python]", "exec"), namespace)  # noqa: S102
     result = namespace["result"]
     assert result.passed is True and result.measurements.snr.snr > 0
     out = capsys.readouterr().out
