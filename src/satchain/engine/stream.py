@@ -26,7 +26,7 @@ import shutil
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -257,6 +257,7 @@ class FarField:
                 band = grid_rows.take(np.arange(rows[0], rows[1]) + dy, axis=0, mode="wrap") * ax[None, :]
                 img = sfft.ifft(_fold(band, self.mx, nox, axis=1), axis=1, overwrite_x=True)
                 self._rows, self._rows_values = rows, img.real * nox
+            assert self._rows_values is not None  # these rows', made above or for the tile before
             return self._rows_values.take(np.arange(cols[0], cols[1]) + dx, axis=1, mode="wrap")
         if rows != self._rows:
             my = sampling_matrix(sim.ys.centres(*rows) - self.origin_px[0], sim.ys.width_px, 0, self.n_px[0], self.my)
@@ -283,7 +284,7 @@ def stream_tiles(
     units: str = "reflectance",
     noise: bool = False,
     seed: int = 0,
-    far: FarField | bool | None = None,
+    far: FarField | Literal[False] | None = None,
 ) -> Iterator[tuple[int, int, np.ndarray]]:
     """Stage 2 (and the sensor) tile by tile, row-major: yields ``(row0, col0, tile)`` for the output rows
     ``rows`` (default all; ``rows[0]`` on the tile grid). Tiles lie on the fixed noise-block grid, so with
