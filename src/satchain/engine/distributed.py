@@ -27,12 +27,12 @@ from typing import Any
 import numpy as np
 
 from satchain._validate import check_choice
+from satchain.config.system import ImagingSystem
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
 from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import as_ground_truth
 from satchain.engine.tiling import Tile
 from satchain.errors import ConfigError, SatchainIOError
-from satchain.config.system import ImagingSystem
 
 __all__ = ["decimate_distributed", "simulate_distributed", "write_zarr"]
 
@@ -81,7 +81,8 @@ def _probe_scheduler(address: str, timeout_s: float) -> None:
     request line) is named as not answering as a Dask scheduler, instead of failing or waiting in Client()."""
     import time
 
-    deadline, out = time.monotonic() + timeout_s, {}
+    deadline = time.monotonic() + timeout_s
+    out: dict[str, Any] = {}
     t = threading.Thread(target=_identity, args=(address, deadline, out), name="satchain-probe", daemon=True)
     t.start()
     t.join(timeout_s + 2.0)
@@ -104,7 +105,7 @@ def _probe_scheduler(address: str, timeout_s: float) -> None:
     ) from exc
 
 
-def _identity(address: str, deadline: float, out: dict) -> None:
+def _identity(address: str, deadline: float, out: dict[str, Any]) -> None:
     """The probe's thread: ``out["connected"]`` once a TCP connection is made (for tcp / tls / ws addresses;
     others once Dask connects), ``out["reply"]`` the answer to ``identity``, or ``out["error"]``."""
     import asyncio
