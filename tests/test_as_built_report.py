@@ -231,12 +231,12 @@ def test_the_edges_overview_marks_the_failing_edge(run, monkeypatch, tmp_path):
 
 
 def test_the_terminal_table_gives_the_as_built_prediction_and_z(run):
-    from satchain.cli import main as cli
+    from satchain.cli import run as cli_run
     from satchain.comparison import row_texts
 
     result, res, _, _ = run
-    with cli.console.capture() as cap:
-        cli._print_run(result)
+    with cli_run.console.capture() as cap:
+        cli_run._print_run(result)
     assert "z as built" in cap.get()
     edge = next(r for r in result.comparison.rows if r.kind == "edge_mtf_at_nyquist" and r.id == "edge_alt")
     s = _summary(res, "edge_mtf_at_nyquist", "edge_alt")

@@ -114,7 +114,7 @@ def test_a_signal_while_the_command_line_starts_is_answered_in_one_line(tmp_path
         sys.executable,
         str(script),
         str(int(signal.SIGTERM)),
-        "satchain.cli.main:_system",
+        "satchain.cli.simulate:system_from_options",
         "simulate",
         str(_raster(tmp_path / "in.tif", 0.7)),
         "--preset",

@@ -2,8 +2,10 @@
 group (``measure``'s subcommands in :mod:`satchain.cli.measure`, ...), shared options in :mod:`satchain.cli.options`
 and :mod:`satchain.cli._common`.
 
-``satchain.cli.app`` and every name of the former ``satchain/cli.py`` module are read from :mod:`satchain.cli.main`
-on first use (PEP 562), so importing a command module does not build the whole app.
+``satchain.cli.app`` and the other names of :mod:`satchain.cli.main` are read from there on first use (PEP 562), so
+importing a command module does not build the whole app.  A command's module shadows its function here:
+``satchain.cli.run`` is the module :mod:`satchain.cli.run` (always, also on first use); the command is
+``satchain.cli.main.run``.
 """
 
 from __future__ import annotations
@@ -15,4 +17,7 @@ from typing import Any
 def __getattr__(name: str) -> Any:
     if name.startswith("__"):
         raise AttributeError(name)
-    return getattr(importlib.import_module("satchain.cli.main"), name)
+    main = importlib.import_module("satchain.cli.main")
+    if name in globals():  # a submodule (satchain.cli.run, ...) that importing main has just bound here
+        return globals()[name]
+    return getattr(main, name)

@@ -1,4 +1,5 @@
-"""What every satchain command shares: consoles and the error handler (one clear line, exit status 2)."""
+"""What every satchain command shares: consoles, the error handler (one clear line, exit status 2), progress bars,
+and the system a command's ``--preset`` / ``--system`` name."""
 
 from __future__ import annotations
 
@@ -9,6 +10,9 @@ import math
 import os
 import re
 import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import typer
@@ -18,17 +22,26 @@ from rich.text import Text
 from satchain._safety import end_startup
 from satchain.errors import ConfigError, SatchainError
 
+if TYPE_CHECKING:
+    from rich.progress import Progress
+
+    from satchain.config.system import ImagingSystem
+
 __all__ = [
     "ReflowGroup",
     "console",
     "err_console",
     "error_line",
     "handle_errors",
+    "handles_interrupts",
     "parse_numbers",
     "print_error",
     "print_warning",
+    "progress_bar",
     "reflow_help",
+    "say",
     "set_debug",
+    "system_from_options",
 ]
 
 # readers' own log lines (e.g. tifffile's "invalid offset") would add a second line to an error message
@@ -61,7 +74,7 @@ def error_line(exc: BaseException) -> str:
     "unexpected KeyError: 'alt' (run with --debug for a traceback and please report it)"
     """
     if isinstance(exc, SatchainError):
-        return _one_line(exc)
+        return _one_line(str(exc))
     if isinstance(exc, OSError):
         name = exc.filename if exc.filename is not None else ""
         what = (exc.strerror or str(exc)).lower()
@@ -90,6 +103,11 @@ def print_warning(message: str, console: Console | None = None) -> None:
     (console or err_console).print(text, highlight=False, soft_wrap=True)
 
 
+def say(message: str) -> None:
+    """Print ``message`` on stdout as it is (no rich markup or highlighting)."""
+    console.print(message, markup=False, highlight=False)
+
+
 def handle_errors(fn):
     """Turn every error into one clear line on stderr and exit status 2 (no traceback unless ``--debug``).
 
@@ -111,6 +129,47 @@ def handle_errors(fn):
             raise typer.Exit(2) from None
 
     return wrapper
+
+
+def handles_interrupts(fn):
+    """A command that answers SIGTERM itself once it writes (satchain._safety.terminate_as_interrupt): the
+    start-up's answer ("nothing was written") stays until then."""
+    fn.handles_interrupts = True
+    return fn
+
+
+def system_from_options(preset: str | None, system: Path | None) -> ImagingSystem:
+    """The system of a command's ``--preset`` or ``--system`` (one, not both; neither: ``ankarasat3``)."""
+    from satchain.config.system import load_preset, load_system
+
+    if preset and system:
+        raise ConfigError(f"--preset {preset!r} and --system {str(system)!r}: give one, not both")
+    if system is not None:
+        return load_system(system)
+    return load_preset(preset or "ankarasat3")
+
+
+def progress_bar(description: str) -> tuple[Progress, Callable[[int, int], None]]:
+    """A rich progress bar on stderr (none in logs and pipes) and the ``progress(done, total)`` callback that
+    drives it."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    bar = Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err_console,
+        transient=False,
+        disable=not err_console.is_terminal,  # no bar in logs and pipes: an error stays one line
+    )
+    task = bar.add_task(description, total=None)
+
+    def update(done: int, total: int) -> None:
+        bar.update(task, completed=done, total=total)
+
+    return bar, update
 
 
 def parse_numbers(name: str, text: str, n: int | None = None, *, minimum: float | None = None) -> list[float]:
@@ -165,7 +224,7 @@ def reflow_help(text: str | None) -> str | None:
     return "\n\n".join(paragraphs) + (f"\n{cut}{tail}" if cut else "")
 
 
-def _reflow_command(command: click.Command | typer.core.TyperCommand) -> None:
+def _reflow_command(command: click.Command | typer.core.TyperCommand | typer.core.TyperGroup) -> None:
     command.help = reflow_help(command.help)
     for sub in getattr(command, "commands", {}).values():
         _reflow_command(sub)

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from rich.table import Table
 
-from satchain.cli._common import handle_errors, print_warning
 from satchain._safety import check_dir_outputs
+from satchain.cli._common import handle_errors, print_warning
 from satchain.cli.options import (
     BandOpt,
     FullScaleOpt,

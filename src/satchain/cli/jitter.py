@@ -11,8 +11,8 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from satchain.cli._common import handle_errors, print_warning
 from satchain._safety import check_dir_outputs
+from satchain.cli._common import handle_errors, print_warning
 from satchain.cli.options import (
     BandOpt,
     FullScaleOpt,

@@ -1,4 +1,5 @@
-"""``satchain measure``: image-quality measurements from image files (a typer sub-app, mounted by cli.py).
+"""``satchain measure``: image-quality measurements from image files (a typer sub-app, mounted by
+:mod:`satchain.cli.main`).
 
 Commands: ``edge``, ``star``, ``bars``, ``wedge`` (one target in a region; :mod:`satchain.cli.targets`),
 ``auto`` (every target of a scene, from its truth file; :mod:`satchain.cli.auto`), ``find`` (the slanted
@@ -10,7 +11,7 @@ prints the result as JSON; ``-o DIR`` writes ``<command>.json`` and a figure the
 stderr, exit status 2.  The options the commands share are defined once, in :mod:`satchain.cli.options`.
 
 This module is where the commands are registered (the one place): imports flow one way,
-``cli -> cli_measure -> cli_targets, cli_auto, cli_find, cli_jitter -> cli_options, cli_output``.
+``main -> measure -> targets, auto, find, jitter -> options, output`` (modules of :mod:`satchain.cli`).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The options the ``satchain measure`` commands share, defined once (as rasterio's ``rio/options.py``).
+"""The options satchain's commands share (those of ``satchain measure``; ``--preset`` / ``--system`` of budget,
+simulate and run), defined once (as rasterio's ``rio/options.py``).
 
 Each shared option is an ``Annotated`` type carrying its one :class:`typer.models.OptionInfo` (name, flags,
 help text); a command declares ``roi: RoiOpt = None`` and gets the same option as every other command.  The
@@ -40,7 +41,9 @@ __all__ = [
     "OriginOpt",
     "OutOpt",
     "PixelOpt",
+    "PresetOpt",
     "RoiOpt",
+    "SystemOpt",
     "ThresholdOpt",
     "TruthOpt",
     "TruthRequiredOpt",
@@ -120,6 +123,10 @@ FrequencyAxisOpt = Annotated[
     ),
 ]
 
+#: The system a command models (budget, simulate; run takes --preset over its configuration's system)
+PresetOpt = Annotated[str | None, typer.Option("--preset", help="packaged system preset, e.g. ankarasat3")]
+SystemOpt = Annotated[Path | None, typer.Option("--system", help="system TOML file")]
+
 #: Every shared option, by its long name (``--truth`` has two forms: required and optional).
 SHARED_OPTIONS: dict[str, tuple] = {
     "--roi": (RoiOpt,),
@@ -134,6 +141,8 @@ SHARED_OPTIONS: dict[str, tuple] = {
     "--nodata": (NodataOpt,),
     "--band": (BandOpt, BandsOpt),
     "--frequency-axis": (FrequencyAxisOpt,),
+    "--preset": (PresetOpt,),
+    "--system": (SystemOpt,),
 }
 
 # ------------------------------------------------------------------------------------------- their parsing

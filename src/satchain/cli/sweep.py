@@ -6,14 +6,17 @@ from __future__ import annotations
 import signal
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.text import Text
 
-from satchain.cli._common import console, err_console
 from satchain._safety import terminate_as_interrupt
+from satchain.cli._common import console, err_console
 from satchain.errors import ConfigError
+
+if TYPE_CHECKING:
+    from satchain._safety import _Received
 
 __all__ = ["simulate_cases"]
 
@@ -38,7 +41,7 @@ class _CaseBars:
         self.cases = self.bar.add_task("cases", total=None)
         self.stage = self.bar.add_task("", total=None, visible=False)
         self.started = False  # whether the cases began (validation passed, the manifest written)
-        self.received = None  # satchain._safety's record of a signal (checked at every step)
+        self.received: _Received | None = None  # satchain._safety's record of a signal (checked at every step)
 
     def __call__(self, stage: str, done: int, total: int) -> None:
         if self.received is not None:
@@ -85,7 +88,7 @@ def simulate_cases(
         if bars.started:
             _summary(read_manifest(out), out)
         signum = getattr(exc, "signum", signal.SIGINT)
-        exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see cli._interrupted)
+        exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see satchain.cli.run._interrupted)
         err_console.print(
             Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
             + Text(

@@ -13,8 +13,8 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from satchain.cli._common import handle_errors, parse_numbers, print_warning
 from satchain._safety import check_dir_outputs, check_star_radius
+from satchain.cli._common import handle_errors, parse_numbers, print_warning
 from satchain.cli.options import (
     BandOpt,
     FitDegreeOpt,
@@ -203,8 +203,9 @@ def star(
     data, p, meta = load_image(image, pixel_m, band)
     check_star_radius(radius, data.shape)
     region = parse_roi("--roi", roi)
-    c = None if center is None else parse_numbers("--center", center, 2)
-    if c is not None:
+    c: list[float] | None = None
+    if center is not None:
+        c = parse_numbers("--center", center, 2)
         _check_center_inside(center, c, data.shape, roi, region)
     if c is not None and region is not None:
         c = [c[0] - region[0], c[1] - region[1]]
