@@ -145,6 +145,7 @@ def _nodata_for(units: str, bits: int | None) -> tuple[np.dtype, float, float]:
     dt = simulated_dtype(units, bits)
     if dt.kind == "f":
         return dt, float("nan"), -np.inf
+    assert bits is not None  # DN: formed by a sensor, whose bit depth _plan_case passes
     top = 2**bits - 1
     if top < np.iinfo(dt).max:
         return dt, float(np.iinfo(dt).max), 0.0
@@ -200,7 +201,7 @@ def simulate_raster(
     from satchain._safety import clean_stale
     from satchain.engine.sensor import sensor_from_system
 
-    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
+    name: Callable[[str], str] = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     path, out = Path(input_), Path(out)
     check_scales(scene_pixel_m, input_scale, name)
     plan = _plan_input(path, band, scene_pixel_m, name)
@@ -234,6 +235,7 @@ def simulate_raster(
             "bands": bands, "pixel_m": system.gsd_act_m,
             "wavelength_m": [s.optics.effective_wavelength_m for s in systems]}  # fmt: skip
     if units == "dn":
+        assert bits is not None  # DN: formed by a sensor (_plan_case)
         meta["bit_depth"] = int(bits)
     if not math.isclose(system.gsd_act_m, system.gsd_alt_m, rel_tol=1e-9):
         meta["pixel_m_xy"] = [system.gsd_act_m, system.gsd_alt_m]
@@ -250,7 +252,7 @@ def simulate_raster(
     out.parent.mkdir(parents=True, exist_ok=True)
     clean_stale(out)
     report = progress or (lambda stage, done, total: None)
-    fp = None if focal_plane is None else _FocalPlane(Path(focal_plane), fp_grid, plan, sim0, len(bands), meta)
+    fp = None if focal_plane is None else _FocalPlane(Path(focal_plane), focal_plane_grid, plan, sim0, len(bands), meta)
     with committed_together(), _staging(out) as d:
         stage_tif = d / "stage.tif"
         with _open_staging(stage_tif, plan, sim0.output_shape, len(bands), dtype, nodata, transform, meta) as dst:
@@ -258,8 +260,8 @@ def simulate_raster(
                 sensor_b = sensor_from_system(s) if sensor is not None else None
                 tag = f"band {b}/{plan.count}: " if len(bands) > 1 else ""
                 write = _Writer(dst, i + 1, src, sim, dtype, nodata, lowest, bits)
-                run = dict(sensor=sensor_b, units=units, noise=noise, seed=_seed(seed, i), scheduler=scheduler)
-                _form_band(sim, src, write, d, planned[i][1], tag, report, fp=fp, **run)
+                _form_band(sim, src, write, d, planned[i][1], tag, report, fp=fp, sensor=sensor_b, units=units,
+                           noise=noise, seed=_seed(seed, i), scheduler=scheduler)  # fmt: skip
                 dst.set_band_description(i + 1, plan.descriptions[b - 1] or f"band {b}")
                 dst.update_tags(i + 1, wavelength_m=f"{s.optics.effective_wavelength_m:.6g}", input_band=str(b))
                 src.close()
@@ -418,7 +420,10 @@ class _Writer:
                  bits: int | None):  # fmt: skip
         self.dst, self.index, self.src, self.sim = dst, index, src, sim
         self.dtype, self.nodata, self.lowest = np.dtype(dtype), nodata, lowest
-        self.top = None if self.dtype.kind == "f" else 2.0**bits - 1  # DN only: float units have no ADC range
+        self.top: float | None = None  # DN only: float units have no ADC range
+        if self.dtype.kind != "f":
+            assert bits is not None  # DN: formed by a sensor, whose bit depth _plan_case passes
+            self.top = 2.0**bits - 1
         self.n_nodata = 0
 
     def rows(self, r0: int, img: np.ndarray) -> None:
@@ -529,7 +534,8 @@ class _FocalPlane:
     GeoTIFF at ``path``."""
 
     def __init__(self, path: Path, grid: str, plan: _Plan, sim, count: int, meta: Mapping[str, Any]):
-        self.path, self.grid, self.plan, self.count, self.bands = path, grid, plan, count, []
+        self.path, self.grid, self.plan, self.count = path, grid, plan, count
+        self.bands: list[np.ndarray] = []
         d = int(sim.D) if grid == "coarse" else 1
         self.d, self.pixel_m = d, plan.pixel_m * d
         self.transform = focal_plane_transform(plan.transform, sim, plan.pixel_m, d)  # the samples' ground
@@ -567,4 +573,4 @@ def _blocks_invalid(valid: np.ndarray, d: int, shape: tuple[int, int]) -> np.nda
     pad = np.ones((ny * d, nx * d), dtype=bool)
     h, w = min(valid.shape[0], ny * d), min(valid.shape[1], nx * d)
     pad[:h, :w] = valid[:h, :w]
-    return ~pad.reshape(ny, d, nx, d).all(axis=(1, 3))
+    return ~pad.reshape(ny, d, nx, d).all(axis=(1, 3))  # type: ignore[return-value]  # an array: the stubs say bool | array
