@@ -12,9 +12,9 @@ from scipy.special import j0
 
 import satchain
 from satchain import load_preset, measure_edge
-from satchain.engine import timepath
 from satchain.engine.simulate import Simulator
 from satchain.engine.sources import ArraySource
+from satchain.tf import pushbroom_otf
 from satchain.tf.pushbroom import PushbroomTerms
 
 BASE = load_preset("ankarasat3")
@@ -127,7 +127,7 @@ def test_the_time_grid_is_fine_enough_and_the_image_does_not_depend_on_the_tilin
     f = 4465.0
     system = BASE.replace({"motion.oscillation": [{"axis": "act", "amplitude_px": 0.8, "frequency_hz": f}]})
     _, coarse_grid = _images(system, "act")
-    monkeypatch.setattr(timepath, "SAMPLES_PER_PERIOD", 4 * timepath.SAMPLES_PER_PERIOD)
+    monkeypatch.setattr(pushbroom_otf, "SAMPLES_PER_PERIOD", 4 * pushbroom_otf.SAMPLES_PER_PERIOD)  # the time grid
     _, fine_grid = _images(system, "act")
     assert np.abs(coarse_grid - fine_grid).max() < 1e-3  # the convergence level
     monkeypatch.undo()

@@ -36,12 +36,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from satchain.tf.pushbroom_otf import (  # noqa: F401 (the time grid, named here as before)
+    LOG_SAMPLES,
+    MIN_WINDOW_SAMPLES,
+    SAMPLES_PER_PERIOD,
+    samples_per_line,
+)
+
 __all__ = ["MIN_WINDOW_SAMPLES", "SAMPLES_PER_PERIOD", "TimePath", "form_rows", "time_path"]
 
-SAMPLES_PER_PERIOD = 24
-LOG_SAMPLES = 8  # time samples per interval of a [motion.line_of_sight] log
-MIN_WINDOW_SAMPLES = 32
-_MAX_SAMPLES_PER_LINE = 4096
 _BLOCK_BYTES = 128 * 2**20  # the sliding sums of one block of rows
 
 
@@ -92,16 +95,6 @@ class TimePath:
         return self.dy[a : a + self.window_samples], self.dx[a : a + self.window_samples]
 
 
-def _samples_per_line(system, line_time_s: float, stages: int) -> int:
-    mot = system.motion
-    f_top = max([o.frequency_hz for o in mot.oscillation] + [t.frequency_hz[-1] for t in mot.jitter_psd] + [0.0])
-    m = max(math.ceil(SAMPLES_PER_PERIOD * f_top * line_time_s), math.ceil(MIN_WINDOW_SAMPLES / stages), 1)
-    if mot.line_of_sight is not None:  # a log, linear between its samples: >= LOG_SAMPLES per interval
-        step = float(np.min(np.diff(mot.line_of_sight.time_s)))
-        m = max(m, math.ceil(LOG_SAMPLES * line_time_s / step))
-    return int(min(m, _MAX_SAMPLES_PER_LINE))
-
-
 def _psd_realisation(table, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """One Gaussian realisation of a one-sided PSD (px^2/Hz, linear between its points) at the times ``t``: a sum
     of cosines at the frequencies ``k / T_total`` with Rayleigh amplitudes ``sqrt(S df) * chi_2`` and uniform
@@ -128,7 +121,7 @@ def time_path(system, n_rows: int, *, seed: int = 0) -> TimePath | None:
     if not terms.active:
         return None
     dt, n_st = terms.line_time_s, terms.stages
-    m = _samples_per_line(system, dt, n_st)
+    m = samples_per_line(system, dt, n_st)
     j = np.arange((int(n_rows) + n_st) * m, dtype=np.float64)
     t = (j + 0.5) * dt / m
     sigma, eps = terms.drift_px if terms.drift_px is not None else (0.0, 0.0)

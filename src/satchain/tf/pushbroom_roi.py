@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from satchain.errors import ConfigError
-from satchain.tf.pushbroom import _frequency_nodes, jitter_psd_otf, log_otf, oscillation_otf
+from satchain.tf.pushbroom_otf import _frequency_nodes, jitter_psd_otf, log_otf, oscillation_otf
 
 __all__ = ["as_imaged_otf", "displacement_factor", "per_row_otf", "rows_blur_otf"]
 
