@@ -30,9 +30,9 @@ import numpy as np
 
 from satchain._argcheck import checked
 from satchain.errors import InputError
-from satchain.scene.targets import HyperbolicWedge, SlantedEdge
 from satchain.prediction.star import StarPrediction, predict_stars
 from satchain.prediction.wedge import PLACEMENTS_PX, WEDGE_AXES, WedgePrediction, predict_wedge
+from satchain.scene.targets import HyperbolicWedge, SlantedEdge
 
 if TYPE_CHECKING:
     from satchain.scene.truth import Truth
@@ -242,10 +242,10 @@ def predict_from_mtf(
     its geometry scales them, e.g. a pushbroom image's along-track scale: a wedge is then predicted on that grid,
     its OTF on the image's axes).
 
-    ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as :func:`satchain.prediction.quality.predict_quality`
-    gives them); without it the NIIRS figures are NaN. ``otf2d`` is the complex OTF (cy/px) that forms the
-    predicted wedge images (default ``mtf2d``, exact when the OTF is real and non-negative); the wedges are
-    rendered at the truth's ``pixel_m`` on its ``background``
+    ``quality`` holds the predicted ``giqe5``, ``rer_giqe5`` and ``snr`` (as
+    :func:`satchain.prediction.quality.predict_quality` gives them); without it the NIIRS figures are NaN.
+    ``otf2d`` is the complex OTF (cy/px) that forms the predicted wedge images (default ``mtf2d``, exact when the
+    OTF is real and non-negative); the wedges are rendered at the truth's ``pixel_m`` on its ``background``
     (:func:`satchain.prediction.wedge.predict_wedge`); ``noise_sigma`` (per-pixel noise in reflectance as a
     function of reflectance, :func:`sensor_noise_reflectance`) gives their crossings' 1-sigma from noise. The
     stars' measured MTF is predicted on their noise-free predicted images formed with ``otf2d`` too
@@ -301,8 +301,9 @@ class _OnImageAxis:
 
     def __init__(self, otf2d: MTF2D, sx: float, sy: float):
         self._otf, self._s = otf2d, (float(sx), float(sy))
-        if getattr(otf2d, "cutoff", None) is not None:
-            self.cutoff = float(otf2d.cutoff) * max(self._s)
+        cutoff = getattr(otf2d, "cutoff", None)
+        if cutoff is not None:
+            self.cutoff = float(cutoff) * max(self._s)
 
     def __call__(self, fx, fy) -> np.ndarray:
         return self._otf(np.asarray(fx) / self._s[0], np.asarray(fy) / self._s[1])
@@ -320,13 +321,17 @@ def _predict_wedges(otf2d: MTF2D, truth: Mapping[str, Any], gsd_m: float, thresh
         if it.get("kind") != HyperbolicWedge.kind:
             continue
         axis = WEDGE_AXES[str(it["orientation"]).lower()]
-        step = None if grid_m is None else {"ACT": grid_m[0][0], "ALT": grid_m[0][1]}.get(axis)
-        own = (0.0, 0.0) if step is None else tuple(float(np.mod(c / step, 1.0)) for c in grid_m[1])
+        otf: MTF2D = otf2d
+        step_m = gsd_m
+        own: tuple[float, ...] = (0.0, 0.0)
+        if grid_m is not None and (step := {"ACT": grid_m[0][0], "ALT": grid_m[0][1]}.get(axis)) is not None:
+            otf = _OnImageAxis(otf2d, step / grid_m[0][0], step / grid_m[0][1])
+            step_m, own = step, tuple(float(np.mod(c / step, 1.0)) for c in grid_m[1])
         try:
             out[str(it["id"])] = predict_wedge(
-                otf2d if step is None else _OnImageAxis(otf2d, step / grid_m[0][0], step / grid_m[0][1]),
+                otf,
                 it,
-                gsd_m=gsd_m if step is None else step,
+                gsd_m=step_m,
                 placements_px=tuple(
                     (float(np.mod(a + own[0], 1.0)), float(np.mod(b + own[1], 1.0))) for a, b in PLACEMENTS_PX
                 ),
