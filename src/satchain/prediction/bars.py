@@ -76,7 +76,7 @@ def _on_rows(mtf, terms, axis: str, rows: tuple[int, int]):
         own = rows_blur_otf(terms, nu, a, first_line=rows[0], n_lines=rows[1] - rows[0])
         return np.where(per > 1e-3, np.asarray(mtf(f), float) * own / np.maximum(per, 1e-3), 0.0)
 
-    on_rows.cutoff = getattr(mtf, "cutoff", None)
+    on_rows.__dict__["cutoff"] = getattr(mtf, "cutoff", None)  # the band limit, as mtf's
     return on_rows
 
 
