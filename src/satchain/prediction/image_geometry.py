@@ -20,8 +20,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from affine import Affine
 
 __all__ = ["ImageGeometry", "geometry_table", "run_geometry"]
 
@@ -33,7 +37,7 @@ class ImageGeometry:
     each image row's line-of-sight displacement (ACT, ALT; the drifts left out) and ``edges`` the truth's edge
     lines by id, ``(point_m, direction_m)`` in truth metres."""
 
-    to_image: object
+    to_image: Affine
     drift_px: tuple[float, float]
     dx_px: np.ndarray = field(repr=False)
     dy_px: np.ndarray = field(repr=False)
@@ -136,7 +140,7 @@ def run_geometry(system, truth: dict, simulator, shape: tuple[int, int]) -> Imag
     if not terms.active:
         return None
     ox, oy = truth_origin_m(truth)
-    to_image = terms.image_affine(tuple(shape)) @ Affine.translation(-ox, -oy)
+    to_image = terms.image_affine((shape[0], shape[1])) @ Affine.translation(-ox, -oy)
     drift = terms.drift_px if terms.drift_px is not None else (0.0, 0.0)
     n = int(shape[0])
     tp = getattr(simulator, "time_path", None)
