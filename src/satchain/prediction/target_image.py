@@ -55,9 +55,10 @@ def _edge_from_truth(rec: Mapping[str, Any]):
     normal = (math.cos(a), -math.sin(a)) if measures == "act" else (-math.sin(a), math.cos(a))
     nx, ny = (float(v) for v in rec["normal_to_bright"])
     side = "positive" if nx * normal[0] + ny * normal[1] > 0 else "negative"
+    cx, cy = (float(v) for v in rec["edge_point_m"])
     return SlantedEdge(
         str(rec["id"]),
-        center_m=tuple(float(v) for v in rec["edge_point_m"]),
+        center_m=(cx, cy),
         size_m=float(rec["size_m"]),
         angle_deg=float(rec["angle_deg"]),
         measures=measures,
@@ -70,9 +71,10 @@ def _edge_from_truth(rec: Mapping[str, Any]):
 def _star_from_truth(rec: Mapping[str, Any]):
     from satchain.scene import SiemensStar
 
+    cx, cy = (float(v) for v in rec["center_m"])
     return SiemensStar(
         str(rec["id"]),
-        center_m=tuple(float(v) for v in rec["center_m"]),
+        center_m=(cx, cy),
         radius_m=float(rec["radius_m"]),
         cycles=int(rec["cycles"]),
         inner_radius_m=float(rec["inner_radius_m"]),
