@@ -179,7 +179,9 @@ def predict_wedge(
         The image noise, 1-sigma per pixel in reflectance as a function of the noise-free reflectance: gives
         ``resolution_noise_m_std``.
     """
-    runs, res, spread = [], [], []
+    runs: list[dict[str, Any]] = []
+    res: list[float | None] = []
+    spread: list[float] = []
     w0, w1 = float(item["line_width_start_m"]), float(item["line_width_end_m"])
     model = _WedgeModel(otf2d, item, gsd_m, truth_pixel_m, background)
     ox, oy = model.origin_m
