@@ -40,8 +40,8 @@ from typing import Any
 import numpy as np
 
 from satchain.errors import InputError
-from satchain.scene.targets import SiemensStar, SlantedEdge
 from satchain.prediction.target_image import item_from_truth, scene_model_image
+from satchain.scene.targets import SiemensStar, SlantedEdge
 
 __all__ = ["CALIBRATION_KINDS", "MAX_OVERSAMPLE", "StarPrediction", "predict_stars"]
 
