@@ -208,7 +208,7 @@ def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | No
     plateaus = {side: _plateau(d, v, tol, ok) for side, v in (("maximum", hi), ("minimum", lo))}
     if plateaus["maximum"] is None and plateaus["minimum"] is None:
         return None  # no flat run at either extreme: no evidence (the noise and the quantum are not needed)
-    quantum = _quantum(d[ok] if unique is None else None, unique)
+    quantum = _quantum(np.unique(d[ok]) if unique is None else unique)
     step_min = max(2 * quantum, STEP_MIN * span)  # smaller steps onto a plateau: reached smoothly
     if noise_std is None:  # estimated: trusted where the other extreme is no exact plateau (noise-free there)
         sigma = _pixel_noise(d, lo, hi, tol, ok)
@@ -246,10 +246,9 @@ def _plateau_evidence(d: np.ndarray, lo: float, hi: float, noise_std: float | No
     return None
 
 
-def _quantum(d: np.ndarray | None, u: np.ndarray | None = None) -> float:
-    """The smallest gap between distinct values (a DN step in quantised data; ~0 in continuous data); ``u``:
-    the distinct values when known."""
-    u = np.unique(d) if u is None else u
+def _quantum(u: np.ndarray) -> float:
+    """The smallest gap between the distinct values ``u`` (a DN step in quantised data; ~0 in continuous
+    data)."""
     return float(np.min(np.diff(u))) if u.size > 1 else 0.0
 
 
