@@ -74,7 +74,7 @@ def _border_steps(a: np.ndarray, z: np.ndarray, band_rows: int = 512):
     """Per border pixel: (shortfall below the pixel 2 px in, the border's tilt from the pixel axes in deg, the
     value 2 px in); and the border pixels' values.  Computed over bands of rows (memory O(band))."""
     pad = 20  # covers the filters' supports (4 + 1 + 12 px) and the 2 px step
-    out = [[], [], [], []]
+    out: list[list[np.ndarray]] = [[], [], [], []]
     for y0 in range(0, a.shape[0], band_rows):
         b0, b1 = max(y0 - pad, 0), min(y0 + band_rows + pad, a.shape[0])
         band = _band_steps(a[b0:b1].astype(np.float32), z[b0:b1], y0 - b0, min(band_rows, a.shape[0] - y0))
