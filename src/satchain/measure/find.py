@@ -502,7 +502,8 @@ def find_edges(
     mask, grads = _edge_mask(a, threshold, band_rows, inner)
     segs = _merge_collinear(_segments(a, mask, p["min_length_px"], grads))
     del mask
-    found, rejected = [], []
+    found: list[EdgeCandidate] = []
+    rejected: list[Rejection] = []
     for s in segs:
         r = _evaluate(a, s, p, noise, threshold, inner)
         (found if isinstance(r, EdgeCandidate) else rejected).append(r)
