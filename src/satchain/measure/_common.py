@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -202,6 +203,8 @@ def to_jsonable(value):
 
 class ResultMixin:
     """``to_dict()`` for frozen result dataclasses: every field, JSON-ready."""
+
+    __dataclass_fields__: ClassVar[dict[str, dataclasses.Field[Any]]]  # set by @dataclass on each result class
 
     def to_dict(self) -> dict:
         return {f.name: to_jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)}
