@@ -6,8 +6,9 @@ Run: ``python benchmarks/bench_stream.py [--size 16384] [--tile 512] [--margin 1
      ``python benchmarks/bench_stream.py --huge [--dir DIR]``  (100000 x 100000: a 9.3 GiB tiled uint8 TIFF
      of a repeated 4096-px procedural square is generated first, then streamed; ~13 GiB of disk)
 
-The input (AnkaraSat-3 at 3.5 cm, k = 14) is the procedural ground truth of ``bench_engine.py`` (stripes,
-sectors, slanted edges: generated per window, never held), or a tiled TIFF (``--tiff``, read by window).
+The input (AnkaraSat-3 at 3.5 cm, k = 14) is the procedural ground truth of ``procedural.py``, which
+``bench_engine.py`` uses too (stripes, sectors, slanted edges: generated per window, never held), or a tiled
+TIFF (``--tiff``, read by window).
 Each path runs in its own subprocess, whose peak RSS (``resource.getrusage``) is reported:
 
 * streamed: ``Simulator.decimate`` into a disk-backed coarse grid, then
@@ -36,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_engine import PIXEL_M, ProceduralScene  # noqa: E402
+from procedural import PIXEL_M, ProceduralScene  # noqa: E402
 
 GiB = 2**30
 
@@ -101,6 +102,7 @@ def worker(args) -> None:
         info["stage1_s"] = t1 - t0
     else:
         from satchain.io import images as io
+
         sim.check_frame()
         io.write_tiff(out, sim.run(src).astype(np.float32))
     wall = time.perf_counter() - t0
@@ -143,6 +145,7 @@ def _print(name: str, r: dict) -> None:
 
 def _difference(a_path: str, b_path: str) -> float:
     from satchain.io import images as io
+
     a, _ = io.read_image(a_path)
     b, _ = io.read_image(b_path)
     b = b.astype(np.float64)
@@ -152,8 +155,8 @@ def _difference(a_path: str, b_path: str) -> float:
 def make_huge_tiff(path: Path, n: int, *, period: int = 4096) -> None:
     """A ``n x n`` uint8 tiled TIFF: one ``period``-px square of the procedural ground truth, repeated (so it
     is written at disk speed rather than rendered pixel by pixel for hours)."""
-    from satchain.io import images as io
     from satchain.engine.tiling import Window
+    from satchain.io import images as io
 
     t = 256
     block = ProceduralScene(period).read(Window(0, 0, period, period))
