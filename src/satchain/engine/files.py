@@ -214,7 +214,7 @@ def simulate_file(
         Before anything is written: a bad option, an output that is an input or a directory, a ground truth
         under 8 px a side, or work that does not fit in memory or on disk.
     """
-    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
+    name: Callable[[str], str] = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     _check_options(units, noise, seed, focal_plane_grid, name)
     check_scales(scene_pixel_m, input_scale, name)
     out, fp_path = Path(out), (None if focal_plane is None else Path(focal_plane))
@@ -226,6 +226,7 @@ def simulate_file(
                             units=units, noise=noise, seed=seed, scheduler=scheduler, progress=progress,
                             notify=notify, names=names, focal_plane=fp_path,
                             focal_plane_grid=focal_plane_grid)  # fmt: skip
+        assert r is not None  # not check_only: the result
         return SimulatedFile(out, r["preview"], r["shape_px"], units, r["streamed"], fp_path,
                              r["focal_plane_pixel_m"], r["metadata"], r["count"], r["crs"], r["transform"])  # fmt: skip
     if band is not None:
@@ -249,7 +250,7 @@ def simulate_file(
             "gsd_alt_m": system.gsd_alt_m, "input": str(input_), "input_pixel_m": src.pixel_m}  # fmt: skip
     sensor = sensor_from_system(system) if (units != "reflectance" or noise) else None
     bits = sensor.bit_depth if sensor is not None else system.detector.bit_depth
-    run = dict(sensor=sensor, units=units, noise=bool(noise), seed=int(seed), bits=bits, meta=meta)
+    run: dict[str, Any] = dict(sensor=sensor, units=units, noise=bool(noise), seed=int(seed), bits=bits, meta=meta)
     report = progress or (lambda stage, done, total: None)
     if streamed:
         with committed_together():  # the image and its preview
@@ -264,7 +265,7 @@ def simulate_file(
 def check_case(system: ImagingSystem, src: SceneSource, *, names: Mapping[str, str] | None = None) -> None:
     """What :func:`simulate_file` checks of ``system`` on the ground truth ``src`` before it writes anything
     (the ground truth's size in detector pixels, memory); a sweep checks every case with it first."""
-    name = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
+    name: Callable[[str], str] = (lambda k: dict(names).get(k, k)) if names else (lambda k: k)
     _plan(system, src, None)
     if min(src.shape_px) < MIN_INPUT_PX:
         raise ConfigError(
