@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
@@ -217,6 +218,7 @@ def _on_joint_lines(image, edges, results, lines: dict, opts: dict, ok):
 
 def _line(r: EdgeResult):
     """(a, c, slope dc/da) of a measured edge: a along it (y for ACT, x for ALT), c across it."""
+    assert r.edge_point_xy is not None  # every measured edge has one (set by measure_edge)
     x, y = r.edge_point_xy
     t = np.deg2rad(r.angle_deg)
     if r.direction == "ACT":
@@ -414,7 +416,7 @@ def measure_found_edges(
         ok, fill_note = zero_fill_mask(image)
     if search is None:
         search = find_edges(image, min_length_px=min_length_px, max_edges=max_edges, min_cnr=min_cnr, valid=ok)
-    opts = {"pixel_m": pixel_m, "full_scale": full_scale, "frequency_axis": check_axis(frequency_axis)}
+    opts: dict[str, Any] = {"pixel_m": pixel_m, "full_scale": full_scale, "frequency_axis": check_axis(frequency_axis)}
     rejected = list(search.rejected)
     edges, results = [], []
     for c in search.candidates:
@@ -438,7 +440,8 @@ def measure_found_edges(
     for d in ("ACT", "ALT"):
         if d not in combined:
             flags.append(f"no usable {d} edge: only the {'ALT' if d == 'ACT' else 'ACT'} MTF is measured")
-    shape = tuple(int(v) for v in np.shape(image))
+    rows, cols = np.shape(image)
+    shape = (int(rows), int(cols))
     return FindResult(
         tuple(edges), combined, tuple(rejected), search.noise_sigma, shape, tuple(flags), tuple(results),
         pixel_m=pixel_m, frequency_axis=opts["frequency_axis"],
@@ -483,7 +486,7 @@ def ceos_csv(result: FindResult, *, step: float = 0.02, f_max: float = 0.5, pixe
     pixel_m is added.
     """
     t = ceos_table(result, step=step, f_max=f_max, pixel_m=pixel_m)
-    cols = [k for k in ("f_over_fs", "f_cy_per_m_ground") if k in t]
+    cols: list[str] = [k for k in ("f_over_fs", "f_cy_per_m_ground") if k in t]
     cols += ["mtf_act", "mtf_act_sigma", "mtf_alt", "mtf_alt_sigma"]
     lines = [",".join(cols)]
     for i in range(t["f_over_fs"].size):
