@@ -283,11 +283,11 @@ def check_image_affine(image_affine) -> tuple[float, float, float, float, float,
     coeffs = tuple(float(v) for v in vals) if ok else ()
     if not ok or not all(math.isfinite(v) for v in coeffs):
         raise InputError(f"image_affine = {image_affine!r}: {allowed}")
-    a, b, _, d, e, _ = coeffs
+    a, b, c, d, e, f = coeffs
     det = a * e - b * d
     if det == 0 or abs(det) <= 1e-12 * (abs(a) + abs(b)) * (abs(d) + abs(e)):
         raise InputError(f"image_affine = {image_affine!r}: not invertible (a e - b d = {det:g}); {allowed}")
-    return coeffs
+    return a, b, c, d, e, f
 
 
 def _frame(truth: dict, shape, pixel_m, origin_m, image_affine) -> Frame:
