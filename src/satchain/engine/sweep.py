@@ -246,13 +246,13 @@ def plan_sweep(
     """
     name = dict(names or {}).get
     opt, opt_in = name("sweep", "sweep"), name("inputs", "inputs")
-    inputs = [str(i) for i in inputs]
+    texts = [str(i) for i in inputs]  # the inputs as given (a path as its text)
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"{name('seed', 'seed')} {seed!r}: must be an integer >= 0")
-    if not inputs:
+    if not texts:
         raise ConfigError(f"{opt_in}: give one or more inputs")
     sweep = {str(k): list(v) for k, v in (sweep or {}).items()}
-    n = len(inputs) * math.prod(len(v) for v in sweep.values())
+    n = len(texts) * math.prod(len(v) for v in sweep.values())
     for key, values in sweep.items():
         if not values:
             raise ConfigError(f"{opt} {key}: needs one or more values")
@@ -265,8 +265,9 @@ def plan_sweep(
     combos = [dict(zip(sweep, vals, strict=True)) for vals in itertools.product(*sweep.values())]
     systems = [_replaced(system, combo, opt) for combo in combos]
     out = Path(out_dir)
-    cases, seen = [], {}
-    for input_ in inputs:
+    cases: list[Case] = []
+    seen: dict[str, str] = {}
+    for input_ in texts:
         for combo in combos:
             cid = _case_id(input_, combo)
             if len(cid) + 4 > 255:
@@ -278,9 +279,9 @@ def plan_sweep(
                     "an input or change a value"
                 )
             seen[cid.lower()] = _show(input_, combo)
-            s = int(seed) if (len(inputs) == 1 and not sweep) else case_seed(seed, input_, combo)
+            s = int(seed) if (len(texts) == 1 and not sweep) else case_seed(seed, input_, combo)
             cases.append(Case(len(cases) + 1, cid, input_, combo, s, out / f"{cid}.tif", out / f"{cid}.png"))
-    return cases, systems * len(inputs)
+    return cases, systems * len(texts)
 
 
 def _show(input_: str, combo: Mapping[str, Any]) -> str:
@@ -375,7 +376,8 @@ def _run_cases(cases: list[Case], systems: list[ImagingSystem], stage: Path, hea
             cases[i + 1 :] = [replace(c, status="not run") for c in cases[i + 1 :]]
             _write_manifest(stage, header, cases)
             raise
-        cases[i] = replace(case, status="written", shape_px=tuple(r.shape_px), preview=case.image.with_suffix(".png"))
+        shape_px = (r.shape_px[0], r.shape_px[1])
+        cases[i] = replace(case, status="written", shape_px=shape_px, preview=case.image.with_suffix(".png"))
         _write_manifest(stage, header, cases)
     report("cases", len(cases), len(cases))
 
@@ -390,8 +392,8 @@ def _sweep_staging(out: Path, notify: Callable[[str], None] | None = None):
     import shutil
     import tempfile
 
-    from satchain.io.runfolder import swap_in
     from satchain._safety import claim, clean_stale
+    from satchain.io.runfolder import swap_in
 
     out.parent.mkdir(parents=True, exist_ok=True)
     clean_stale(out)  # the staging folders of killed sweeps
