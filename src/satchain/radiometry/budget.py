@@ -15,7 +15,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -267,7 +267,7 @@ def radiometric_budget(system: ImagingSystem, *, reflectance: float | None = Non
         solar_irradiance_w_per_m2_per_m=sp["e0"],
         radiance_surface_w_per_m2_sr_per_m=sp["l_surface"],
         radiance_toa_w_per_m2_sr_per_m=sp["l_toa"],
-        band_m=tuple(system.radiometry.band_m),
+        band_m=system.radiometry.band_m,
         reflectance=rho,
         sun_zenith_deg=il.sun_zenith_deg,
         transmission_down=sp["t_down"],
@@ -290,7 +290,16 @@ def radiometric_budget(system: ImagingSystem, *, reflectance: float | None = Non
     )
 
 
-def _band_values(system: ImagingSystem, sp: dict[str, Any]) -> dict[str, float]:
+class _BandValues(TypedDict):
+    """The band-integrated fields of :class:`RadiometryResult`."""
+
+    solar_irradiance_band_w_per_m2: float
+    radiance_surface_band_w_per_m2_sr: float
+    radiance_toa_band_w_per_m2_sr: float
+    focal_plane_irradiance_band_w_per_m2: float
+
+
+def _band_values(system: ImagingSystem, sp: dict[str, Any]) -> _BandValues:
     """The band-integrated quantities of :class:`RadiometryResult` from the spectra of :func:`_spectra`."""
     lam, band, o = sp["lam"], system.radiometry.band_m, system.optics
     l_toa_band = band_radiance(lam, sp["l_toa"], band)
