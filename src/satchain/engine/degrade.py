@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -187,7 +188,7 @@ def simulate_image(
     check_choice("units", units, OUTPUT_UNITS)
     if isinstance(source, (str, os.PathLike)):
         g.check_scales(pixel_m, input_scale, lambda k: {"scene_pixel_m": "pixel_m"}.get(k, k))
-        plan = g._plan_input(os.fspath(source), band, pixel_m, lambda k: k)
+        plan = g._plan_input(Path(source), band, pixel_m, lambda k: k)
         idx = [band] if band is not None else list(range(1, plan.count + 1))
         srcs, t, px, crs = [g._band_source(plan, b, input_scale) for b in idx], plan.transform, plan.pixel_m, plan.crs
         count, squeeze = plan.count, len(idx) == 1
@@ -204,6 +205,7 @@ def simulate_image(
         sensor = sensor_from_system(s) if (units != "reflectance" or noise) else None
         img = sim.run(src, sensor=sensor, units=units, noise=noise, seed=g._seed(seed, i))
         if units == "dn":
+            assert sensor is not None  # DN: formed by the sensor made above
             img = np.clip(np.round(img), 0, 2.0**sensor.bit_depth - 1)
         bad = g.invalid_cells(src, sim, (0, sim.output_shape[0])) if src.masked else None
         images.append(img)
