@@ -13,8 +13,9 @@ import pytest
 from scipy.special import ndtr
 from typer.testing import CliRunner
 
-from satchain._deprecate import REMOVED_IN, RENAMED, renamed_json_keys
+from satchain._deprecate import REMOVED_IN, RENAMED
 from satchain.cli.measure import measure_app
+from satchain.cli.output import renamed_json_keys
 from satchain.io.images import write_npy
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,7 +64,7 @@ def test_measure_auto_json_keeps_the_renamed_key_in_every_edge(tmp_path):
 
 def test_the_python_dicts_keep_only_the_new_names():
     """The aliases are added where the JSON is written: ``to_dict()`` stays canonical (the old attribute warns)."""
-    from satchain._deprecate import with_renamed_keys
+    from satchain.cli.output import with_renamed_keys
 
     payload = {"angle_deg": 1.0, "mtf_at_nyquist_sigma": 0.1, "slanted_edges": [{"mtf_at_nyquist_sigma": 0.2}]}
     out = with_renamed_keys("edge", payload)

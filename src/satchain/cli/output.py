@@ -10,7 +10,6 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from satchain._deprecate import with_renamed_keys
 from satchain.errors import SatchainIOError
 
 __all__ = [
@@ -23,8 +22,57 @@ __all__ = [
     "pm",
     "print_flags",
     "print_ground",
+    "renamed_json_keys",
     "wide_console",
+    "with_renamed_keys",
 ]
+
+
+def renamed_json_keys() -> dict[str, dict[str, dict[str, str]]]:
+    """JSON keys renamed in an output, written beside their new name with its value until
+    :data:`~satchain._deprecate.REMOVED_IN`: {output: {where: {old key: new key}}}. The output is the JSON file's
+    stem (``measure edge`` writes edge.json, ``measure auto`` auto.json, their ``--json`` prints the same); where is
+    ``""`` for the top level, else the key of a list whose every item carries the key (auto.json's slanted edges,
+    named by the measure layer's registry, imported when first asked for, so that ``satchain --help`` stays
+    fast)."""
+    from satchain.measure._keys import RESULT_KEY
+    from satchain.scene.targets import SlantedEdge
+
+    return {
+        "edge": {"": {"edge_angle_deg": "angle_deg", "mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
+        "auto": {RESULT_KEY[SlantedEdge.kind]: {"mtf_at_nyquist_std": "mtf_at_nyquist_sigma"}},
+    }
+
+
+def _beside(d: dict, renamed: dict[str, str]) -> dict:
+    """``d`` with each old key right after its new one (same value), where the new one is there and the old not."""
+    out: dict[str, Any] = {}
+    for key, value in d.items():
+        out[key] = value
+        for old, new in renamed.items():
+            if key == new and old not in d:
+                out[old] = value
+    return out
+
+
+def with_renamed_keys(output: str, payload: dict) -> dict:
+    """The JSON ``payload`` of ``output`` with every renamed key of :func:`renamed_json_keys` beside its new
+    name (a new dict; ``payload`` is left as it is).
+
+    Examples
+    --------
+    >>> with_renamed_keys("edge", {"angle_deg": 5.0, "mtf_at_nyquist_sigma": 0.01})
+    {'angle_deg': 5.0, 'edge_angle_deg': 5.0, 'mtf_at_nyquist_sigma': 0.01, 'mtf_at_nyquist_std': 0.01}
+    >>> with_renamed_keys("find", {"angle_deg": 5.0})
+    {'angle_deg': 5.0}
+    """
+    out = dict(payload)
+    for where, renamed in renamed_json_keys().get(output, {}).items():
+        if where == "":
+            out = _beside(out, renamed)
+        elif isinstance(out.get(where), list):
+            out[where] = [_beside(it, renamed) if isinstance(it, dict) else it for it in out[where]]
+    return out
 
 
 def wide_console() -> Console:
@@ -34,7 +82,7 @@ def wide_console() -> Console:
 
 def emit(payload: dict, as_json: bool, out: Path | None, name: str, plot, table) -> None:
     """Print (JSON or tables) and write ``out/name.json`` + the figures ``plot(out)`` returns (atomically); a
-    renamed key is written beside its new name until satchain 0.2 (:func:`satchain._deprecate.with_renamed_keys`)."""
+    renamed key is written beside its new name until satchain 0.2 (:func:`with_renamed_keys`)."""
     text = json.dumps(with_renamed_keys(name, payload), indent=2, allow_nan=False)
     written = []
     if out is not None:
