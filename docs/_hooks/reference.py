@@ -414,7 +414,10 @@ def keys_page(kind: str, title: str, intro: str, *, toml: bool = True) -> str:
                 default = "required (see above)"
             else:
                 default = ""
-            description = "; ".join(d for d in (_description(prop), _sizes(prop)) if d)
+            own = _description(prop)
+            if not own and ref is not None and ref in defs:  # a table: its model's first sentence
+                own = str(defs[ref].get("description", "")).split("\n\n", 1)[0]
+            description = "; ".join(d for d in (own, _sizes(prop)) if d)
             unit = _unit(prop) or unit_of_name(name) or ""
             out.append(
                 f"| `{key}` | {type_text} | {_cell(unit)} | {_cell(_bounds(prop))} | {_cell(default)} | "

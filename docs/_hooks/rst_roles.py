@@ -32,8 +32,12 @@ def _resolve(obj: griffe.Object, pkg: griffe.Module, name: str) -> str | None:
         return path
 
 
+_PARAM_LINE = re.compile(r"^\s*\*{0,2}[A-Za-z_][\w, *]*\s:\s")  # "name : type" of a numpydoc section
+_UNDERLINE = re.compile(r"^\s*(-{3,}|={3,})\s*$")  # a section title's underline
+
+
 def _rewrite(text: str, obj: griffe.Object, pkg: griffe.Module) -> str:
-    def one(m: re.Match[str]) -> str:
+    def one(m: re.Match[str], *, plain: bool) -> str:
         raw = m.group("target").strip()
         label_override = None
         explicit = re.fullmatch(r"(?P<label>.+?)\s*<(?P<target>[^>]+)>", raw)  # :func:`label <target>`
@@ -42,13 +46,22 @@ def _rewrite(text: str, obj: griffe.Object, pkg: griffe.Module) -> str:
         short = raw.startswith("~")
         name = raw.lstrip("~").lstrip(".").removesuffix("()")
         label = label_override or (name.rsplit(".", 1)[-1] if short else name)
+        if plain:  # a parameter's type or a section title: rendered as text, no markup
+            return label
         code = f"<code>{html.escape(label)}</code>"
         path = _resolve(obj, pkg, name)
         if path is None:
             return code
         return f'<autoref identifier="{html.escape(path)}" optional>{code}</autoref>'
 
-    return _ROLE.sub(one, text)
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
+        if ":" not in line:
+            continue
+        title = i + 1 < len(lines) and bool(_UNDERLINE.match(lines[i + 1]))
+        plain = title or bool(_PARAM_LINE.match(line))
+        lines[i] = _ROLE.sub(lambda m, plain=plain: one(m, plain=plain), line)
+    return "\n".join(lines)
 
 
 class RstRoles(griffe.Extension):
