@@ -143,15 +143,10 @@ class PushbroomTerms:
             comps[f"oscillation_{i}"] = _on_axis(osc.axis, self._pitch_mm[osc.axis], fn)
         for axis in ("act", "alt"):
             if axis in self.psd:
-                w = self.psd[axis]
-                comps[f"jitter_psd_{axis}"] = _on_axis(
-                    axis, self._pitch_mm[axis], lambda nu, w=w: jitter_psd_otf(nu, w)
-                )
+                comps[f"jitter_psd_{axis}"] = _on_axis(axis, self._pitch_mm[axis], _psd_fn(self.psd[axis]))
         for axis, (x, m, k) in self.log.items():
             if np.ptp(x) > 0:
-                comps[f"los_log_{axis}"] = _on_axis_signed(
-                    axis, self._pitch_mm[axis], lambda nu, x=x, m=m, k=k: log_otf(nu, x, m, k)
-                )
+                comps[f"los_log_{axis}"] = _on_axis_signed(axis, self._pitch_mm[axis], _log_fn(x, m, k))
         if self.drift_px is not None:
             dx, dy = self.drift_px
             px, py = self._pitch_mm["act"], self._pitch_mm["alt"]
@@ -170,8 +165,9 @@ class PushbroomTerms:
         """The motion's OTF on ``axis`` of an edge measured as imaged over the image rows ``first_line ..
         first_line + n_lines - 1`` (about a fitted polynomial of ``degree``): :func:`satchain.tf.pushbroom_roi.
         as_imaged_otf`."""
-        kw = {"first_line": first_line, "n_lines": n_lines, "about_line": about_line, "degree": degree}
-        return as_imaged_otf(self, nu_cy_per_px, axis, **kw)
+        return as_imaged_otf(
+            self, nu_cy_per_px, axis, first_line=first_line, n_lines=n_lines, about_line=about_line, degree=degree
+        )
 
     def image_affine(self, shape: tuple[int, int] | None = None, *, origin_m: tuple[float, float] = (0.0, 0.0)):
         """The mean map from ground metres (x ACT, y ALT, from the scene's origin) to image pixel coordinates
@@ -261,8 +257,8 @@ class PushbroomTerms:
             e = {k: v for k, v in self.earth.items() if k != "tdi_drift_px_per_stage"}
             out["earth_rotation"] = e
             out["alt_scale"] = e["alt_scale"] + mot.line_rate_error
-            for k in ("shear_act_px_per_line", "shear_deg", "rotation_deg"):
-                out[k] = e[k]
+            for key in ("shear_act_px_per_line", "shear_deg", "rotation_deg"):
+                out[key] = e[key]
         return out
 
 
@@ -282,6 +278,14 @@ def yaw_pivot_m(shape: tuple[int, int], gsd_m: tuple[float, float], origin_m=(0.
 
 def _osc_fn(amplitude_px: float, c: float) -> Callable[[np.ndarray], np.ndarray]:
     return lambda nu: oscillation_otf(nu, amplitude_px=amplitude_px, cycles_per_window=c)
+
+
+def _psd_fn(window: PSDWindow) -> Callable[[np.ndarray], np.ndarray]:
+    return lambda nu: jitter_psd_otf(nu, window)
+
+
+def _log_fn(x: np.ndarray, m: int, k: int) -> Callable[[np.ndarray], np.ndarray]:
+    return lambda nu: log_otf(nu, x, m, k)
 
 
 def _on_axis(axis: str, pitch_mm: float, fn: Callable[[np.ndarray], np.ndarray]):
