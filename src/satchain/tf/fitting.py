@@ -28,8 +28,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from satchain._validate import as_float_array, check_choice
-from satchain.errors import ConfigError, InputError
 from satchain.config.system import ImagingSystem
+from satchain.errors import ConfigError, InputError
 from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_budget
 
 __all__ = ["DEFAULT_BOUNDS", "MTFFit", "fit_mtf"]
@@ -172,10 +172,15 @@ def fit_mtf(
         s = system.replace(dict(zip(keys, map(float, x), strict=True)))
         return np.abs(SystemOTF(s)(*axes))
 
-    res = least_squares(lambda x: (model(x) - m) * w, x0, bounds=(lo, hi), x_scale="jac", diff_step=1e-6)
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return (model(x) - m) * w
+
+    # scipy documents diff_step as array_like (a scalar applies to every parameter); scipy-stubs allow only 1-D
+    res = least_squares(residuals, x0, bounds=(lo, hi), x_scale="jac", diff_step=1e-6)  # type: ignore[arg-type]
     fitted = system.replace(dict(zip(keys, map(float, res.x), strict=True)))
     n, p = m.size, len(keys)
-    jtj = res.jac.T @ res.jac
+    jac = np.asarray(res.jac)  # dense: the default finite-difference Jacobian
+    jtj = jac.T @ jac
     try:
         cov = np.linalg.inv(jtj)
     except np.linalg.LinAlgError:
