@@ -35,6 +35,7 @@ from satchain.prediction.wedge import PLACEMENTS_PX, WEDGE_AXES, WedgePrediction
 from satchain.scene.targets import HyperbolicWedge, SlantedEdge
 
 if TYPE_CHECKING:
+    from satchain.prediction.image_geometry import ImageGeometry
     from satchain.scene.truth import Truth
 
 __all__ = [
@@ -213,7 +214,7 @@ class Predictions:
     warnings: tuple[str, ...] = ()
     mtf2d: MTF2D | None = field(default=None, repr=False, compare=False)
     stars: Mapping[str, StarPrediction] = field(default_factory=dict)
-    geometry: Any = field(default=None, repr=False, compare=False)
+    geometry: ImageGeometry | None = field(default=None, repr=False, compare=False)
 
     def edge(self, edge_id: str, direction: str) -> EdgePrediction:
         """The prediction of edge ``edge_id``; an edge the truth does not list gets its axis ``direction``."""

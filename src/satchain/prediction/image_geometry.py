@@ -27,6 +27,8 @@ import numpy as np
 if TYPE_CHECKING:
     from affine import Affine
 
+    from satchain.tf.pushbroom import PushbroomTerms
+
 __all__ = ["ImageGeometry", "geometry_table", "run_geometry"]
 
 
@@ -42,7 +44,7 @@ class ImageGeometry:
     dx_px: np.ndarray = field(repr=False)
     dy_px: np.ndarray = field(repr=False)
     edges: dict = field(default_factory=dict, repr=False)
-    terms: object = field(default=None, repr=False, compare=False)  # the PushbroomTerms (an edge as imaged)
+    terms: PushbroomTerms | None = field(default=None, repr=False, compare=False)  # an edge as imaged
     bars: dict = field(default_factory=dict, repr=False)  # the truth's bar-target records by id (their CTF)
     background: float = 0.0  # the scene's background reflectance around the targets
 
