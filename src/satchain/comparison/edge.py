@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from satchain.comparison.sigma import edge_angle_sigma
 from satchain.comparison._common import finite, sigma_or_why, within
 from satchain.comparison.records import CheckRow, EdgeCheck
+from satchain.comparison.sigma import edge_angle_sigma
 from satchain.prediction.core import Predictions
 from satchain.tf.pushbroom_roi import rows_blur_otf
 
@@ -78,13 +78,13 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
                 if a_true is not None
                 else "measured vs the truth mapped through the image geometry"
             )
-        if a_los is not None and finite(e.get("angle_deg_expected")) is not None:
-            note += (
-                f"; the line of sight moves the rows (mean map alone: {finite(e.get('angle_deg_expected')):.3f} "
-                f"deg), so the prediction is the edge measurement's own fit (degree {int(e.get('fit_degree') or 1)}) "
-                "of the positions the line-of-sight model puts the edge at on the region's lines (the per-line "
-                "plot 'line_of_sight.png' shows them against the measured ones)"
-            )
+            if a_los is not None and finite(e.get("angle_deg_expected")) is not None:
+                note += (
+                    f"; the line of sight moves the rows (mean map alone: {finite(e.get('angle_deg_expected')):.3f} "
+                    f"deg), so the prediction is the edge measurement's own fit (degree "
+                    f"{int(e.get('fit_degree') or 1)}) of the positions the line-of-sight model puts the edge at on "
+                    "the region's lines (the per-line plot 'line_of_sight.png' shows them against the measured ones)"
+                )
         rows.append(
             CheckRow(
                 label, "edge_angle", e["id"], a, a_ref, a_err, tol.edge_angle_deg,
@@ -102,9 +102,9 @@ def _as_imaged(e: dict, p, pred: Predictions) -> dict:
     headline MTF folds in when it does not locate each line), the motion the measurement removed and the rms
     displacement the geometry predicts about a straight edge over the region's rows; {} without such a
     geometry."""
-    geo = getattr(pred, "geometry", None)
-    terms, roi = getattr(geo, "terms", None), e.get("roi_px")
-    if terms is None or roi is None or not geo.moves:
+    geo = pred.geometry
+    terms, roi = (None if geo is None else geo.terms), e.get("roi_px")
+    if geo is None or terms is None or roi is None or not geo.moves:
         return {}
     ratio, ratio_fit, ratio_rows = 1.0, 1.0, 1.0
     span = {"first_line": max(int(roi[1]), 0), "n_lines": int(roi[3]) - max(int(roi[1]), 0)}
@@ -166,7 +166,7 @@ def _alt_rows_moved(e: dict, pred: Predictions) -> list[str]:
     """``["alt_line_of_sight_motion"]`` for an ALT edge whose region's rows the line of sight displaces along its
     normal by more than 0.03 px rms (:attr:`ImageGeometry.dy_px`): each of its lines (a column) crosses many
     rows, so the rows' displacements warp the ESF's axis (a local along-track scale) where no line can show them."""
-    geo, roi = getattr(pred, "geometry", None), e.get("roi_px")
+    geo, roi = pred.geometry, e.get("roi_px")
     if geo is None or roi is None or e.get("direction") != "ALT":
         return []
     dy = np.asarray(geo.dy_px, float)[max(int(roi[1]), 0) : int(roi[3])]
@@ -212,9 +212,9 @@ def _as_imaged_note(d: dict) -> str | None:
 
 def _angle_through_rows(e: dict, pred: Predictions) -> float | None:
     """The angle the measurement should give of edge ``e`` on a pushbroom image whose rows the line of sight
-    displaces (``pred.geometry``, :class:`satchain.prediction.image_geometry.ImageGeometry`): its fit of the positions the
-    geometry predicts on the lines it measured; None without that geometry or those lines."""
-    geo = getattr(pred, "geometry", None)
+    displaces (``pred.geometry``, :class:`satchain.prediction.image_geometry.ImageGeometry`): its fit of the
+    positions the geometry predicts on the lines it measured; None without that geometry or those lines."""
+    geo = pred.geometry
     if geo is None or not geo.moves or not e.get("lines") or e.get("direction_truth", e["direction"]) != e["direction"]:
         return None  # (straight rows: the mean map's angle; an edge measured across the other axis: the same)
     fit = geo.edge_angle_deg(e["id"], e["lines"], e.get("edge_position_px"), e.get("fit_degree") or 1, e["direction"])
