@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from satchain.tf import ctf as _ctf
 from satchain.comparison._common import finite, floats, sigma_or_why, within
 from satchain.comparison.records import BarCheck, CheckRow
 from satchain.measure._keys import AT_NOISE_FLOOR
 from satchain.prediction.core import Predictions
+from satchain.tf import ctf as _ctf
 
 __all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "bar_checks"]
 
@@ -101,9 +101,9 @@ def _at_placement(b: dict, pred: Predictions, n: int) -> np.ndarray | None:
     whose line of sight moves the rows along the bars' modulation axis (the rows' displacements and their own
     blur, not the budget's expectation, are what a group a few rows tall shows); None otherwise (Coltman's CTF
     of the system MTF is compared)."""
-    geo = getattr(pred, "geometry", None)
+    geo = pred.geometry
     d = None if geo is None else geo.dy_px if str(b.get("direction", "ACT")).upper() == "ALT" else geo.dx_px
-    if d is None or float(np.ptp(np.asarray(d, float))) <= 1e-6:
+    if geo is None or d is None or float(np.ptp(np.asarray(d, float))) <= 1e-6:
         return None
     from satchain.prediction.bars import predict_bar_ctf
 
