@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from satchain.comparison.sigma import SNR_REL_SIGMA, niirs_sigma, rer_sigma_bound
 from satchain.comparison._common import finite, within
 from satchain.comparison.records import CheckRow, EdgeCheck, NiirsCheck
+from satchain.comparison.sigma import SNR_REL_SIGMA, niirs_sigma, rer_sigma_bound
 from satchain.prediction.core import Predictions
 
 __all__ = ["niirs_check"]
@@ -23,9 +23,10 @@ def _mean_rer(edges: tuple[EdgeCheck, ...], direction: str) -> float | None:
 def _mean_rer_sigma(edges: tuple[EdgeCheck, ...], direction: str) -> float | None:
     """1-sigma of the mean RER of the edges along ``direction`` (independent noise per edge)."""
     sig = [rer_sigma_bound(e.f_cy_per_px, e.mtf_sigma) for e in edges if e.direction == direction and e.rer_measured]
-    if not sig or any(v is None for v in sig):
+    known = [v for v in sig if v is not None]
+    if not sig or len(known) < len(sig):
         return None
-    return float(np.sqrt(np.sum(np.square(sig))) / len(sig))
+    return float(np.sqrt(np.sum(np.square(known))) / len(known))
 
 
 def _niirs_sigma(r_act: float, r_alt: float, snr_m: float, snr_sigma: float | None, edges: tuple[EdgeCheck, ...],
@@ -60,7 +61,8 @@ def niirs_check(
     snr_m = finite(snr.get("snr"))
     rer_m = giqe5_rer(r_act, r_alt) if r_act and r_alt else None
     snr_sig, note = _snr_sigma(snr)
-    niirs_m, why, sig = None, None, (None, "no error (the check is n/a)")
+    niirs_m, why = None, None
+    sig: tuple[float | None, str | None] = (None, "no error (the check is n/a)")
     if rer_m is None:
         why = "needs a measured RER from both an ACT and an ALT edge"
     elif snr_m is None or snr_m <= 0:
@@ -68,6 +70,7 @@ def niirs_check(
     else:
         gsd_in = float(units.m_to_inches(pred.gsd_los_m))
         niirs_m = giqe5(gsd_in=gsd_in, rer=rer_m, snr=snr_m, elevation_deg=pred.elevation_deg)
+        assert r_act is not None and r_alt is not None  # rer_m is made of both
         sig = _niirs_sigma(r_act, r_alt, snr_m, snr_sig, edges, gsd_in, pred.elevation_deg)
     pr = finite(pred.giqe5)
     err = None if niirs_m is None or pr is None else niirs_m - pr
