@@ -5,8 +5,8 @@ container :class:`Comparison`, with the texts the terminal table prints."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import Field, dataclass, field, fields
+from typing import Any, ClassVar
 
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
@@ -115,6 +115,8 @@ class _Detail:
     """Per-target detail: ``to_dict()`` gives the results.json entry (``passed`` is written ``pass``). Each has an
     ``as_built`` entry, written only for a run simulated as built: its predicted quantities (and errors, pass) for
     the camera as built (:func:`satchain.comparison.as_built.with_as_built`)."""
+
+    __dataclass_fields__: ClassVar[dict[str, Field[Any]]]  # (type only) every subclass is a dataclass
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]):
@@ -393,6 +395,7 @@ def row_texts(r: CheckRow) -> dict[str, str]:
     verdict = "n/a" if r.passed is None else ("pass" if r.passed else "FAIL")
     if r.tolerance_inside_noise:
         verdict += " (tolerance inside noise)"
+    as_built = r.as_built or {}
     return {
         "measured": num(r.measured),
         "predicted": num(r.predicted),
@@ -401,6 +404,6 @@ def row_texts(r: CheckRow) -> dict[str, str]:
         "z": "-" if r.z is None else f"{r.z:+.2f}",
         "tolerance": r.tolerance_text,
         "result": verdict,
-        "predicted as built": num((r.as_built or {}).get("predicted")),
-        "z as built": "-" if (r.as_built or {}).get("z") is None else f"{r.as_built['z']:+.2f}",
+        "predicted as built": num(as_built.get("predicted")),
+        "z as built": "-" if as_built.get("z") is None else f"{as_built['z']:+.2f}",
     }
