@@ -112,11 +112,11 @@ def _star_detail(st: dict, pred: Predictions, tol: Any) -> tuple[dict[str, Any],
     f = np.asarray(st["f_cy_per_px"], float)
     stds = st.get("mtf_std") or {}
     sp = pred.stars.get(str(st["id"]))
-    use = sp is not None and sp.reason is None
+    own = sp if sp is not None and sp.reason is None else None  # the star's own predicted image, when made
     per_dir = {}
     for d, curve in st.get("mtf", {}).items():
         model = np.asarray(pred.mtf_along[d.upper()](f), float)
-        per_dir[d] = _star_direction(f, curve, stds.get(d), sp.mtf_at(d, f) if use else model, model)
+        per_dir[d] = _star_direction(f, curve, stds.get(d), own.mtf_at(d, f) if own is not None else model, model)
     sigmas = np.concatenate([v.pop("_sigmas") for v in per_dir.values()] or [np.zeros(0)])
     done = {d: v for d, v in per_dir.items() if v["max_abs_error_to_nyquist"] is not None}
     wd = max(done, key=lambda d: done[d]["max_abs_error_to_nyquist"]) if done else None
