@@ -38,7 +38,6 @@ maximum of noise); the star's sigma is that of its maximum.
 
 from __future__ import annotations
 
-from satchain.comparison.sigma import SNR_REL_SIGMA, edge_angle_sigma_deg
 from satchain.comparison._common import PREDICTION_SIGMA_NOTE
 from satchain.comparison.bars import BAR_COMPARE_MAX_CY_PER_PX
 from satchain.comparison.core import CHECKS, TargetChecks, compare
@@ -55,6 +54,7 @@ from satchain.comparison.records import (
     row_texts,
     signed_text,
 )
+from satchain.comparison.sigma import SNR_REL_SIGMA, edge_angle_sigma_deg
 from satchain.comparison.star import STAR_F_MIN_CY_PER_PX, max_error_sigma
 
 __all__ = [
