@@ -127,3 +127,13 @@ def test_non_finite_or_float32_overflowing_input_is_refused(value, match):
     a[350, 5] = value
     with pytest.raises(InputError, match=match):
         simulate(a, load_preset("ankarasat3"), pixel_m=0.035)
+
+
+@pytest.mark.parametrize("window", [(2, 2, 0, 3), (2, 2, 3, 0), (-2, 2, 0, 3), (12, 12, 0, 0)])
+@pytest.mark.parametrize("rule", ["symmetric", "constant"])
+def test_an_empty_window_reads_as_an_empty_array_of_its_shape(window, rule):
+    """A window of height or width 0, inside the source or not, is an empty array of that shape (inside the
+    source it once failed on the block it never read)."""
+    src = ArraySource(np.arange(100.0).reshape(10, 10), pixel_m=1.0)
+    out = read_with_border(src, Window(*window), rule=rule)
+    assert out.shape == (window[2], window[3]) and out.dtype == np.float64

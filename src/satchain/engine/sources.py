@@ -295,7 +295,8 @@ class BorderedWindow:
         if self._whole is not None:
             return self._whole[a:b]
         if self.inside:
-            assert self.block is not None  # inside the source: read (an empty window has none and failed here before)
+            if self.block is None:  # an empty window (height or width 0) inside the source: nothing to read
+                return np.empty((b - a, self.shape[1]), self.dtype)
             with np.errstate(over="ignore"):
                 return np.asarray(self.block[a:b], dtype=self.dtype)
         out = (
