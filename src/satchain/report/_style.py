@@ -8,6 +8,7 @@ with the data, from the labels' strings measured with the font (no figure drawn)
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import matplotlib
 from matplotlib.figure import Figure
@@ -28,6 +29,16 @@ __all__ = [
 _LINE_EM = 1.2
 #: Slack added to every margin so that a label never touches the figure's edge, points.
 _SLACK_PT = 3.0
+#: The ``rcParams`` keys of the font sizes the layouts read.
+FontSizeKey = Literal[
+    "font.size",
+    "axes.labelsize",
+    "axes.titlesize",
+    "figure.titlesize",
+    "legend.fontsize",
+    "xtick.labelsize",
+    "ytick.labelsize",
+]
 
 
 def grid_axes(fig: Figure, rows: list[tuple[float, float]], cols: list[tuple[float, float]], *, left: float,
@@ -48,14 +59,14 @@ def grid_axes(fig: Figure, rows: list[tuple[float, float]], cols: list[tuple[flo
     return out
 
 
-def _pt(key: str) -> float:
+def _pt(key: FontSizeKey) -> float:
     """A font size of ``rcParams`` in points (named sizes such as "large" resolved)."""
     from matplotlib.font_manager import FontProperties
 
     return FontProperties(size=matplotlib.rcParams[key]).get_size_in_points()
 
 
-def text_height_in(key: str = "font.size", lines: int = 1) -> float:
+def text_height_in(key: FontSizeKey = "font.size", lines: int = 1) -> float:
     """Height (in) of ``lines`` lines of text at the ``rcParams`` font size ``key``."""
     return lines * _LINE_EM * _pt(key) / 72
 
@@ -75,7 +86,7 @@ def title_band_in(lines: int = 1) -> float:
     return (matplotlib.rcParams["axes.titlepad"] + _SLACK_PT) / 72 + text_height_in("axes.titlesize", lines)
 
 
-def legend_height_in(rows: int, key: str = "legend.fontsize") -> float:
+def legend_height_in(rows: int, key: FontSizeKey = "legend.fontsize") -> float:
     """Height (in) of a legend of ``rows`` rows with its frame (matplotlib's default spacings: 0.3 + 1.5 em a
     row) and the pad between it and what it is anchored to."""
     return (0.3 + 1.5 * rows + matplotlib.rcParams["legend.borderaxespad"]) * _pt(key) / 72
