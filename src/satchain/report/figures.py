@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -11,9 +12,12 @@ from satchain.report._save import save_figure
 from satchain.report._style import axis_band_in, legend_height_in, place_grid, text_height_in, title_band_in
 from satchain.report.compare_plots import with_rc
 
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
 __all__ = ["plot_mtf_budget", "plot_square_wave"]
 
-_STYLE = {
+_STYLE: dict[str, dict[str, Any]] = {
     "diffraction": dict(color="tab:orange"),
     "detector": dict(color="tab:green"),
     "smear": dict(color="tab:purple"),
@@ -56,7 +60,7 @@ def plot_mtf_budget(budget, path: str | Path, *, ctf: dict | None = None, title:
         ax.set_title(f"{d.upper()} ({'along-track, f_y' if d == 'alt' else 'across-track, f_x'})")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("modulation")
-    handles, labels = {}, {}
+    handles: dict[str, Artist] = {}
     for ax in axes:  # one legend for both panels, below them (the ACT panel lacks the smear)
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(lab, h)
