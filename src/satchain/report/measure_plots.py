@@ -18,6 +18,7 @@ True
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -26,7 +27,7 @@ from satchain.report._save import save_figure
 
 __all__ = ["plot_bars", "plot_edge", "plot_jitter", "plot_star", "plot_wedge"]
 
-_DIRECTION_STYLE = {
+_DIRECTION_STYLE: dict[str, dict[str, Any]] = {
     "ACT": dict(color="tab:blue"),
     "ALT": dict(color="tab:red"),
     "D45": dict(color="tab:green", linestyle="--"),
