@@ -183,8 +183,8 @@ def edge_line_points(it: dict, m: dict, v: OverlayView, n: int = 24) -> list[tup
     a = m.get("angle_deg")
     if a is None or "edge_point_m" not in it:
         return []
-    t = math.radians(float(a))
-    d = (math.sin(t), math.cos(t)) if str(it.get("measures")).lower() == "act" else (math.cos(t), math.sin(t))
+    rad = math.radians(float(a))
+    d = (math.sin(rad), math.cos(rad)) if str(it.get("measures")).lower() == "act" else (math.cos(rad), math.sin(rad))
     cx, cy = it["edge_point_m"]
     half = 0.5 * float(it.get("size_m", 10.0))
     return [v.ground(cx - half * d[0], cy - half * d[1]), v.ground(cx + half * d[0], cy + half * d[1])]
