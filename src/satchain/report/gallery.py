@@ -15,7 +15,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Polygon, Rectangle
+from matplotlib.patches import Patch, Polygon, Rectangle
 
 from satchain.io.images import PNG_COMPRESS_LEVEL
 from satchain.report._save import save_figure
@@ -71,7 +71,7 @@ def plot_image_with_rois(ctx, path: Path) -> None:
     draw_image_with_rois(*image_rois_args(ctx), path)
 
 
-def image_rois_args(ctx) -> tuple:
+def image_rois_args(ctx) -> tuple[np.ndarray, float, dict, list[dict]]:
     """The plain data :func:`draw_image_with_rois` needs (a job for a helper process). Under a pushbroom image
     map (``ctx.image_affine``: shear, along-track scale, yaw) each item carries ``outline_m``, its box's corners
     where the image has them (image metres: pixel ``(col, row)`` spans ``[col, col + 1] x gsd``)."""
@@ -93,7 +93,7 @@ def _corners_m(box) -> list[tuple[float, float]]:
     return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
 
 
-def _item_shape(it: dict, **kw) -> tuple[float, float, object]:
+def _item_shape(it: dict, **kw) -> tuple[float, float, Patch]:
     """An item's box where the image has it (``outline_m``, else ``bbox_m``): its top-left (m) and its patch."""
     outline = it.get("outline_m")
     if outline:
@@ -252,7 +252,8 @@ def panel_maps(ctx) -> dict:
     gsd = float(ctx.image_gsd_m)
     out["detector"] = Affine.scale(gsd) @ Affine.translation(0.5, 0.5) @ geo
     sim = getattr(ctx, "simulator", None)
-    if sim is not None and getattr(sim, "yaw_deg", 0.0):
+    yaw_deg: float = getattr(sim, "yaw_deg", 0.0)
+    if sim is not None and yaw_deg:
         from satchain.engine.yaw import grid_origin_m
         from satchain.measure.auto import truth_origin_m
         from satchain.tf.pushbroom import yaw_pivot_m
