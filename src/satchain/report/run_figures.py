@@ -5,6 +5,7 @@ predicted comparisons (:mod:`satchain.report.compare_plots`). matplotlib's objec
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -68,7 +69,9 @@ def plot_target_chain(ctx, item: dict, path: Path) -> None:
     draw_target_chain(*target_chain_args(ctx, item), path)
 
 
-def target_chain_args(ctx, item: dict) -> tuple:
+def target_chain_args(
+    ctx, item: dict
+) -> tuple[Any, dict, float, int, float, tuple[np.ndarray, tuple], tuple[np.ndarray, tuple]]:
     """The plain data :func:`draw_target_chain` needs (a job for a helper process): the scene (rendered there),
     the focal-plane and detector crops."""
     from satchain.report.gallery import _scene, mapped_box, panel_maps
