@@ -140,6 +140,7 @@ class FigureJobs:
 
     def _feed(self, p: subprocess.Popen) -> None:
         """Hand the helper ``p`` one pickled call at a time from the front of the queue, until it is closed."""
+        assert p.stdin is not None and p.stdout is not None  # launched with pipes
         try:
             while (i := self._take(front=True)) is not None:
                 try:
@@ -171,6 +172,7 @@ class FigureJobs:
         self._close()
         if not self._feeders:  # launched, given nothing: let them exit
             for p in self._procs:
+                assert p.stdin is not None  # launched with pipes
                 with contextlib.suppress(OSError):
                     p.stdin.close()
         while True:
@@ -186,6 +188,7 @@ class FigureJobs:
                 break
         procs, self._procs, self._feeders = self._procs, [], []
         for p in procs:
+            assert p.stderr is not None  # launched with pipes
             with contextlib.suppress(OSError):
                 p.stderr.read()  # a helper's error: its call was drawn here instead (above)
             p.wait()
