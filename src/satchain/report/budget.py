@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from satchain.tf import ctf as _ctf
 from satchain import units
 from satchain.config.system import ImagingSystem
+from satchain.tf import ctf as _ctf
 from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_at_nyquist, mtf_budget, mtfa
 
 __all__ = ["DirectionalMTF", "budget_results", "square_wave_figure_data", "write_budget_outputs"]
@@ -67,7 +67,8 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
         fmm = units.cy_per_px_to_cy_per_mm(fpx, pitch_m=_pitch(system, d))
         out["mtfa"][d] = mtfa(fpx, m(fmm), f_max_cy_per_px=0.5)
     out["mtf_at_nyquist"] = mtf_at_nyquist(system, otf=otf)
-    geometry = otf.pushbroom.geometry() if getattr(otf, "pushbroom", None) is not None else None
+    pb = getattr(otf, "pushbroom", None)
+    geometry = pb.geometry() if pb is not None else None
     if geometry is not None:
         out["motion_geometry"] = geometry  # line displacement, TDI drift, Earth-rotation shear/scale/rotation
     from satchain.prediction.quality import predict_quality
