@@ -19,11 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from satchain.tf import ctf as _ctf
 from satchain import units
 from satchain.prediction.core import WIDE_COMPONENTS
 from satchain.report._save import write_text
 from satchain.report.kinds import BARS, EDGES, STARS, WEDGES
+from satchain.tf import ctf as _ctf
 
 __all__ = ["CSV_FAMILIES", "build_curves", "crossing", "edge_curves", "predicted_lsf", "write_curves"]
 
@@ -312,13 +312,14 @@ def _star_columns(stars: list[dict]) -> tuple[list[str], list[list], str]:
 
 
 def _bars_columns(bars: list[dict]) -> tuple[list[str], list[list], str]:
-    rows = [[] for _ in range(14)]
+    rows: list[list] = [[] for _ in range(14)]
     for br in bars:
         f = list(br.get("f_cy_per_px", []))
         lim = br.get("compared_up_to_cy_per_px", 0.2)
         n = len(f)
-        groups = br.get("group") if len(br.get("group") or []) == n else list(range(n))
-        floor = br.get("at_noise_floor") if len(br.get("at_noise_floor") or []) == n else _rep(None, n)
+        given, flagged = br.get("group") or [], br.get("at_noise_floor") or []
+        groups = given if len(given) == n else list(range(n))
+        floor = flagged if len(flagged) == n else _rep(None, n)
         ab = (br.get("as_built") or {}).get("ctf_coltman_predicted")
         vals = (
             _rep(br["id"], n),
