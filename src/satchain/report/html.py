@@ -155,7 +155,8 @@ def _bar_rows(b: dict) -> list[dict]:
 
     raw, meas, corr, std, pred = (col(k) for k in ("ctf_raw_measured", "ctf_measured", "ctf_correction",
                                                      "ctf_std_measured", "ctf_coltman_predicted"))  # fmt: skip
-    groups = b.get("group") if len(b.get("group") or []) == n else list(range(n))  # the design's numbers
+    given = b.get("group") or []
+    groups = given if len(given) == n else list(range(n))  # the design's numbers
     floor = col("at_noise_floor")
     ab = (b.get("as_built") or {}).get("ctf_coltman_predicted") or []
     ab = ab if len(ab) == n else [None] * n
