@@ -34,9 +34,10 @@ from satchain.results import BudgetResult, Measurements, RunResult, SceneResult,
 
 if TYPE_CHECKING:
     from satchain.comparison import Comparison
-    from satchain.prediction.core import Predictions
     from satchain.config.run import RunConfig
     from satchain.config.system import ImagingSystem
+    from satchain.prediction.core import Predictions
+    from satchain.report.truth_crops import TruthCrops
 
 __all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
@@ -158,7 +159,7 @@ def _image_affine(system: ImagingSystem, truth: dict, shape: tuple[int, int]):
     if not terms.active:
         return None
     ox, oy = truth_origin_m(truth)
-    return terms.image_affine(tuple(shape)) @ Affine.translation(-ox, -oy)
+    return terms.image_affine((shape[0], shape[1])) @ Affine.translation(-ox, -oy)
 
 
 def _stage_compare(config: RunConfig, budget: BudgetResult, scene: SceneResult, sim: SimulationResult,
@@ -189,8 +190,8 @@ def _predict(config: RunConfig, budget: BudgetResult, truth, sim: SimulationResu
     """The predictions, with the simulated image's geometry row by row when its system moves the line of sight
     in time (:func:`satchain.prediction.image_geometry.run_geometry`: the edges' angles are predicted through it, the
     wedges' widths in metres on the image's own ground steps, an along-track scale included)."""
-    from satchain.prediction.image_geometry import run_geometry
     from satchain.prediction.core import predict
+    from satchain.prediction.image_geometry import run_geometry
 
     truth_d = truth if isinstance(truth, dict) else truth.to_dict()
     geo = run_geometry(sim.system or budget.system, truth_d, sim.simulator, sim.image.shape)
@@ -320,7 +321,7 @@ class _EarlyFigures:
         self.config, self.out, self.jobs = config, out, jobs
         self.thumbnails: list[tuple[dict, tuple, int]] = []  # (item, box, job of its ground-truth panel)
         self.measured = False  # the measured figures handed over
-        self.crops = None  # the thumbnails' ground truth, kept as the simulation renders it
+        self.crops: TruthCrops | None = None  # the thumbnails' ground truth, kept as the simulation renders it
         self.edges: list[dict] | None = None  # results.json's edges, their figures handed over
         self.edge_curves: list[dict] | None = None
 
@@ -413,13 +414,13 @@ def write_run_directory(
     """Write every output of ``result`` but the manifest into the (new, staging) directory ``out``; ``jobs``: a
     :class:`satchain.report._jobs.FigureJobs` already launched (its helpers warm), else one made here; ``early``:
     the outputs already handed to it while the run computed (:class:`_EarlyFigures`), else handed here."""
+    from satchain.config.run import config_to_toml
     from satchain.report import curves, html, run_figures
     from satchain.report._jobs import FigureJobs
     from satchain.report._save import write_text
     from satchain.report.gallery import assemble_thumbnail, thumbnail_crops
     from satchain.report.kinds import EDGES
     from satchain.report.summary_csv import write_summary_csv
-    from satchain.config.run import config_to_toml
 
     report = progress or (lambda stage, done, total: None)
     results = result.to_json_dict()
@@ -518,8 +519,8 @@ def run_to_directory(config: RunConfig, out_dir: str | Path, *, progress: Progre
     Interrupted (Ctrl-C, or SIGTERM, which raises :class:`satchain._safety.Interrupted` while this runs), failed
     or not, the staging folder is removed and a previous ``out_dir`` is left as it was.
     """
-    from satchain.io.runfolder import swap_in, written_files
     from satchain._safety import terminate_as_interrupt
+    from satchain.io.runfolder import swap_in, written_files
 
     out = Path(out_dir).resolve()
     _check_out_dir(out)
