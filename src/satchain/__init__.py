@@ -121,7 +121,8 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.api import RunResult, run  # noqa: F401
     from satchain.comparison import CheckRow, Comparison, compare  # noqa: F401
-    from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
+    from satchain.config.run import RunConfig, Tolerances, load_run_config  # noqa: F401
+    from satchain.config.system import ImagingSystem, load_preset, load_system  # noqa: F401
     from satchain.engine.simulate import simulate  # noqa: F401
     from satchain.geometry import Rect  # noqa: F401
     from satchain.measure.auto import measure_auto  # noqa: F401
@@ -134,8 +135,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.wedge import measure_wedge  # noqa: F401
     from satchain.prediction.core import Predictions, predict  # noqa: F401
     from satchain.prediction.quality import predict_quality  # noqa: F401
-    from satchain.config.run import RunConfig, Tolerances, load_run_config  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
-    from satchain.config.system import ImagingSystem, load_preset, load_system  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401
+    from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401

@@ -19,6 +19,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from satchain.config.run import RunConfig
 from satchain.results import (
     NULL_MEANING,
     RESULTS_FORMAT_VERSION,
@@ -29,7 +30,6 @@ from satchain.results import (
     SimulationResult,
     strict_json,
 )
-from satchain.config.run import RunConfig
 
 __all__ = [
     "NULL_MEANING",
@@ -51,8 +51,8 @@ def as_run_config(config: RunConfig | Mapping[str, Any] | str | Path | None) -> 
     """A RunConfig from a RunConfig, a dict (as in the TOML), a TOML path, or None (the defaults)."""
     import os
 
-    from satchain.errors import ParameterTypeError
     from satchain.config.run import load_run_config
+    from satchain.errors import ParameterTypeError
 
     if isinstance(config, RunConfig):
         return config

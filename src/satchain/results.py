@@ -26,15 +26,15 @@ import numpy as np
 
 if TYPE_CHECKING:
     from satchain.comparison import Comparison
+    from satchain.config.run import RunConfig
+    from satchain.config.system import ImagingSystem
     from satchain.engine.sensor import SensorModel
     from satchain.engine.simulate import Simulator
     from satchain.measure.auto import AutoResult
     from satchain.measure.snr import SnrResult
     from satchain.prediction.core import Predictions
-    from satchain.config.run import RunConfig
     from satchain.scene import ImageScene, Scene
     from satchain.scene.truth import Truth
-    from satchain.config.system import ImagingSystem
     from satchain.tf.budget import SystemOTF
 
 __all__ = [
