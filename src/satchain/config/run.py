@@ -13,9 +13,9 @@ from typing import Any, Literal
 from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from satchain.config._base import refuse_unknown_keys
-from satchain.errors import ConfigError, SatchainIOError
 from satchain.config.sections import _StrictNumbers
 from satchain.config.system import ImagingSystem, _config_error, load_preset
+from satchain.errors import ConfigError, SatchainIOError
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -267,8 +267,8 @@ def results_schema() -> dict[str, Any]:
         WedgeCheck,
         result_key,
     )
-    from satchain.results import RESULTS_FORMAT_VERSION
     from satchain.config.run import Tolerances
+    from satchain.results import RESULTS_FORMAT_VERSION
     from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
     num, opt_num = {"type": "number"}, {"type": ["number", "null"]}

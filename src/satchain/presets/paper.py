@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from satchain.errors import SatchainIOError
 from satchain.config.system import ImagingSystem, load_preset
+from satchain.errors import SatchainIOError
 
 __all__ = ["FITTED_PARAMETERS", "Table1", "fit_table1", "read_table1"]
 
