@@ -2,19 +2,18 @@
 
 Two stages (see :mod:`satchain.engine.spectral`):
 
-1. **decimate** -- the ground truth is read tile by tile (rendered on the fly for scenes), each tile with a
-   short margin, low-passed by a filter that is exactly 1 on the optical band and decimated by ``D`` onto
-   a coarse grid. This is the only stage that touches the fine grid; memory is bounded by one tile, and the
-   tiles are independent (they run in parallel on Dask, :mod:`satchain.engine.distributed`).
-2. **form** -- the coarse frame (extended by ``far_margin_px`` output pixels on every side by the border rule)
-   is transformed once; the full system OTF (all components but the detector aperture) and the exact
-   detector footprint averaging are applied in frequency and evaluated at the output pixels. The PSF's
-   long tails (the obscured Airy pattern's energy beyond radius R falls only as 1/R) are thus never cut at
-   a tile seam.
+1. **decimate** -- the ground truth is read tile by tile (rendered on the fly for scenes), each tile with a short
+   margin, low-passed by a filter that is exactly 1 on the optical band and decimated by ``D`` onto a coarse grid.
+   This is the only stage that touches the fine grid; memory is bounded by one tile, and the tiles are independent
+   (they run in parallel on Dask, :mod:`satchain.engine.distributed`).
+2. **form** -- the coarse frame (extended by ``far_margin_px`` output pixels on every side by the border rule) is
+   transformed once; the full system OTF (all components but the detector aperture) and the exact detector footprint
+   averaging are applied in frequency and evaluated at the output pixels. The PSF's long tails (the obscured Airy
+   pattern's energy beyond radius R falls only as 1/R) are thus never cut at a tile seam.
 
-The result equals a full-frame FFT convolution of the ground truth with the same OTF followed by footprint
-integration, within ~1e-6, for every output pixel farther than ``far_margin_px`` from the ground truth's
-edge. Closer to the edge the ground truth is continued by the border rule (mirror by default).
+The result equals a full-frame FFT convolution of the ground truth with the same OTF followed by footprint integration,
+within ~1e-6, for every output pixel farther than ``far_margin_px`` from the ground truth's edge. Closer to the edge
+the ground truth is continued by the border rule (mirror by default).
 """
 
 from __future__ import annotations
@@ -22,7 +21,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,11 +30,9 @@ from satchain.engine import spectral
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
 from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
+from satchain.engine.timepath import TimePath, form_rows, time_path
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.tf.budget import SystemOTF
-
-if TYPE_CHECKING:
-    from satchain.engine.timepath import TimePath
 
 __all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
 
@@ -152,18 +148,9 @@ class Simulator:
         self.system, self.params, self.input_pixel_m = system, params, a
         self.input_shape = (int(input_shape[0]), int(input_shape[1]))
         det = system.detector
-        self.ys = AxisSampling(
-            system.gsd_alt_m / a,
-            det.active_width_y_m / det.pitch_y_m,
-            params.phase_px[0],
-            self.input_shape[0],
-        )
-        self.xs = AxisSampling(
-            system.gsd_act_m / a,
-            det.active_width_x_m / det.pitch_x_m,
-            params.phase_px[1],
-            self.input_shape[1],
-        )
+        ny, nx = self.input_shape
+        self.ys = AxisSampling(system.gsd_alt_m / a, det.active_width_y_m / det.pitch_y_m, params.phase_px[0], ny)
+        self.xs = AxisSampling(system.gsd_act_m / a, det.active_width_x_m / det.pitch_x_m, params.phase_px[1], nx)
         if self.ys.n_output < 1 or self.xs.n_output < 1:
             raise ConfigError(
                 f"input_shape = {self.input_shape!r} at input_pixel_m = {a!r}: smaller than one detector pixel "
@@ -184,8 +171,6 @@ class Simulator:
         self._plan_decimation()
         self._plan_frame()
         if has_pushbroom_motion(system):  # rows formed in time along the line of sight (engine.timepath)
-            from satchain.engine.timepath import time_path
-
             self.set_time_path(time_path(system, self.output_shape[0], seed=motion_seed))
 
     def set_time_path(self, path) -> None:
@@ -489,7 +474,6 @@ class Simulator:
 
     def _form_moving(self, vals, spec, start, rows, cols) -> np.ndarray:
         """:meth:`form_spectrum`'s matrix evaluation with every row moved along the time path (unscaled)."""
-        from satchain.engine.timepath import form_rows
 
         D = self.D
         ny_f, nx_f = spec.shape[0] * D, spec.shape[1] * D
