@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -17,6 +18,36 @@ __all__: list[str] = []
 
 #: A model validator's message that starts with the name of one of its fields ("qe[1] = 1.2: ...").
 _NAMES_A_FIELD = re.compile(r"[a-z_][a-z0-9_]*(\[\d+\])? (=|has) ")
+
+
+def schema_bounds(
+    *, number: dict[str, float] | None = None, items: dict[str, float] | None = None
+) -> Callable[[dict[str, Any]], None]:
+    """A ``json_schema_extra`` that writes bounds a validator enforces into a field's JSON Schema (validation and
+    its messages are unchanged): ``number`` on a plain number (``qe = 0.8``), ``items`` on every element of an
+    array (``wavelengths_m``, ``band_m``) or value of a table (``zernike_rms_waves``), in each alternative of an
+    ``anyOf`` (``float | tuple[float, ...] | None``).
+
+    Examples
+    --------
+    >>> s = {"anyOf": [{"type": "array", "items": {"type": "number"}}, {"type": "null"}]}
+    >>> schema_bounds(items={"minimum": 0})(s); s["anyOf"][0]["items"]
+    {'type': 'number', 'minimum': 0}
+    """
+
+    def extra(s: dict[str, Any]) -> None:
+        for alt in (s, *s.get("anyOf", ())):
+            kind = alt.get("type")
+            if kind == "number" and number:
+                alt.update(number)
+            elif kind == "array" and items:
+                for element in (alt.get("items"), *alt.get("prefixItems", ())):
+                    if isinstance(element, dict):
+                        element.update(items)
+            elif kind == "object" and items and isinstance(alt.get("additionalProperties"), dict):
+                alt["additionalProperties"].update(items)
+
+    return extra
 
 
 def _number_kinds(annotation: Any) -> tuple[bool, bool]:

@@ -17,6 +17,7 @@ from satchain.config._base import (  # noqa: F401  (re-exported: other modules i
     _not_a_number,
     _number_kinds,
     _StrictNumbers,
+    schema_bounds,
 )
 from satchain.config.sections_motion import JitterPSD, LineOfSightLog, Oscillation, as_tables, check_earth_rotation
 
@@ -51,14 +52,40 @@ class Orbit(_Frozen):
     the foreshortening ``1 / cos(incidence)``.
     """
 
-    altitude_m: float = Field(gt=0, le=1e8, description="height above the ground, m")
-    off_nadir_deg: float = Field(default=0.0, ge=0, lt=90, description="look angle across-track at the satellite")
+    altitude_m: float = Field(
+        gt=0, le=1e8, description="height above the ground, m, of the circular orbit: sets the range, GSD and ground speed"
+    )
+    off_nadir_deg: float = Field(
+        default=0.0,
+        ge=0,
+        lt=90,
+        description="look angle across-track at the satellite (a roll): slant range, foreshortened ACT GSD, GIQE "
+        "elevation; must stay below the Earth's limb seen from altitude_m",
+    )
     # --- the Earth's rotation under a pushbroom scan (satchain.config.sections_motion, README "Pushbroom TDI motion")
-    latitude_deg: float | None = Field(default=None, ge=-90, le=90, description="latitude of the scene")
-    inclination_deg: float | None = Field(default=None, ge=0, le=180, description="orbit inclination")
-    earth_rotation: bool = Field(default=False, description="the ground moves east under the satellite")
-    yaw_steering: bool = Field(default=False, description="detector line kept across the ground's relative motion")
-    pass_direction: Literal["descending", "ascending"] = "descending"
+    latitude_deg: float | None = Field(
+        default=None,
+        ge=-90,
+        le=90,
+        description="latitude of the scene: the Earth's surface speed and the ground track's heading under "
+        "earth_rotation; within what the orbit reaches, |latitude| <= min(i, 180 - i)",
+    )
+    inclination_deg: float | None = Field(
+        default=None, ge=0, le=180, description="orbit inclination i: the ground track's heading under earth_rotation"
+    )
+    earth_rotation: bool = Field(
+        default=False,
+        description="the ground moves east under the satellite during the scan (a shear and a line-rate mismatch of "
+        "the pushbroom image); needs latitude_deg and inclination_deg",
+    )
+    yaw_steering: bool = Field(
+        default=False,
+        description="the detector line is turned to stay across the ground's relative motion (needs earth_rotation)",
+    )
+    pass_direction: Literal["descending", "ascending"] = Field(
+        default="descending",
+        description="'descending' (southbound) or 'ascending' (northbound) pass: the sign of the Earth-rotation shear",
+    )
 
     @model_validator(mode="after")
     def _below_horizon(self) -> Orbit:
@@ -104,8 +131,10 @@ class Orbit(_Frozen):
 class Spiders(_Frozen):
     """Secondary-mirror support vanes: ``count`` straight vanes of ``width_m`` through the pupil centre."""
 
-    count: int = Field(ge=0, le=16)
-    width_m: float = Field(gt=0)
+    count: int = Field(
+        ge=0, le=16, description="number of straight radial vanes, equally spaced by 360 / count deg (count); 0: none"
+    )
+    width_m: float = Field(gt=0, description="width of each vane; must be < optics.aperture_diameter_m")
     angle_deg: float = Field(default=0.0, ge=-360, le=360, description="angle of the first vane from +x (ACT)")
 
 
@@ -128,25 +157,79 @@ class Optics(_Frozen):
     satchain's convention.
     """
 
-    aperture_diameter_m: float = Field(gt=0, le=100)
-    focal_length_m: float = Field(gt=0, le=1e3)
-    f_number: float = Field(gt=0, le=1e3)
-    obscuration_ratio: float = Field(default=0.0, ge=0, lt=1, description="central obscuration diameter ratio")
-    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="wavelengths for the polychromatic MTF")
-    wavelength_weights: tuple[float, ...] | None = None
-    transmission: float = Field(default=1.0, gt=0, le=1)
-    wfe_rms_waves: float = Field(default=0.0, ge=0, le=0.25, description="random wavefront error, rms waves")
+    aperture_diameter_m: float = Field(
+        gt=0,
+        le=100,
+        description="entrance-pupil (primary mirror) diameter D: with the wavelength it sets the diffraction blur, "
+        "with the F# the light collected",
+    )
+    focal_length_m: float = Field(
+        gt=0,
+        le=1e3,
+        description="effective focal length f = F# D: with the pixel pitch and the range it sets the GSD; give it "
+        "or f_number (both: they must agree within 0.1 %)",
+    )
+    f_number: float = Field(
+        gt=0,
+        le=1e3,
+        description="focal ratio F# = focal_length_m / aperture_diameter_m (dimensionless): the optical cutoff "
+        "1 / (lambda F#) and the focal-plane irradiance; give it or focal_length_m",
+    )
+    obscuration_ratio: float = Field(
+        default=0.0,
+        ge=0,
+        lt=1,
+        description="central obscuration diameter ratio (secondary mirror / aperture, dimensionless): an annular "
+        "pupil; blocks ratio^2 of its area",
+    )
+    wavelengths_m: tuple[float, ...] = Field(
+        min_length=1,
+        description="wavelengths at which the diffraction OTF is evaluated and summed into the polychromatic MTF, "
+        "each in [1e-08, 0.0001] m (not the radiometric band, radiometry.band_m)",
+        json_schema_extra=schema_bounds(items={"minimum": 1e-8, "maximum": 1e-4}),
+    )
+    wavelength_weights: tuple[float, ...] | None = Field(
+        default=None,
+        description="relative weight of each of wavelengths_m in the polychromatic MTF (dimensionless): one per "
+        "wavelength, each >= 0, a positive sum; default: equal weights",
+        json_schema_extra=schema_bounds(items={"minimum": 0}),
+    )
+    transmission: float = Field(
+        default=1.0,
+        gt=0,
+        le=1,
+        description="optics transmission tau (dimensionless fraction): scales the focal-plane irradiance "
+        "pi L tau (1 - eps^2) / (4 F#^2), so the signal; no effect on the MTF",
+    )
+    wfe_rms_waves: float = Field(
+        default=0.0,
+        ge=0,
+        le=0.25,
+        description="random wavefront error, rms waves at the effective wavelength (Shannon's aberration transfer "
+        "factor)",
+    )
     zernike_rms_waves: dict[int, float] = Field(
         default_factory=dict,
-        description="Noll index -> rms coefficient in waves (defocus is 4); sign as zernike_sign says",
+        description="Noll index -> rms coefficient in waves (defocus is 4); sign as zernike_sign says; Noll indices "
+        "in [1, 66], coefficients in [-1, 1]; non-zero terms use the pupil FFT",
+        json_schema_extra=schema_bounds(items={"minimum": -1, "maximum": 1}),
     )
     zernike_sign: Literal["satchain", "zemax"] = Field(
         default="satchain",
         description="convention of zernike_rms_waves: 'satchain' (a positive Z2 moves the image +x, ACT) or "
         "'zemax' (Zemax OpticStudio's and GalSim's: -x); 'zemax' is W -> -W, the PSF rotated by 180 deg",
     )
-    spiders: Spiders | None = None
-    diffraction_model: Literal["auto", "analytic", "pupil_fft"] = "auto"
+    spiders: Spiders | None = Field(
+        default=None,
+        description="secondary-mirror support vanes, e.g. { count = 4, width_m = 0.02 } (through the pupil FFT); "
+        "default: none",
+    )
+    diffraction_model: Literal["auto", "analytic", "pupil_fft"] = Field(
+        default="auto",
+        description="how the diffraction OTF is computed: 'auto' (the closed-form annular OTF, O'Neill 1956, or the "
+        "pupil function by FFT when spiders or Zernike terms need it), 'analytic' (always the closed form: spiders "
+        "and Zernike terms left out) or 'pupil_fft' (always the FFT)",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -249,30 +332,90 @@ class Detector(_Frozen):
 
     _input_keys: ClassVar[tuple[str, ...]] = ("pitch_m", "fill_factor")  # turned into fields by _pitch_and_fill
 
-    pitch_x_m: float = Field(gt=0, le=1e-3)
-    pitch_y_m: float = Field(gt=0, le=1e-3)
-    active_width_x_m: float = Field(gt=0)
-    active_width_y_m: float = Field(gt=0)
-    charge_diffusion_length_m: float = Field(default=0.0, ge=0, le=1e-3)
-    tdi_stages: int = Field(default=1, ge=1, le=1024)
+    pitch_x_m: float = Field(
+        gt=0,
+        le=1e-3,
+        description="pixel pitch across-track (x, the columns): the sampling; with the focal length and range the ACT "
+        "GSD (pitch_m sets both axes)",
+    )
+    pitch_y_m: float = Field(
+        gt=0,
+        le=1e-3,
+        description="pixel pitch along-track (y, the rows): with the focal length and range the ALT GSD and the line "
+        "time (pitch_m sets both axes)",
+    )
+    active_width_x_m: float = Field(
+        gt=0,
+        description="width of a pixel's photosensitive area across-track: the pixel OTF sinc(d_x f_x) and the "
+        "collecting area; <= pitch_x_m; default: pitch_x_m, or from fill_factor",
+    )
+    active_width_y_m: float = Field(
+        gt=0,
+        description="height of a pixel's photosensitive area along-track: the pixel OTF sinc(d_y f_y) and the "
+        "collecting area; <= pitch_y_m; default: pitch_y_m, or from fill_factor",
+    )
+    charge_diffusion_length_m: float = Field(
+        default=0.0,
+        ge=0,
+        le=1e-3,
+        description="lateral charge-diffusion length L (an exponential PSF): the OTF (1 + (2 pi L f)^2)^-1.5; 0: none",
+    )
+    tdi_stages: int = Field(
+        default=1,
+        ge=1,
+        le=1024,
+        description="number of TDI stages N (count): the signal adds over N line periods, the TDI window over "
+        "which line-rate mismatch and pushbroom motion act",
+    )
     tdi_sync_error: float = Field(
-        default=0.0, ge=-0.5, le=0.5, description="fractional along-track line-rate mismatch of TDI clocking"
+        default=0.0,
+        ge=-0.5,
+        le=0.5,
+        description="fractional along-track line-rate mismatch of TDI clocking (dimensionless): a smear of "
+        "tdi_stages x |error| px ALT; the older name of motion.line_rate_error (give one)",
     )
     # --- radiometric properties (satchain.radiometry). Defaults describe an ideal detector: QE 1, no
     # read or dark noise, no full-well limit, no quantisation.
     qe: float | tuple[float, ...] = Field(
-        default=1.0, description="quantum efficiency, e-/photon: a number, or a table on qe_wavelengths_m"
+        default=1.0,
+        description="quantum efficiency, e-/photon (dimensionless): a number in (0, 1], or a table of values in "
+        "[0, 1] on qe_wavelengths_m (linear between them, 0 outside)",
+        json_schema_extra=schema_bounds(
+            number={"exclusiveMinimum": 0, "maximum": 1}, items={"minimum": 0, "maximum": 1}
+        ),
     )
-    qe_wavelengths_m: tuple[float, ...] | None = Field(default=None, description="wavelengths of a qe table")
-    full_well_e: float | None = Field(default=None, gt=0, le=1e9, description="charge capacity, electrons")
+    qe_wavelengths_m: tuple[float, ...] | None = Field(
+        default=None,
+        description="wavelengths of a qe table: one per qe value (>= 2), strictly increasing, each in "
+        "[1e-08, 0.0001] m",
+        json_schema_extra=schema_bounds(items={"minimum": 1e-8, "maximum": 1e-4}),
+    )
+    full_well_e: float | None = Field(
+        default=None,
+        gt=0,
+        le=1e9,
+        description="charge capacity, electrons: the signal clips there and the ADC range spans it; default: "
+        "the signal of reflectance 1",
+    )
     read_noise_e: float = Field(default=0.0, ge=0, le=1e4, description="read noise per read, electrons rms")
     dark_current_e_per_s: float = Field(default=0.0, ge=0, le=1e9, description="dark current, e-/s per pixel")
-    bit_depth: int | None = Field(default=None, ge=1, le=32, description="ADC bits, range = full_well_e")
+    bit_depth: int | None = Field(
+        default=None,
+        ge=1,
+        le=32,
+        description="ADC resolution in bits: full_well_e / 2^bit_depth electrons per DN; needs full_well_e; "
+        "default: 12 bits",
+    )
     readout: Literal["ccd", "cmos"] = Field(
         default="ccd",
         description="TDI accumulation: 'ccd' sums charge (one read), 'cmos' sums digitally (one per stage)",
     )
-    prnu: float = Field(default=0.0, ge=0, le=1, description="photo-response non-uniformity, fraction rms")
+    prnu: float = Field(
+        default=0.0,
+        ge=0,
+        le=1,
+        description="photo-response non-uniformity, fraction of the signal rms (dimensionless): a fixed gain pattern",
+    )
     dsnu_e: float = Field(default=0.0, ge=0, le=1e6, description="dark-signal non-uniformity, electrons rms")
 
     @model_validator(mode="before")
@@ -383,11 +526,25 @@ class Motion(_Frozen):
     jitter_rms_px: float = Field(default=0.0, ge=0, le=10, description="Gaussian jitter per axis, rms")
     # --- pushbroom TDI motion in time (satchain.config.sections_motion, satchain.tf.pushbroom)
     line_rate_error: float = Field(
-        default=0.0, ge=-0.5, le=0.5, description="image motion per line period / one line, minus 1 (TDI mismatch)"
+        default=0.0,
+        ge=-0.5,
+        le=0.5,
+        description="image motion per line period / one line, minus 1 (TDI mismatch, dimensionless): a TDI smear "
+        "of tdi_stages x e px and an along-track scale 1 + e",
     )
-    oscillation: tuple[Oscillation, ...] = Field(default=(), max_length=64, description="[[motion.oscillation]]")
-    jitter_psd: tuple[JitterPSD, ...] = Field(default=(), max_length=16, description="[motion.jitter_psd] table(s)")
-    line_of_sight: LineOfSightLog | None = Field(default=None, description="[motion.line_of_sight]: a measured log")
+    oscillation: tuple[Oscillation, ...] = Field(
+        default=(),
+        max_length=64,
+        description="[[motion.oscillation]]: sinusoidal line-of-sight motions during the TDI window",
+    )
+    jitter_psd: tuple[JitterPSD, ...] = Field(
+        default=(),
+        max_length=16,
+        description="[motion.jitter_psd] table(s): random line-of-sight motion given by its power spectral density",
+    )
+    line_of_sight: LineOfSightLog | None = Field(
+        default=None, description="[motion.line_of_sight]: a measured log of the line of sight, e.g. attitude data"
+    )
 
     @field_validator("jitter_psd", mode="before")
     @classmethod
@@ -420,8 +577,18 @@ class Radiometry(_Frozen):
     stage; when omitted it is the line time, ``gsd_alt_m / ground_speed_m_per_s``.
     """
 
-    band_m: tuple[float, float] = Field(default=(4.5e-7, 9.0e-7), description="spectral band [min, max], m")
-    integration_time_s: float | None = Field(default=None, gt=0, le=10, description="exposure per TDI stage")
+    band_m: tuple[float, float] = Field(
+        default=(4.5e-7, 9.0e-7),
+        description="spectral band [min, max], m, over which the signal is integrated; "
+        "2.8e-07 <= min < max <= 4e-06 m (the solar table's 280-4000 nm)",
+        json_schema_extra=schema_bounds(items={"minimum": 2.8e-7, "maximum": 4.0e-6}),
+    )
+    integration_time_s: float | None = Field(
+        default=None,
+        gt=0,
+        le=10,
+        description="exposure per TDI stage; default: the line time, gsd_alt_m / ground speed",
+    )
 
     @field_validator("band_m")
     @classmethod
@@ -440,13 +607,45 @@ class Atmosphere(_Frozen):
 
     turbulence: bool = Field(default=False, description="include the turbulence OTF")
     r0_m: float | None = Field(
-        default=None, gt=0, description="Fried parameter; default: Hufnagel-Valley, down-looking"
+        default=None,
+        gt=0,
+        description="Fried parameter of the turbulence OTF; default: from the Hufnagel-Valley profile "
+        "(hv_wind_m_per_s, hv_ground_cn2), looking down from orbit.altitude_m",
     )
-    hv_wind_m_per_s: float = Field(default=21.0, ge=0, le=200)
-    hv_ground_cn2: float = Field(default=1.7e-14, ge=0, le=1e-10)
-    view_zenith_deg: float = Field(default=0.0, ge=0, le=80)
-    aerosol_scattered_fraction: float = Field(default=0.0, ge=0, lt=1)
-    aerosol_psf_scale_m: float = Field(default=200.0, gt=0, le=1e5)
+    hv_wind_m_per_s: float = Field(
+        default=21.0,
+        ge=0,
+        le=200,
+        description="rms upper-atmosphere wind speed of the Hufnagel-Valley Cn2 profile (21: HV 5/7); sets r0 when "
+        "turbulence is on and r0_m is not given",
+    )
+    hv_ground_cn2: float = Field(
+        default=1.7e-14,
+        ge=0,
+        le=1e-10,
+        description="ground-level refractive-index structure constant Cn2 of the Hufnagel-Valley profile, m^-2/3 "
+        "(1.7e-14: HV 5/7); sets r0 as hv_wind_m_per_s does",
+    )
+    view_zenith_deg: float = Field(
+        default=0.0,
+        ge=0,
+        le=80,
+        description="zenith angle of the path through the turbulence (it lengthens by sec(zenith)); used for r0 only, "
+        "not taken from orbit.off_nadir_deg",
+    )
+    aerosol_scattered_fraction: float = Field(
+        default=0.0,
+        ge=0,
+        lt=1,
+        description="fraction s of the signal that aerosols scatter into a wide adjacency PSF (dimensionless): the "
+        "OTF (1 - s) + s (1 + (2 pi L f)^2)^-1.5 on ground frequencies, a contrast loss s; 0: off",
+    )
+    aerosol_psf_scale_m: float = Field(
+        default=200.0,
+        gt=0,
+        le=1e5,
+        description="scale L of the aerosol adjacency PSF exp(-r / L) on the ground",
+    )
 
 
 class Illumination(_Frozen):
@@ -462,12 +661,44 @@ class Illumination(_Frozen):
     term excludes path radiance).
     """
 
-    sun_zenith_deg: float = Field(default=30.0, ge=0, lt=90)
-    reflectance: float = Field(default=0.2, ge=0, le=1, description="Lambertian surface reflectance (albedo)")
-    atmosphere_absorption: float = Field(default=0.23, ge=0, lt=1, description="absorbed fraction per pass")
-    atmosphere_path: Literal["both", "down", "up"] = "both"
-    path_radiance_w_per_m2_sr_per_um: float = Field(default=0.0, ge=0, le=1e4)
-    solar_spectrum: Literal["astm_g173_etr", "planck_5778k"] = "astm_g173_etr"
+    sun_zenith_deg: float = Field(
+        default=30.0,
+        ge=0,
+        lt=90,
+        description="angle of the sun from the local vertical at the scene: the surface irradiance goes with "
+        "cos(sun_zenith)",
+    )
+    reflectance: float = Field(
+        default=0.2,
+        ge=0,
+        le=1,
+        description="Lambertian surface reflectance (albedo, dimensionless) at which the budget gives the signal "
+        "and SNR",
+    )
+    atmosphere_absorption: float = Field(
+        default=0.23,
+        ge=0,
+        lt=1,
+        description="absorbed fraction per pass through the atmosphere (dimensionless; transmission 1 - "
+        "absorption), on the path(s) atmosphere_path names",
+    )
+    atmosphere_path: Literal["both", "down", "up"] = Field(
+        default="both",
+        description="where atmosphere_absorption applies: 'down' (sun to ground: lowers the surface radiance), "
+        "'up' (ground to sensor) or 'both'",
+    )
+    path_radiance_w_per_m2_sr_per_um: float = Field(
+        default=0.0,
+        ge=0,
+        le=1e4,
+        description="spectrally flat path radiance added at the top of the atmosphere: signal and shot noise "
+        "without contrast; default 0 (MODTRAN's ground-reflected term has none)",
+    )
+    solar_spectrum: Literal["astm_g173_etr", "planck_5778k"] = Field(
+        default="astm_g173_etr",
+        description="the sun's spectral irradiance at the top of the atmosphere: 'astm_g173_etr' (the ASTM G173-03 "
+        "extraterrestrial table, 280-4000 nm) or 'planck_5778k' (a 5778 K black body)",
+    )
 
 
 class Band(_Frozen):
@@ -482,10 +713,25 @@ class Band(_Frozen):
     'red'
     """
 
-    name: str = Field(default="", max_length=64)
-    wavelengths_m: tuple[float, ...] = Field(min_length=1, description="effective wavelengths of the band, m")
-    wavelength_weights: tuple[float, ...] | None = None
-    band_m: tuple[float, float] | None = Field(default=None, description="spectral band [min, max], m")
+    name: str = Field(default="", max_length=64, description="the band's name, e.g. 'red' (a label)")
+    wavelengths_m: tuple[float, ...] = Field(
+        min_length=1,
+        description="effective wavelengths of the band, m: the optics' wavelengths_m for this band, each in "
+        "[1e-08, 0.0001] m",
+        json_schema_extra=schema_bounds(items={"minimum": 1e-8, "maximum": 1e-4}),
+    )
+    wavelength_weights: tuple[float, ...] | None = Field(
+        default=None,
+        description="relative weight of each of wavelengths_m (dimensionless): one per wavelength, each >= 0, a "
+        "positive sum; default: equal weights",
+        json_schema_extra=schema_bounds(items={"minimum": 0}),
+    )
+    band_m: tuple[float, float] | None = Field(
+        default=None,
+        description="spectral band [min, max], m, over which this band's signal is integrated (instead of "
+        "radiometry.band_m); 2.8e-07 <= min < max <= 4e-06 m",
+        json_schema_extra=schema_bounds(items={"minimum": 2.8e-7, "maximum": 4.0e-6}),
+    )
 
     @model_validator(mode="after")
     def _check(self) -> Band:

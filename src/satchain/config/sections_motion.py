@@ -19,7 +19,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from satchain.config._base import _Frozen
+from satchain.config._base import _Frozen, schema_bounds
 from satchain.errors import ConfigError, SatchainIOError
 
 __all__ = ["MAX_FREQUENCY_HZ", "JitterPSD", "LineOfSightLog", "Oscillation", "check_earth_rotation", "read_los_csv"]
@@ -41,9 +41,12 @@ class Oscillation(_Frozen):
     0.0
     """
 
-    axis: Literal["act", "alt"]
+    axis: Literal["act", "alt"] = Field(
+        description="the axis the line of sight moves along: 'act' (x, across-track, the columns) or 'alt' (y, "
+        "along-track, the rows)"
+    )
     amplitude_px: float = Field(ge=0, le=1000, description="zero-to-peak, detector pixels on the ground")
-    frequency_hz: float = Field(gt=0, le=MAX_FREQUENCY_HZ)
+    frequency_hz: float = Field(gt=0, le=MAX_FREQUENCY_HZ, description="frequency of the sinusoid")
     phase_deg: float = Field(default=0.0, ge=-360, le=360, description="phase at t = 0")
 
 
@@ -59,9 +62,23 @@ class JitterPSD(_Frozen):
     0.162
     """
 
-    axis: Literal["act", "alt"]
-    frequency_hz: tuple[float, ...] = Field(min_length=2, max_length=10000)
-    psd_px2_per_hz: tuple[float, ...] = Field(min_length=2, max_length=10000)
+    axis: Literal["act", "alt"] = Field(
+        description="the axis the line of sight moves along: 'act' (x, across-track, the columns) or 'alt' (y, "
+        "along-track, the rows)"
+    )
+    frequency_hz: tuple[float, ...] = Field(
+        min_length=2,
+        max_length=10000,
+        description="frequencies of the PSD's points, strictly increasing, each in (0, 1e+06] Hz",
+        json_schema_extra=schema_bounds(items={"exclusiveMinimum": 0, "maximum": MAX_FREQUENCY_HZ}),
+    )
+    psd_px2_per_hz: tuple[float, ...] = Field(
+        min_length=2,
+        max_length=10000,
+        description="one-sided power spectral density at each frequency_hz, each >= 0, linear between the points and "
+        "0 outside them; its area, the variance, at most 1e6 px^2",
+        json_schema_extra=schema_bounds(items={"minimum": 0}),
+    )
 
     @model_validator(mode="after")
     def _table(self) -> JitterPSD:
@@ -105,9 +122,23 @@ class LineOfSightLog(_Frozen):
 
     _input_keys: ClassVar[tuple[str, ...]] = ("file",)  # read into time_s, act_px, alt_px by _file
 
-    time_s: tuple[float, ...] = Field(min_length=2, max_length=MAX_LOG_SAMPLES)
-    act_px: tuple[float, ...] | None = Field(default=None, max_length=MAX_LOG_SAMPLES)
-    alt_px: tuple[float, ...] | None = Field(default=None, max_length=MAX_LOG_SAMPLES)
+    time_s: tuple[float, ...] = Field(
+        min_length=2,
+        max_length=MAX_LOG_SAMPLES,
+        description="the log's sample times, finite and strictly increasing (time_offset_s is the log's time at t = 0)",
+    )
+    act_px: tuple[float, ...] | None = Field(
+        default=None,
+        max_length=MAX_LOG_SAMPLES,
+        description="line-of-sight offset across-track (x) at each time_s, each within +-1000 px; default: 0",
+        json_schema_extra=schema_bounds(items={"minimum": -1000, "maximum": 1000}),
+    )
+    alt_px: tuple[float, ...] | None = Field(
+        default=None,
+        max_length=MAX_LOG_SAMPLES,
+        description="line-of-sight offset along-track (y) at each time_s, each within +-1000 px; default: 0",
+        json_schema_extra=schema_bounds(items={"minimum": -1000, "maximum": 1000}),
+    )
     time_offset_s: float = Field(default=0.0, ge=-1e9, le=1e9, description="the log's time at t = 0")
 
     @model_validator(mode="before")

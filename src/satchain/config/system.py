@@ -73,15 +73,21 @@ class ImagingSystem(_Frozen):
     """A complete satellite camera: orbit, optics, detector and motion, plus derived quantities."""
 
     _error_title: ClassVar[str] = "invalid imaging system"
-    name: str = "custom"
-    description: str = ""
-    orbit: Orbit
-    optics: Optics
-    detector: Detector
-    motion: Motion = Field(default_factory=Motion)
-    radiometry: Radiometry = Field(default_factory=Radiometry)
-    illumination: Illumination = Field(default_factory=Illumination)
-    atmosphere: Atmosphere = Field(default_factory=Atmosphere)
+    name: str = Field(default="custom", description="the camera's name, shown in reports and results.json")
+    description: str = Field(default="", description="free text about the camera")
+    orbit: Orbit = Field(description="[orbit]: the circular orbit and the look angle")
+    optics: Optics = Field(description="[optics]: the telescope")
+    detector: Detector = Field(description="[detector]: the pixels, TDI and the detector's signal chain")
+    motion: Motion = Field(default_factory=Motion, description="[motion]: line-of-sight motion during the exposure")
+    radiometry: Radiometry = Field(
+        default_factory=Radiometry, description="[radiometry]: spectral band and exposure of the signal"
+    )
+    illumination: Illumination = Field(
+        default_factory=Illumination, description="[illumination]: sun, surface and atmosphere of the signal"
+    )
+    atmosphere: Atmosphere = Field(
+        default_factory=Atmosphere, description="[atmosphere]: atmospheric blur (turbulence, aerosols); off by default"
+    )
     bands: tuple[Band, ...] = Field(default=(), description="per-band optics of a multiband camera ([[bands]])")
     provenance: dict[str, Any] = Field(default_factory=dict, description="free-form notes, e.g. fitted values")
 
