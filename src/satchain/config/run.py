@@ -32,9 +32,11 @@ class _Frozen(_StrictNumbers):  # no bool, string or NaN where a number is wante
 class SystemRef(_Frozen):
     """``preset`` (a packaged name), or ``file`` (a system TOML, relative to the config), or ``inline``."""
 
-    preset: str | None = "ankarasat3"
-    file: str | None = None
-    inline: dict[str, Any] | None = None
+    preset: str | None = Field(
+        default="ankarasat3", description="a packaged system by name (the default, 'ankarasat3': the paper's camera)"
+    )
+    file: str | None = Field(default=None, description="a system TOML file, relative to this configuration file")
+    inline: dict[str, Any] | None = Field(default=None, description="the system itself, as a system file holds it")
 
     @model_validator(mode="before")
     @classmethod
@@ -50,6 +52,8 @@ class SystemRef(_Frozen):
 
 
 class SceneConfig(_Frozen):
+    """The ground-truth scene: its layout of targets and its sampling."""
+
     layout: str = Field(default="paper", description="'paper' or a scene file (.toml/.json)")
     pixel_m: float = Field(
         default=0.035,
@@ -62,26 +66,84 @@ class SceneConfig(_Frozen):
 
 
 class SimulationConfig(_Frozen):
-    units: Literal["dn", "electrons", "radiance", "reflectance"] = "dn"
-    noise: bool = True
-    seed: int = Field(default=20260101, ge=0)
-    far_margin_px: int = Field(default=128, ge=0, le=100_000)
-    border: Literal["symmetric", "periodic", "constant"] = "symmetric"
+    """How the image is simulated: its units, noise and borders."""
+
+    units: Literal["dn", "electrons", "radiance", "reflectance"] = Field(
+        default="dn",
+        description="unit of the simulated image: 'dn' (the detector's ADC counts), 'electrons', 'radiance' "
+        "(top-of-atmosphere, in band, W/(m^2 sr)) or 'reflectance' (the ground truth's own unit)",
+    )
+    noise: bool = Field(
+        default=True,
+        description="add the detector's noise (shot, dark, read, PRNU/DSNU); false: a noise-free image, for which "
+        "no SNR (nor NIIRS) is measured",
+    )
+    seed: int = Field(
+        default=20260101,
+        ge=0,
+        description="seed of the noise and of the random line-of-sight motion (an integer, no unit): one seed, "
+        "one image",
+    )
+    far_margin_px: int = Field(
+        default=128,
+        ge=0,
+        le=100_000,
+        description="output pixels of border context around the ground truth (continued by the border rule), "
+        "within which the PSF's tails are exact",
+    )
+    border: Literal["symmetric", "periodic", "constant"] = Field(
+        default="symmetric",
+        description="how the ground truth is continued beyond its edge: 'symmetric' (mirrored), 'periodic' "
+        "(wrapped) or 'constant' (0)",
+    )
 
 
 class MeasurementConfig(_Frozen):
-    wedge_threshold: float = Field(default=0.15, gt=0, lt=1, description="contrast at which a wedge stops resolving")
+    """Settings of the measurements."""
+
+    wedge_threshold: float = Field(
+        default=0.15,
+        gt=0,
+        lt=1,
+        description="contrast (dimensionless) at which a hyperbolic wedge stops resolving: the paper's threshold "
+        "(Rayleigh)",
+    )
 
 
 class Tolerances(_Frozen):
     """Pass/fail limits of measured vs predicted figures of merit (absolute unless said otherwise)."""
 
-    edge_mtf_at_nyquist: float = Field(default=0.02, gt=0)
-    edge_angle_deg: float = Field(default=0.2, gt=0)
-    star_mtf: float = Field(default=0.05, gt=0)
-    bar_ctf: float = Field(default=0.06, gt=0)
-    wedge_resolution_rel: float = Field(default=0.15, gt=0)
-    niirs: float = Field(default=0.2, gt=0)
+    edge_mtf_at_nyquist: float = Field(
+        default=0.02,
+        gt=0,
+        description="largest |measured - predicted| MTF at Nyquist of a slanted edge that passes (MTF, dimensionless)",
+    )
+    edge_angle_deg: float = Field(
+        default=0.2, gt=0, description="largest |measured - true| angle of a slanted edge that passes"
+    )
+    star_mtf: float = Field(
+        default=0.05,
+        gt=0,
+        description="largest |measured - predicted| MTF of a Siemens star up to Nyquist, in its worst direction, "
+        "that passes (MTF, dimensionless)",
+    )
+    bar_ctf: float = Field(
+        default=0.06,
+        gt=0,
+        description="largest |measured - predicted| CTF of a bar target up to 0.4 cy/px that passes (CTF, "
+        "dimensionless)",
+    )
+    wedge_resolution_rel: float = Field(
+        default=0.15,
+        gt=0,
+        description="largest |measured / predicted - 1| resolution of a hyperbolic wedge that passes (a ratio, "
+        "dimensionless: 0.15 is 15 %)",
+    )
+    niirs: float = Field(
+        default=0.2,
+        gt=0,
+        description="largest |measured - predicted| NIIRS (GIQE 5) that passes, in NIIRS levels (dimensionless)",
+    )
 
 
 class RunConfig(_Frozen):
@@ -93,12 +155,24 @@ class RunConfig(_Frozen):
     (:meth:`load_as_built_system`).
     """
 
-    system: SystemRef = Field(default_factory=SystemRef)
-    as_built: dict[str, Any] | None = None
-    scene: SceneConfig = Field(default_factory=SceneConfig)
-    simulation: SimulationConfig = Field(default_factory=SimulationConfig)
-    measurement: MeasurementConfig = Field(default_factory=MeasurementConfig)
-    tolerances: Tolerances = Field(default_factory=Tolerances)
+    system: SystemRef = Field(
+        default_factory=SystemRef, description="[system]: the camera designed, a preset, a system file or inline"
+    )
+    as_built: dict[str, Any] | None = Field(
+        default=None,
+        description="the camera as built: a system file (file) and/or its sections, merged over [system]; applied "
+        "to the simulation only",
+    )
+    scene: SceneConfig = Field(default_factory=SceneConfig, description="[scene]: the ground truth")
+    simulation: SimulationConfig = Field(
+        default_factory=SimulationConfig, description="[simulation]: units, noise and borders of the image"
+    )
+    measurement: MeasurementConfig = Field(
+        default_factory=MeasurementConfig, description="[measurement]: settings of the measurements"
+    )
+    tolerances: Tolerances = Field(
+        default_factory=Tolerances, description="[tolerances]: pass/fail limits of measured vs predicted"
+    )
     base_dir: str = Field(default=".", description="directory that relative paths are resolved against")
 
     @field_validator("as_built")

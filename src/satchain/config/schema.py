@@ -205,7 +205,7 @@ def run_schema() -> dict[str, Any]:
         loose.pop("anyOf", None)
         loose["description"] = f"[{section}] keys of the camera as built, merged over the design's"
         defs[f"AsBuilt{ref_name}"] = loose
-        partial[section] = {"$ref": f"#/$defs/AsBuilt{ref_name}"}
+        partial[section] = {"$ref": f"#/$defs/AsBuilt{ref_name}", "description": loose["description"]}
     desc = s["properties"]["as_built"].get("description", "")
     s["properties"]["as_built"] = {
         "anyOf": [{"type": "object", "properties": partial, "additionalProperties": False}, {"type": "null"}],

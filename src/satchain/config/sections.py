@@ -53,7 +53,9 @@ class Orbit(_Frozen):
     """
 
     altitude_m: float = Field(
-        gt=0, le=1e8, description="height above the ground, m, of the circular orbit: sets the range, GSD and ground speed"
+        gt=0,
+        le=1e8,
+        description="height above the ground, m, of the circular orbit: sets the range, GSD and ground speed",
     )
     off_nadir_deg: float = Field(
         default=0.0,
