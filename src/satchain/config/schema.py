@@ -63,8 +63,8 @@ _INPUT_KEYS: dict[tuple[str, str], dict[str, Any]] = {
         "type": "number",
         "exclusiveMinimum": 0,
         "maximum": 1,
-        "description": "active area fraction of a pixel, a square centred in it (sets active_width_x_m and "
-        "active_width_y_m)",
+        "description": "active area fraction of a pixel (a ratio, dimensionless), a square centred in it (sets "
+        "active_width_x_m and active_width_y_m)",
     },
     ("LineOfSightLog", "file"): {
         "type": "string",
