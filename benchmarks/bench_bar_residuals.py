@@ -14,7 +14,7 @@
    toward their surroundings (0.8 reads ~0.794, 0.05 reads ~0.053 even 6 px inside), so a straight line fitted
    to those medians has a gain ~1.2 % low and an offset ~0.0035 in reflectance high; a bar group's mean level
    then reads low and its modulation A / a high by ~0.8 %.  The calibration now models that tail
-   (satchain/measure/_auto_calibrate.py); the plain line on the same medians is printed beside it.  With the
+   (satchain/measure/auto/_calibrate.py); the plain line on the same medians is printed beside it.  With the
    true response the residuals are +0.001..+0.003: what is left is the target's 2-D geometry (bars 5 widths
    long on a plate one bar width wide in a 0.2 background, under the same long tail), which Coltman's infinite
    square wave leaves out.
@@ -38,10 +38,10 @@ from _render import bar_coltman, render_bar_group  # noqa: E402
 
 from satchain import load_preset  # noqa: E402
 from satchain.engine.sensor import sensor_from_system  # noqa: E402
-from satchain.measure._auto_calibrate import calibrate  # noqa: E402
-from satchain.measure._auto_common import AutoContext, Frame  # noqa: E402
-from satchain.measure._auto_items import bars_item  # noqa: E402
 from satchain.measure.auto import _geometry, _truth_items  # noqa: E402
+from satchain.measure.auto._calibrate import calibrate  # noqa: E402
+from satchain.measure.auto._common import AutoContext, Frame  # noqa: E402
+from satchain.measure.auto._items import bars_item  # noqa: E402
 from satchain.measure.bars import measure_bars  # noqa: E402
 
 Q = 6.4961e-7 * 9.72 / 5.88e-6  # lambda F / p of the ankarasat3 preset

@@ -33,8 +33,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "measure"))
 from _render_jitter import render_wobbly_edge  # noqa: E402
 
-from satchain.measure.jitter import measure_jitter  # noqa: E402
 from satchain.config.system import load_preset  # noqa: E402
+from satchain.measure.jitter import measure_jitter  # noqa: E402
 
 DT = 1e-3
 

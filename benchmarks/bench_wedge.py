@@ -19,8 +19,8 @@ import argparse
 import numpy as np
 
 import satchain
-from satchain.tf import ctf as ctf
 from satchain.config.run import RunConfig, load_run_config
+from satchain.tf import ctf as ctf
 
 
 def _wedge_rows(result) -> None:

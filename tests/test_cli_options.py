@@ -153,7 +153,8 @@ def test_a_bad_origin_gets_the_same_error_from_wedge_and_auto(inputs):
 def test_the_old_module_still_offers_its_names():
     # code written before the split (issue 18) imports these from satchain.cli.measure
     import satchain.cli.measure as old
-    from satchain.cli import options as cli_options, output as cli_output
+    from satchain.cli import options as cli_options
+    from satchain.cli import output as cli_output
 
     assert old.ImageArg is cli_options.ImageArg and old.RoiOpt is cli_options.RoiOpt
     assert old.PixelOpt is cli_options.PixelOpt and old.JsonOpt is cli_options.JsonOpt

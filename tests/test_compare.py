@@ -11,10 +11,17 @@ from hypothesis import strategies as st
 
 from satchain import units
 from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX, compare
-from satchain.tf.ctf import band_limited, wedge_resolution_m
-from satchain.prediction.core import DIRECTIONS, AxisMTF, WedgePrediction, predict, predict_from_mtf, saturation_warnings
-from satchain.prediction.quality import giqe5, giqe5_rer
 from satchain.config.run import Tolerances
+from satchain.prediction.core import (
+    DIRECTIONS,
+    AxisMTF,
+    WedgePrediction,
+    predict,
+    predict_from_mtf,
+    saturation_warnings,
+)
+from satchain.prediction.quality import giqe5, giqe5_rer
+from satchain.tf.ctf import band_limited, wedge_resolution_m
 
 TOL = Tolerances()
 A, B = 1.0, 2.0  # the Gaussian MTF falls twice as fast along y (ALT) as along x (ACT)

@@ -19,9 +19,9 @@ from satchain.comparison import (
     row_texts,
     signed_text,
 )
+from satchain.config.run import Tolerances
 from satchain.prediction.core import predict_from_mtf
 from satchain.report.tables import fmt
-from satchain.config.run import Tolerances
 
 TOL = Tolerances()
 

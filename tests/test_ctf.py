@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from scipy.ndimage import gaussian_filter1d
 from scipy.special import ndtr, sici
 
+from satchain.errors import ConfigError, InputError
 from satchain.tf.ctf import (
     band_limited,
     coltman_ctf,
@@ -21,7 +22,6 @@ from satchain.tf.ctf import (
     square_wave_series,
     tabulated_mtf,
 )
-from satchain.errors import ConfigError, InputError
 
 TABLE1 = Path(__file__).resolve().parents[1].parent / "shared" / "reference" / "table1.csv"
 FOUR_OVER_PI = 4.0 / math.pi

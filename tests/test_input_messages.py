@@ -12,8 +12,8 @@ import pytest
 from typer.testing import CliRunner
 
 from satchain.cli.main import app
-from satchain.errors import ConfigError, InputError
 from satchain.config.system import ImagingSystem
+from satchain.errors import ConfigError, InputError
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent / "measure"))
 from _render_jitter import render_wobbly_edge  # noqa: E402

@@ -11,8 +11,8 @@ from scipy.special import j0
 
 import satchain
 from satchain import load_preset
-from satchain.errors import ConfigError, SatchainIOError
 from satchain.config.system import ImagingSystem
+from satchain.errors import ConfigError, SatchainIOError
 from satchain.tf.budget import SystemOTF
 from satchain.tf.pushbroom import PushbroomTerms
 

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from satchain.tf import ctf as ctf
 from satchain.presets.paper import read_table1
 from satchain.report.budget import DirectionalMTF
+from satchain.tf import ctf as ctf
 from satchain.tf.budget import SystemOTF, mtf_budget
 
 

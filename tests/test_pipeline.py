@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 
 import satchain
 from satchain.cli.main import app
-from satchain.pipeline import run_pipeline
 from satchain.config.run import DEFAULT_CONFIG_TOML, RunConfig, load_run_config
+from satchain.pipeline import run_pipeline
 
 
 def strict_loads(text: str):

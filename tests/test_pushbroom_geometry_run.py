@@ -15,9 +15,9 @@ from matplotlib.path import Path
 
 import satchain
 from satchain import load_preset
-from satchain.pipeline import run_to_directory
 from satchain.config.run import RunConfig
 from satchain.config.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
+from satchain.pipeline import run_to_directory
 
 EARTH = {"orbit.latitude_deg": 0.0, "orbit.inclination_deg": 97.6, "orbit.earth_rotation": True}
 OSC = {"motion.oscillation": [{"axis": "act", "amplitude_px": 1.0, "frequency_hz": 60.0}]}

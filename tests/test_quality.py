@@ -13,6 +13,8 @@ from scipy.special import erf
 
 from satchain import ConfigError, InputError
 from satchain.prediction import quality as q
+
+
 def _gauss_mtf(f, sigma_px):
     """MTF of a Gaussian LSF of standard deviation sigma (pixels): exp(-2 pi^2 sigma^2 f^2)."""
     return np.exp(-2.0 * (np.pi * sigma_px * f) ** 2)

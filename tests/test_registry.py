@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from satchain.measure._auto_common import AutoItem
 from satchain.measure.auto import MEASURERS, OBJECT_KINDS, Measurer, measure_auto
+from satchain.measure.auto._common import AutoItem
 from satchain.report import measure_plots, tables
 from satchain.report.kinds import REPORT_KINDS, RESULT_KEYS, ReportKind, measured_entries, overlay_svg
 from satchain.scene import ITEM_KINDS, TARGET_KINDS

@@ -8,10 +8,10 @@ import numpy as np
 import tomllib
 from typer.testing import CliRunner
 
-from satchain.io import images as io
 from satchain._safety import MARKER
 from satchain.cli.main import app
 from satchain.config.run import RunConfig
+from satchain.io import images as io
 
 runner = CliRunner()
 README = Path(__file__).resolve().parents[1] / "README.md"

@@ -59,9 +59,9 @@ def test_every_field_has_a_real_type(cls):
 
 
 def test_the_field_types_are_the_classes_the_stages_produce():
+    from satchain.config.system import ImagingSystem
     from satchain.measure.auto import AutoResult
     from satchain.measure.snr import SnrResult
-    from satchain.config.system import ImagingSystem
     from satchain.tf.budget import SystemOTF
 
     assert resolved_hints(results.BudgetResult)["system"] is ImagingSystem

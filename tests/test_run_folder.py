@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from satchain.io.runfolder import swap_in, written_files
 from satchain._safety import MARKER, OWNER
 from satchain.cli.main import app
 from satchain.errors import SatchainIOError
+from satchain.io.runfolder import swap_in, written_files
 
 ONE_EDGE_SCENE = """
 [scene]

@@ -13,10 +13,10 @@ import pytest
 import tifffile
 from typer.testing import CliRunner
 
-from satchain.io import images as io
 from satchain._safety import MARKER, OWNER, check_distinct_paths, check_run_dir, clean_stale
 from satchain.cli.main import app
 from satchain.errors import ConfigError, SatchainIOError
+from satchain.io import images as io
 
 runner = CliRunner()
 PRESET = Path(__file__).resolve().parents[1] / "src" / "satchain" / "presets" / "ankarasat3.toml"

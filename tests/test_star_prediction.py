@@ -14,11 +14,11 @@ from scipy import ndimage
 
 import satchain
 from satchain.comparison import compare, max_error_sigma
+from satchain.config.run import RunConfig, Tolerances
 from satchain.measure.auto import measure_auto
 from satchain.prediction.core import predict_from_mtf
-from satchain.config.run import RunConfig, Tolerances
-from satchain.scene import HyperbolicWedge, Scene, SiemensStar, SlantedEdge
 from satchain.prediction.target_image import TargetImageModel, item_from_truth
+from satchain.scene import HyperbolicWedge, Scene, SiemensStar, SlantedEdge
 
 GSD = 0.5
 D = 8  # fine pixels per detector pixel

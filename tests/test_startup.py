@@ -46,8 +46,8 @@ def test_the_run_path_never_imports_scipy_stats_or_signal():
     code = (
         "import numpy as np\n"
         "from satchain.engine.sensor import _poisson_ppf\n"
-        "from satchain.measure._auto_calibrate import _convolve_valid\n"
-        "from satchain.measure._edge_mtf import _dft_rows\n"
+        "from satchain.measure.auto._calibrate import _convolve_valid\n"
+        "from satchain.measure.edge._numerics import _dft_rows\n"
         "from satchain.measure.edge import measure_edge\n"
         "u = np.random.default_rng(0).random((8, 8))\n"
         "_poisson_ppf(u, np.full(u.shape, 5.0))\n"
@@ -66,5 +66,5 @@ def test_the_figure_helper_preloads_no_fft_nor_measurement_code():
     from satchain.pipeline import _FIGURE_MODULES
 
     code = "import importlib\n" + "".join(f"importlib.import_module({m!r})\n" for m in _FIGURE_MODULES)
-    heavy = ("scipy.fft", "satchain.measure.edge", "satchain.measure._edge_lines", "satchain.engine")
+    heavy = ("scipy.fft", "satchain.measure.edge", "satchain.measure.edge._crossings", "satchain.engine")
     assert _loaded(code, heavy) == []

@@ -7,8 +7,8 @@ from __future__ import annotations
 import pytest
 
 from satchain import load_preset
-from satchain.errors import ConfigError
 from satchain.config.system import ImagingSystem
+from satchain.errors import ConfigError
 
 BASE = load_preset("ankarasat3")
 OSC = {"axis": "act", "amplitude_px": 0.5, "frequency_hz": 4465.0, "phase_deg": 30.0}

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from satchain.comparison import compare
-from satchain.prediction.core import predict_from_mtf
 from satchain.config.run import Tolerances
-from satchain.scene import HyperbolicWedge, Scene
+from satchain.prediction.core import predict_from_mtf
 from satchain.prediction.wedge import predict_wedge, wedge_model_image
+from satchain.scene import HyperbolicWedge, Scene
 
 GSD = 0.5
 D = 8  # truth pixels per detector pixel

@@ -1,5 +1,5 @@
-"""satchain.io.raster and satchain.io.images on rasters this test writes with rasterio: GTiff, COG, JP2, NITF, VRT; UTM and
-geographic; multiband; nodata, alpha; window reads against the array written; bad files refused in one line."""
+"""satchain.io.raster and satchain.io.images on rasters this test writes with rasterio: GTiff, COG, JP2, NITF, VRT;
+UTM and geographic; multiband; nodata, alpha; window reads against the array written; bad files refused in one line."""
 
 from __future__ import annotations
 
@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 rasterio = pytest.importorskip("rasterio")
 from rasterio import Affine  # noqa: E402
 
-from satchain.io import images as io  # noqa: E402
 from satchain.errors import ConfigError, InputError, SatchainIOError, SatchainWarning  # noqa: E402
+from satchain.io import images as io  # noqa: E402
 from satchain.io.raster import open_raster  # noqa: E402
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")

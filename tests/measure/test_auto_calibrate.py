@@ -109,7 +109,7 @@ def test_compact_psf_fits_no_tail():
 )
 def test_valid_convolution_equals_the_direct_sum(ny, nx, ky, kx, seed):
     """The tail sum's FFT convolution ('valid' part) equals the direct double sum."""
-    from satchain.measure._auto_calibrate import _convolve_valid
+    from satchain.measure.auto._calibrate import _convolve_valid
 
     rng = np.random.default_rng(seed)
     a, k = rng.normal(size=(ny, nx)), rng.normal(size=(ky, kx))

@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 from scipy.ndimage import gaussian_filter
 
 from satchain.errors import InputError
-from satchain.measure._auto_common import _ON_BORDER, Frame
 from satchain.measure.auto import measure_auto
+from satchain.measure.auto._common import _ON_BORDER, Frame
 from satchain.scene import BarTarget, Scene, SiemensStar, SlantedEdge
 
 G = 0.5  # ground pixel (m)

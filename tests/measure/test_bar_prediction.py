@@ -11,9 +11,9 @@ import numpy as np
 from _render import _GAUSS_CUT, bar_esf, bar_mtf
 from affine import Affine
 
+from satchain.measure.bars import measure_bars
 from satchain.prediction.bars import predict_bar_ctf, target_model_image
 from satchain.prediction.image_geometry import ImageGeometry
-from satchain.measure.bars import measure_bars
 
 SIGMA = 0.45  # Gaussian blur, px
 DARK, BRIGHT = 0.05, 0.8

@@ -219,7 +219,7 @@ def test_phase_grid_costs_batched_equal_one_least_squares_each(n, period, n_harm
     """The joint refit's phase grid is solved in one batch (stacked SVD); each cost equals the per-phase
     ``lstsq`` it replaces, with the refit's prior rows (A_k - rho_k A_1 = 0 +- sigma for every harmonic above
     the fundamental, sigma from 1e-4 to 10) on aliased harmonics too."""
-    from satchain.measure._barjoint import _grid_costs, _solve
+    from satchain.measure.bars._joint import _grid_costs, _solve
 
     rng = np.random.default_rng(seed)
     ks = tuple(range(1, 2 * n_harm, 2))

@@ -85,7 +85,7 @@ def test_a_region_holding_another_period_is_still_refused():
 def test_measure_auto_names_a_refusal_by_the_groups_design_number():
     """measure_bars numbers the groups it is given; measure auto gives it the design's groups from the first one
     inside Nyquist: a refusal's ``group_rois[j]`` / ``periods_px[j]`` is renamed to the design's index."""
-    from satchain.measure._auto_items import _design
+    from satchain.measure.auto._items import _design
 
     keep = [1, 3, 4]  # group 0 beyond Nyquist, group 2 refused earlier
     msg = "group_rois[1]: no bars; periods_px[2] = 2.5: ..."

@@ -17,8 +17,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.special import ndtr
 
-from satchain.measure._edge_mtf import window_mtf
 from satchain.measure.edge import measure_edge
+from satchain.measure.edge._numerics import window_mtf
 
 F_NYQ = np.arange(0.0, 0.5001, 0.005)
 

@@ -15,12 +15,12 @@ from hypothesis import strategies as st
 from scipy import ndimage as ndi
 
 from satchain.errors import InputError
-from satchain.measure import _edge_checks as checks
-from satchain.measure import _edge_lines as lines
-from satchain.measure import _edge_locate as locate
 from satchain.measure import find
 from satchain.measure._common import median, robust_sigma
-from satchain.measure._edge_mtf import _Lsf, _spectrum_sigma_direct, spectrum_sigma
+from satchain.measure.edge import _checks as checks
+from satchain.measure.edge import _crossings as lines
+from satchain.measure.edge import _locate as locate
+from satchain.measure.edge._numerics import _Lsf, _spectrum_sigma_direct, spectrum_sigma
 
 
 @settings(max_examples=40, deadline=None)
@@ -276,7 +276,7 @@ def test_segment_gradients_equal_each_segments_own_crop():
 def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
     """The spectrum rows at ``j step`` cy/bin: a real FFT where it fits, else the factorised matrix DFT, both equal
     to the plain sum of ``rows[k] exp(-2 pi i j step k)``."""
-    from satchain.measure._edge_mtf import _dft_rows
+    from satchain.measure.edge._numerics import _dft_rows
 
     rows = np.random.default_rng(seed).normal(size=(2, n))
     direct = rows @ np.exp(-2j * np.pi * np.outer(np.arange(m) * step, np.arange(n))).T
@@ -287,7 +287,7 @@ def test_dft_rows_equals_the_direct_sum(n, m, step, seed):
 @given(n=st.integers(2, 400), t0=st.sampled_from([0.0, 50.0, 3000.0]), seed=st.integers(0, 10**6))
 def test_flatten_line_fit_equals_polyfit(n, t0, seed):
     """The row flattening's straight line (centred closed form) = ``np.polyval(np.polyfit(t, y, 1), at)``."""
-    from satchain.measure._edge_mtf import _line_fit
+    from satchain.measure.edge._numerics import _line_fit
 
     rng = np.random.default_rng(seed)
     t = t0 + np.sort(rng.choice(np.arange(4 * n), n, replace=False)).astype(float)
@@ -348,7 +348,7 @@ def test_bin_esf_smoothing_and_gradient_equal_scipy_and_numpy_bitwise(n, sigma, 
     np.gradient does: the same floats."""
     from scipy.ndimage import correlate1d
 
-    from satchain.measure._edge_mtf import _gauss_kernel_nd, _gradient
+    from satchain.measure.edge._numerics import _gauss_kernel_nd, _gradient
 
     a = np.cumsum(np.random.default_rng(seed).normal(size=n))
     ref = ndi.gaussian_filter1d(a, sigma, mode="nearest")

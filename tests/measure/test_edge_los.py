@@ -106,8 +106,8 @@ def test_run_comparison_like_with_like():
     from affine import Affine
 
     from satchain.comparison.edge import edge_checks
-    from satchain.prediction.image_geometry import ImageGeometry
     from satchain.prediction.core import EdgePrediction, Predictions
+    from satchain.prediction.image_geometry import ImageGeometry
 
     cycles, n = 0.3, 100
     path = {"amp_px": [1.0], "freq_hz": [cycles / (N * DT)], "phase_rad": [np.pi / 2]}
@@ -153,8 +153,8 @@ def test_run_flags_an_alt_edge_whose_rows_move():
     from affine import Affine
 
     from satchain.comparison.edge import edge_checks
-    from satchain.prediction.image_geometry import ImageGeometry
     from satchain.prediction.core import EdgePrediction, Predictions
+    from satchain.prediction.image_geometry import ImageGeometry
 
     kw = {"amp_px": [1.0], "freq_hz": [0.3 / (N * DT)], "phase_rad": [np.pi / 2], "line_time_s": DT, "stages": N}
     img, shift = render_tdi_alt_edge(60, 100, angle_deg=ANGLE, **kw)

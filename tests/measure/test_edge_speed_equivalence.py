@@ -16,10 +16,10 @@ from scipy.interpolate import BSpline, make_lsq_spline
 from scipy.special import ndtr
 
 from satchain.errors import InputError
-from satchain.measure import _edge_lines as lines
-from satchain.measure import _edge_locate as locate
 from satchain.measure._common import robust_sigma
-from satchain.measure._edge_mtf import _Lsf, adaptive_mtf, window_mtf
+from satchain.measure.edge import _crossings as lines
+from satchain.measure.edge import _locate as locate
+from satchain.measure.edge._numerics import _Lsf, adaptive_mtf, window_mtf
 
 
 def _esf_bins(n_half: float, w: float, seed: int, noise: float):

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from scipy.special import ndtr
 
 from satchain.errors import InputError
-from satchain.measure import _edge_lines as lines
-from satchain.measure import _edge_locate as locate
 from satchain.measure import measure_edge
+from satchain.measure.edge import _crossings as lines
+from satchain.measure.edge import _locate as locate
 
 
 def _edge(angle_deg: float, blur: float, noise: float, seed: int, n: int = 48) -> np.ndarray:

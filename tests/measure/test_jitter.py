@@ -16,11 +16,11 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from satchain.cli.main import app
+from satchain.config.system import load_preset
 from satchain.errors import ConfigError, InputError
 from satchain.measure import measure_edge
 from satchain.measure._jitter_fit import frequency_grid
 from satchain.measure.jitter import _find_peaks, measure_jitter
-from satchain.config.system import load_preset
 
 DT = 1e-3  # line time of the hypothesis cases (s): Nyquist 500 Hz
 

@@ -17,11 +17,11 @@ from matplotlib.text import Text
 from PIL import Image
 
 from satchain.comparison import BAR_COMPARE_MAX_CY_PER_PX
+from satchain.config.run import load_run_config
 from satchain.pipeline import run_pipeline
 from satchain.report import _save, compare_plots, curves, figures, gallery, radiometry_plot, run_figures
 from satchain.report.compare_plots import PRINT_WIDTH_IN
 from satchain.report.html import SECTIONS
-from satchain.config.run import load_run_config
 
 #: The reduced end-to-end scene (tests/conftest.py) plus a bar target.
 BARS_TOML = """

@@ -74,8 +74,8 @@ def test_simulate_prints_the_warning_once_and_still_simulates(tmp_path):
 def test_a_run_names_its_scene_pixel_key(tmp_path):
     import json
 
-    from satchain.pipeline import _stage_scene
     from satchain.config.run import RunConfig
+    from satchain.pipeline import _stage_scene
 
     layout = tmp_path / "fine.json"
     layout.write_text(json.dumps(LAYOUT))

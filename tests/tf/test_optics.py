@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 from scipy.special import j0, j1
 
-from satchain.errors import ConfigError, InputError, ResourceLimitError
 from satchain.config.system import Optics, Spiders
+from satchain.errors import ConfigError, InputError, ResourceLimitError
 from satchain.tf.optics import (
     PupilOTF,
     PupilParams,

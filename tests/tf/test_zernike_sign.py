@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from satchain.config.system import ImagingSystem
 from satchain.engine.degrade import simulate_image
 from satchain.errors import ConfigError
-from satchain.config.system import ImagingSystem
 from satchain.tf.optics import make_diffraction_otf
 from satchain.tf.pupil import PupilParams
 

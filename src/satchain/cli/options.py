@@ -182,7 +182,7 @@ def parse_frequency_axis(text: str) -> str:
     >>> parse_frequency_axis(" Row ")
     'row'
     """
-    from satchain.measure._edge_axis import FREQUENCY_AXES
+    from satchain.measure.edge._axis import FREQUENCY_AXES
 
     value = str(text).strip().lower()
     if value not in FREQUENCY_AXES:

@@ -15,7 +15,7 @@ from satchain.tf import ctf as _ctf
 __all__ = ["BAR_COMPARE_MAX_CY_PER_PX", "bar_checks"]
 
 #: Bar groups finer than this (fewer than 2.5 px per period) are listed but not compared with Coltman's CTF.
-#: The bar measurement fits the group at its known period with the phase free (measure/_barfit.py), so from
+#: The bar measurement fits the group at its known period with the phase free (measure/bars/_fit.py), so from
 #: 2.5 px per period its CTF no longer depends on where the bars fall on the pixel grid (within 0.03 of
 #: Coltman's, up to 0.045 and flagged at integer periods where harmonics alias onto the fitted ones); the
 #: sampled max - min used before needed 5 px. The MTF derived from all groups is still plotted.

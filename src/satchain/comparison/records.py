@@ -226,7 +226,7 @@ class BarCheck(_Detail):
     predicted MTF. ``ctf_measured`` is the square-wave CTF the measurement reports: the group's fitted
     modulation (``ctf_raw_measured``) plus ``ctf_correction``, the difference between the model's Coltman CTF
     and the same estimator on the group rendered through the target's joint MTF model (finite 3-bar group,
-    aliased harmonics, grid phase; see measure/_barjoint.py). ``max_abs_error_sigma`` is ``ctf_std_measured``
+    aliased harmonics, grid phase; see measure/bars/_joint.py). ``max_abs_error_sigma`` is ``ctf_std_measured``
     at the group with the largest error (``worst_f_cy_per_px``, ``worst_group``). ``group``: each group's index in
     the target's design (the number every flag, table and file uses for it); ``at_noise_floor``: per group, whether
     its modulation was not above the noise (its CTF ~0 with its 1-sigma is measured and compared, not refused)."""

@@ -37,9 +37,9 @@ from scipy.stats import chi2 as chi2_dist
 from satchain._validate import check_range
 from satchain.errors import InputError
 from satchain.measure._common import ResultMixin, first_crossing, unmask, valid_mask
-from satchain.measure._edge_axis import check_axis
 from satchain.measure._zero_fill import zero_fill_mask
 from satchain.measure.edge import EdgeResult, measure_edge
+from satchain.measure.edge._axis import check_axis
 from satchain.measure.find import EdgeCandidate, EdgeSearch, Rejection, find_edges
 
 __all__ = ["CombinedMTF", "FindResult", "FoundEdge", "SIGMA_FLOOR", "ceos_csv", "ceos_table", "measure_found_edges"]

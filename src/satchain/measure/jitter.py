@@ -2,7 +2,7 @@
 
 A pushbroom camera forms each image line at its own instant; a line-of-sight oscillation shifts whole lines,
 so a straight near-vertical (ACT) edge wobbles in x.  :func:`measure_jitter` measures where every line crosses
-the edge (the same positions as ``measure_edge(...).edge_position_px``: :mod:`satchain.measure._edge_lines`),
+the edge (the same positions as ``measure_edge(...).edge_position_px``: :mod:`satchain.measure.edge._crossings`),
 removes the edge's tilt and finds the significant sinusoids (:mod:`satchain.measure._jitter_fit`).
 
 Conventions
@@ -28,9 +28,6 @@ from satchain._validate import check_positive, check_range
 from satchain.errors import ConfigError, InputError
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, to_jsonable, unmask
-from satchain.measure._edge_checks import check_saturation
-from satchain.measure._edge_lines import edge_line_fields, rough_line
-from satchain.measure._edge_locate import edge_region
 from satchain.measure._jitter_fit import baluev_fap as _fap
 from satchain.measure._jitter_fit import (
     fit_sinusoids,
@@ -39,6 +36,9 @@ from satchain.measure._jitter_fit import (
     periodogram,
     threshold_z,
 )
+from satchain.measure.edge._checks import check_saturation
+from satchain.measure.edge._crossings import edge_line_fields, rough_line
+from satchain.measure.edge._locate import edge_region
 
 __all__ = ["JitterPeak", "JitterResult", "measure_jitter"]
 

@@ -124,7 +124,7 @@ class _Flat:
 
 def _edge_plateaus(image: np.ndarray, it: Mapping[str, Any], frame) -> tuple[_Flat, _Flat] | None:
     """An edge's bright and dark plateaus (>= 4 px from the edge, >= 2 px inside its square), None when either
-    is too small. ``frame``: the image's geometry (:class:`satchain.measure._auto_common.Frame`)."""
+    is too small. ``frame``: the image's geometry (:class:`satchain.measure.auto._common.Frame`)."""
     x0, y0, x1, y1 = (float(v) for v in it["bbox_m"])
     c0, r0, c1, r1 = frame.covering(it["bbox_m"])
     r0, r1, c0, c1 = max(r0, 0), min(r1, image.shape[0]), max(c0, 0), min(c1, image.shape[1])
@@ -252,8 +252,8 @@ def measure_snr(
     >>> abs(r.snr / (1000 * 0.08 / 2.0) - 1) < 0.1
     True
     """
-    from satchain.measure._auto_common import Frame
     from satchain.measure.auto import check_image_affine
+    from satchain.measure.auto._common import Frame
 
     image, masked = split_mask("image", image)
     if masked is not None:

@@ -36,8 +36,8 @@ from typing import Any
 import numpy as np
 
 from satchain._validate import as_float_array, check_choice
-from satchain.errors import ConfigError
 from satchain.config.system import ImagingSystem
+from satchain.errors import ConfigError
 from satchain.tf import detector as _det
 from satchain.tf import motion as _mot
 from satchain.tf import optics as _opt

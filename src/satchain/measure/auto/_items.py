@@ -11,10 +11,10 @@ from dataclasses import replace
 import numpy as np
 
 from satchain.errors import InputError
-from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
-from satchain.measure._bargroups import renumber
 from satchain.measure._common import to_jsonable
+from satchain.measure.auto._common import AutoContext, AutoItem, Frame, Skip, skip_entry
 from satchain.measure.bars import measure_bars
+from satchain.measure.bars._groups import renumber
 from satchain.measure.edge import measure_edge
 from satchain.measure.star import measure_star
 from satchain.scene.targets import BarTarget, SiemensStar, SlantedEdge

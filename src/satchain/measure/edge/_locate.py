@@ -333,7 +333,7 @@ def curvature(coef, rows) -> float:
 
 def project(work: np.ndarray, rows: np.ndarray, coef, shift=None):
     """Signed distance of every pixel centre to the fitted edge along its local normal; ``shift`` (px along the
-    row, one per row of ``rows``) moves each row's edge from the polynomial (:mod:`satchain.measure._edge_align`).
+    row, one per row of ``rows``) moves each row's edge from the polynomial (:mod:`satchain.measure.edge._align`).
 
     Returns (distances, values, slope at the middle row, each row's sub-pixel phase frac(-x_e))."""
     nx = work.shape[1]

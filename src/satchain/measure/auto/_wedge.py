@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from satchain.errors import InputError
-from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip
-from satchain.measure._auto_items import geometry_text
 from satchain.measure._common import to_jsonable
+from satchain.measure.auto._common import AutoContext, AutoItem, Frame, Skip
+from satchain.measure.auto._items import geometry_text
 from satchain.measure.wedge import measure_wedge
 from satchain.scene.targets import HyperbolicWedge
 

@@ -5,7 +5,7 @@ A pushbroom camera forms each line at its own instant, so line-of-sight motion d
 of a line sits at its own position.  Two MTFs follow, and :func:`align_lines` gives the per-line offsets of
 both from the edge polynomial that the ESF is projected on:
 
-* **aligned** (each line located): the lines' measured edge positions (:mod:`satchain.measure._edge_lines`)
+* **aligned** (each line located): the lines' measured edge positions (:mod:`satchain.measure.edge._crossings`)
   smoothed by a penalised fit whose stiffness comes from the data -- a Whittaker smoother (second differences,
   whose null space is the straight line) with the penalty chosen by the unbiased risk estimate (Mallows' C_p)
   under the positions' own noise.  It is used only where the positions depart from the edge polynomial by more
@@ -25,8 +25,8 @@ import numpy as np
 from scipy.linalg import solveh_banded
 
 from satchain.measure._common import median
-from satchain.measure._edge_lines import line_numbers
-from satchain.measure._edge_locate import _Poly
+from satchain.measure.edge._crossings import line_numbers
+from satchain.measure.edge._locate import _Poly
 
 __all__ = ["align_lines", "los_curves", "on_grid", "smooth_positions"]
 

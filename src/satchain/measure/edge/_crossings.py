@@ -68,7 +68,7 @@ def edge_line_fields(work, coef, valid, clip, transposed: bool, roi):
 def rough_line(work: np.ndarray, usable=None) -> np.ndarray:
     """A straight line ``x = coef[0] y + coef[1]`` through the lines' derivative peaks (least squares, then once
     more without the peaks off it by more than 5 robust sigma + 3 px): only where to search for the edge, for
-    an edge that wobbles too much for :func:`satchain.measure._edge_locate.locate_edge`'s robust fit."""
+    an edge that wobbles too much for :func:`satchain.measure.edge._locate.locate_edge`'s robust fit."""
     ny, nx = work.shape
     g = np.zeros_like(work)
     g[:, 1:-1] = 0.5 * (work[:, 2:] - work[:, :-2])

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from satchain.measure._common import first_crossing
-from satchain.measure._edge_locate import curvature
+from satchain.measure.edge._locate import curvature
 from satchain.units import cy_per_px_to_cy_per_m_ground, cy_per_px_to_cy_per_mm
 
 __all__ = ["NU_STEP", "I_NYQ", "result_fields", "edge_point", "angle_deg", "edge_metrics"]

@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from satchain.measure._barfit import GroupFit, fit_group, plateau
-from satchain.measure._barjoint import MtfModel, refit_with_prior
+from satchain.measure.bars._fit import GroupFit, fit_group, plateau
+from satchain.measure.bars._joint import MtfModel, refit_with_prior
 
 __all__ = ["finite_group_correction", "group_centres"]
 

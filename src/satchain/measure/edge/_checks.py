@@ -15,8 +15,8 @@ from scipy.ndimage import correlate1d
 from satchain.errors import InputError
 from satchain.measure._clipping import find_clipping
 from satchain.measure._common import median
-from satchain.measure._edge_locate import _Poly
-from satchain.measure._edge_mtf import _gauss_kernel_nd, window_mtf
+from satchain.measure.edge._locate import _Poly
+from satchain.measure.edge._numerics import _gauss_kernel_nd, window_mtf
 
 __all__ = [
     "check_model",

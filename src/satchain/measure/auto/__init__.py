@@ -40,7 +40,7 @@ Radiometry.  The star's input modulation, the bars' large-area levels and the we
 values proportional to reflectance.  The image is calibrated to reflectance by a fit of
 ``value = offset + gain * reflectance`` to uniform truth areas (the two sides of every slanted edge, and the
 background away from every item), the diffraction tail of the PSF that pulls every plateau toward its
-surroundings modelled (:mod:`satchain.measure._auto_calibrate`); ``calibration`` in the result says what was
+surroundings modelled (:mod:`satchain.measure.auto._calibrate`); ``calibration`` in the result says what was
 used.
 
 Kinds.  :data:`MEASURERS` maps each scene kind to its result key and measuring function; a new target kind is
@@ -62,13 +62,13 @@ import numpy as np
 
 from satchain._validate import as_float_array, check_positive, check_range, masked_as_nan
 from satchain.errors import InputError
-from satchain.measure._auto_calibrate import calibrate
-from satchain.measure._auto_common import AutoContext, AutoItem, Frame, Skip, skip_entry
-from satchain.measure._auto_items import bars_item, edge_item, star_item
-from satchain.measure._auto_wedge import wedge_item
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import to_jsonable
 from satchain.measure._keys import RESULT_KEY
+from satchain.measure.auto._calibrate import calibrate
+from satchain.measure.auto._common import AutoContext, AutoItem, Frame, Skip, skip_entry
+from satchain.measure.auto._items import bars_item, edge_item, star_item
+from satchain.measure.auto._wedge import wedge_item
 from satchain.scene.layout import OBJECT_KINDS
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 

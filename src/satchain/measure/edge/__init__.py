@@ -59,9 +59,9 @@ from satchain.measure._common import (
     robust_sigma,
     unmask,
 )
-from satchain.measure._edge_align import los_curves, on_grid
-from satchain.measure._edge_axis import check_axis, line_coef, on_axis, oversampled_f_max
-from satchain.measure._edge_checks import (
+from satchain.measure.edge._align import los_curves, on_grid
+from satchain.measure.edge._axis import check_axis, line_coef, on_axis, oversampled_f_max
+from satchain.measure.edge._checks import (
     CRITICAL_TILTS_DEG,
     check_model,
     check_saturation,
@@ -74,13 +74,13 @@ from satchain.measure._edge_checks import (
     quantisation_step,
     unfitted_curvature,
 )
-from satchain.measure._edge_lines import edge_line_fields, line_numbers
-from satchain.measure._edge_locate import edge_region, locate_edge, orient_edge, project
-from satchain.measure._edge_mtf import adaptive_mtf, bin_esf, choose_bins, rise_width
-from satchain.measure._edge_mtf import flatten_rows as _flatten_rows
-from satchain.measure._edge_mtf import trim_ends as _trim_ends
-from satchain.measure._edge_result import NU_STEP as _NU_STEP
-from satchain.measure._edge_result import result_fields
+from satchain.measure.edge._crossings import edge_line_fields, line_numbers
+from satchain.measure.edge._locate import edge_region, locate_edge, orient_edge, project
+from satchain.measure.edge._numerics import adaptive_mtf, bin_esf, choose_bins, rise_width
+from satchain.measure.edge._numerics import flatten_rows as _flatten_rows
+from satchain.measure.edge._numerics import trim_ends as _trim_ends
+from satchain.measure.edge._result import NU_STEP as _NU_STEP
+from satchain.measure.edge._result import result_fields
 
 __all__ = ["EdgeResult", "measure_edge", "DEGENERATE_ANGLES_DEG"]
 
@@ -113,9 +113,9 @@ class EdgeResult(ResultMixin):
     coordinates, ``roi`` offset included) and ``edge_position_px`` where each crosses it (x for ACT, y for ALT;
     raw, not detrended; NaN / null where a line is not measured: its window leaves the region or touches an
     excluded or clipped pixel), with its 1-sigma ``edge_position_sigma_px``
-    (:mod:`satchain.measure._edge_lines`): line-of-sight motion from a long straight edge
+    (:mod:`satchain.measure.edge._crossings`): line-of-sight motion from a long straight edge
     (:func:`satchain.measure.jitter.measure_jitter`).
-    ``mtf_aligned`` is the MTF with each line located (:mod:`satchain.measure._edge_align`): the same curve as
+    ``mtf_aligned`` is the MTF with each line located (:mod:`satchain.measure.edge._align`): the same curve as
     ``mtf`` unless ``fit_degree`` is forced; where the lines' positions wobble beyond their noise (flag
     ``line_of_sight_motion``) ``mtf``, ``mtf_at_nyquist``, the ESF, LSF, RER and overshoot are measured so, the
     budget's per-row motion terms' counterpart.  ``mtf_as_imaged`` (``mtf_as_imaged_sigma``,
@@ -245,7 +245,7 @@ def measure_edge(
         MTF_normal(f / cos t)``, i.e. the normal axis scaled by ``cos t`` (``frequency_scale``; 0.957 at the
         Baotou target's 16.8 deg: the row MTF at Nyquist is the normal MTF at 0.522 cy/px).  Every frequency
         of the result (``f_cy_per_px``, ground, focal plane, MTF at Nyquist, MTF50) is then on the row axis;
-        the ESF, LSF, RER and overshoot stay along the normal.  See :mod:`satchain.measure._edge_axis`.
+        the ESF, LSF, RER and overshoot stay along the normal.  See :mod:`satchain.measure.edge._axis`.
     edge_line : (x, y, angle_deg), optional
         A known edge line (a point in the image, x = column, y = row, ``roi`` offset included, and the angle
         as ``angle_deg``), e.g. the joint line of two collinear halves of one target edge: the ESF is projected
@@ -328,7 +328,7 @@ def _moved_curve(work, valid, moved, stats, opts, axis_opts):
 
 
 def _line_positions(work, coef, valid, clip, where, flags):
-    """(lines, edge position, 1-sigma) per line crossing the edge (:mod:`satchain.measure._edge_lines`); all
+    """(lines, edge position, 1-sigma) per line crossing the edge (:mod:`satchain.measure.edge._crossings`); all
     NaN (flag ``lines_unmeasured``) where the lines' profile cannot be estimated."""
     transposed, roi = where
     try:
@@ -381,7 +381,7 @@ def _binned_esf(
     counts, sigma), flags, (lines, edge positions) of the ridge).  Pixels outside ``valid`` are left out.  With
     ``line`` (a degree-1 polynomial) the ESF is projected on that line, not on the one fitted.  ``moved =
     (locate_edge's result, per-line offsets)`` projects on the located polynomial moved line by line
-    (:mod:`satchain.measure._edge_align`) without locating it again."""
+    (:mod:`satchain.measure.edge._align`) without locating it again."""
     located, shift = (None, None) if moved is None else moved
     own, rows, flags, ridge = locate_edge(work, deg, valid) if located is None else located
     flags = list(flags)

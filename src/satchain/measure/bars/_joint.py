@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar, nnls
 
-from satchain.measure._barfit import F_HARMONIC_MAX, GroupFit, _design
+from satchain.measure.bars._fit import F_HARMONIC_MAX, GroupFit, _design
 
 __all__ = ["MtfModel", "fit_mtf_model", "held_harmonics", "prior_harmonics", "refit_with_prior"]
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from satchain.errors import InputError
-from satchain.measure._barfinite import group_centres
-from satchain.measure._barfit import GroupFit, fit_group
 from satchain.measure._common import clipping_flag, crop_roi
 from satchain.measure._keys import AT_NOISE_FLOOR
+from satchain.measure.bars._finite import group_centres
+from satchain.measure.bars._fit import GroupFit, fit_group
 
 __all__ = ["AT_NOISE_FLOOR", "measure_groups", "validate_deferred", "scatter", "renumber", "refusal_flags", "Groups"]
 
@@ -58,7 +58,7 @@ def _check_group(fit: GroupFit, prof: np.ndarray, period: float, index: int, def
     ``index`` and decided against the target's MTF model (``validate_deferred``).  With ``floor_ok`` (a target
     of two or more groups), a modulation not above the noise is a measurement at the noise floor
     (:func:`_noise_floor_flag`; ``noise``: the profile's, from its rows), not a refusal."""
-    from satchain.measure._barfit import period_gain
+    from satchain.measure.bars._fit import period_gain
 
     g_claim, g_other, f_other = period_gain(prof, period)
     if floor_ok and not _significant(fit):

@@ -21,7 +21,7 @@ region or the profile is not noise about a level (``_bargroups``).  Without
 ``levels`` the large-area levels are the plateaus of the widest group (its samples near bar and gap
 centres), only if they are flat at every grid phase (else refused: the CTF would be inflated, the old
 default's 7.8 %; a long-tailed PSF holds even flat-looking tops below the levels, see
-:func:`satchain.measure._barfit.plateau`); a single group cannot be its own reference.  The fitted CTF is
+:func:`satchain.measure.bars._fit.plateau`); a single group cannot be its own reference.  The fitted CTF is
 kept within [the samples' own modulation, 1] (a lower bound, and the bound of a non-negative PSF), flagged
 when clipped.  Where a group's samples within P/8 of its bar and gap centres are flat (wide bars), their
 means are the peak and trough themselves and give the CTF directly (no truncated series).
@@ -60,13 +60,13 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.errors import InputError
-from satchain.measure._barfinite import finite_group_correction
-from satchain.measure._barfit import GroupFit
-from satchain.measure._barfit import plateau as _plateau
-from satchain.measure._bargroups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
-from satchain.measure._barjoint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
 from satchain.measure._clipping import resolve_full_scale
 from satchain.measure._common import ResultMixin, masked_as_nan
+from satchain.measure.bars._finite import finite_group_correction
+from satchain.measure.bars._fit import GroupFit
+from satchain.measure.bars._fit import plateau as _plateau
+from satchain.measure.bars._groups import Groups, measure_groups, refusal_flags, renumber, scatter, validate_deferred
+from satchain.measure.bars._joint import fit_mtf_model, held_harmonics, prior_harmonics, refit_with_prior
 from satchain.units import cy_per_px_to_cy_per_m_ground
 
 __all__ = ["BarsResult", "measure_bars", "coltman_inverse_coefficients", "mtf_from_ctf_samples"]

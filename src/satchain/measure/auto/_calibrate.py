@@ -26,8 +26,8 @@ import math
 
 import numpy as np
 
-from satchain.measure._auto_common import Frame, Skip
 from satchain.measure._common import fill_invalid
+from satchain.measure.auto._common import Frame, Skip
 from satchain.scene.targets import SlantedEdge
 
 __all__ = ["ERODE_PX", "TAIL_RMAX_PX", "TAIL_RMIN_PX", "calibrate"]

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.ndimage import convolve1d, correlate1d
 
 from satchain.measure._common import median
-from satchain.measure._edge_locate import MIN_ROWS
+from satchain.measure.edge._locate import MIN_ROWS
 
 __all__ = ["adaptive_mtf", "bin_esf", "choose_bins", "flatten_rows", "rise_width", "trim_ends", "window_mtf"]
 
