@@ -1,5 +1,5 @@
-"""[as_built] file = a complete system file (the README's, the preset's, the run's own) or a partial one; fill
-factor and active widths in either file (issue 29, item 2: these raised KeyError 'active_width_x_m')."""
+"""[as_built] file = a complete system file (docs/guide/budget.md's, the preset's, the run's own) or a partial one;
+fill factor and active widths in either file (issue 29, item 2: these raised KeyError 'active_width_x_m')."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 from satchain.config.run import RunConfig, system_differences
 from satchain.config.system import ImagingSystem, load_preset
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+BUDGET = Path(__file__).resolve().parents[1] / "docs" / "guide" / "budget.md"
 PRESET = resources.files("satchain.presets").joinpath("ankarasat3.toml")
 
 #: The preset's camera with its active area given as widths (80 % and 90 % of the 5.88 um pitch).
@@ -21,12 +21,13 @@ WIDTHS_DESIGN = {"detector": {"pitch_m": 5.88e-6, "active_width_x_m": 4.704e-6, 
 
 
 def _readme_system() -> str:
-    section = README.read_text()[README.read_text().index("### A system file") :]
-    return re.search(r"```toml\n(.*?)```", section, re.S).group(1)
+    """The system file of docs/guide/budget.md ("A system file"), written there by ``cat > mycamera.toml``."""
+    section = BUDGET.read_text().split("### A system file", 1)[1]
+    return re.search(r"^cat > mycamera\.toml <<'EOF'\n(.*?)^EOF$", section, re.S | re.M).group(1)
 
 
 def _design(tmp_path: Path, system: str) -> dict:
-    """A ``[system]`` table: the preset, or the README's file written into ``tmp_path``."""
+    """A ``[system]`` table: the preset, or the guide's system file written into ``tmp_path``."""
     if system == "preset":
         return {"preset": "ankarasat3"}
     (tmp_path / "design.toml").write_text(_readme_system())
@@ -88,7 +89,7 @@ def test_active_widths_over_a_design_with_fill_factor(tmp_path):
 
 
 def test_pitch_and_fill_factor_together_in_a_partial_file(tmp_path):
-    """Both shorthands at once (the README file's pair) raised KeyError; either order."""
+    """Both shorthands at once (the guide system file's pair) raised KeyError; either order."""
     for text in ("pitch_m = 6e-6\nfill_factor = 0.81\n", "fill_factor = 0.81\npitch_m = 6e-6\n"):
         (tmp_path / "d.toml").write_text("[detector]\n" + text)
         det = RunConfig.from_dict({"as_built": {"file": "d.toml"}}, base_dir=tmp_path).load_as_built_system().detector

@@ -1,5 +1,5 @@
-"""Issue 11, point 8: the README's example system file runs through `simulate` and `run`, and a run is
-reproduced from its own config.toml (from any directory): the same simulated image, pixel for pixel."""
+"""Issue 11, point 8: the guide's example system file (docs/guide/budget.md) runs through `simulate` and `run`, and a
+run is reproduced from its own config.toml (from any directory): the same simulated image, pixel for pixel."""
 
 import re
 from pathlib import Path
@@ -14,7 +14,7 @@ from satchain.config.run import RunConfig
 from satchain.io import images as io
 
 runner = CliRunner()
-README = Path(__file__).resolve().parents[1] / "README.md"
+BUDGET = Path(__file__).resolve().parents[1] / "docs" / "guide" / "budget.md"
 
 TINY_SCENE = """
 [scene]
@@ -33,9 +33,9 @@ measures = "act"
 
 
 def _readme_system() -> str:
-    text = README.read_text()
-    section = text[text.index("### A system file") :]
-    return re.search(r"```toml\n(.*?)```", section, re.S).group(1)
+    """The system file of docs/guide/budget.md ("A system file"), written there by ``cat > mycamera.toml``."""
+    section = BUDGET.read_text().split("### A system file", 1)[1]
+    return re.search(r"^cat > mycamera\.toml <<'EOF'\n(.*?)^EOF$", section, re.S | re.M).group(1)
 
 
 def test_readme_system_file_simulates_to_dn_within_the_adc_range(tmp_path):

@@ -16,8 +16,6 @@ from typer.testing import CliRunner
 
 from satchain.cli.main import app
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-
 MINIMAL_SYSTEM = """
 [orbit]
 altitude_m = 500000
@@ -55,9 +53,17 @@ def _errors(kind: str, data) -> list[str]:
     return [f"{'.'.join(map(str, e.absolute_path))}: {e.message}" for e in validator.iter_errors(data)]
 
 
+BUDGET = Path(__file__).resolve().parents[1] / "docs" / "guide" / "budget.md"
+
+
+def _system_file_text() -> str:
+    """The system file of docs/guide/budget.md ("A system file"), written there by ``cat > mycamera.toml``."""
+    section = BUDGET.read_text().split("### A system file", 1)[1]
+    return re.search(r"^cat > mycamera\.toml <<'EOF'\n(.*?)^EOF$", section, re.S | re.M).group(1)
+
+
 def _readme_system_file() -> dict:
-    section = README.read_text().split("### A system file", 1)[1]
-    return tomllib.loads(re.search(r"```toml\n(.*?)```", section, re.S).group(1))
+    return tomllib.loads(_system_file_text())
 
 
 def test_the_preset_the_readme_example_and_a_minimal_system_file_validate():

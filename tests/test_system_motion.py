@@ -93,7 +93,7 @@ def test_readme_block_is_valid(tmp_path, monkeypatch):
     else:  # pragma: no cover
         import tomli as tomllib
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    text = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "pushbroom.md").read_text()
     (block,) = [b for b in re.findall(r"```toml\n(.*?)```", text, re.S) if "[[motion.oscillation]]" in b]
     keys = tomllib.loads(block)
     monkeypatch.chdir(tmp_path)  # the block's attitude log, relative to the working folder here
