@@ -17,7 +17,7 @@ from pydantic import BaseModel
 from typer.testing import CliRunner
 
 from satchain.config.run import RunConfig
-from satchain.config.schema import _unit, schema
+from satchain.config.schema import schema, unit_of_key
 from satchain.config.system import ImagingSystem
 from satchain.errors import ConfigError
 
@@ -123,7 +123,7 @@ def test_every_key_has_a_description(kind: str, model: type[BaseModel]) -> None:
 @pytest.mark.parametrize("kind", ["system", "run"])
 def test_a_numeric_key_without_a_unit_suffix_says_its_unit(kind: str) -> None:
     keys = SYSTEM_KEYS if kind == "system" else RUN_KEYS
-    unitless = {k: p for k, p in keys.items() if _is_numeric(p) and _unit(k.rsplit(".", 1)[-1]) is None}
+    unitless = {k: p for k, p in keys.items() if _is_numeric(p) and unit_of_key(k.rsplit(".", 1)[-1]) is None}
     expected = {
         "system": {"optics.f_number", "optics.transmission", "detector.tdi_stages", "optics.spiders.count",
                    "detector.qe", "atmosphere.hv_ground_cn2", "bands.wavelength_weights"},
@@ -133,7 +133,7 @@ def test_a_numeric_key_without_a_unit_suffix_says_its_unit(kind: str) -> None:
     missing = {k: _own(p) for k, p in unitless.items() if not _UNIT_IN_WORDS.search(_own(p))}
     assert not missing, f"numeric keys whose name has no unit suffix and whose description names none: {missing}"
     for key, prop in keys.items():  # a unit suffix: the schema states the unit
-        unit = _unit(key.rsplit(".", 1)[-1])
+        unit = unit_of_key(key.rsplit(".", 1)[-1])
         if unit is not None and _is_numeric(prop):
             assert prop.get("x-unit") == unit, key
 

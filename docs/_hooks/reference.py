@@ -365,10 +365,11 @@ def _anchor(section: str) -> str:
 def keys_page(kind: str, title: str, intro: str, *, toml: bool = True) -> str:
     """A page with one table per section (a TOML table, or a JSON object when ``toml`` is false), each nested
     table right after its parent."""
-    from satchain.config.schema import _unit as unit_of_name
     from satchain.config.schema import schema
+    from satchain.config.schema import unit_of_key as unit_of_name
+    from satchain.results import results_schema
 
-    top = schema(kind)
+    top = results_schema() if kind == "results" else schema(kind)
     defs = top.get("$defs", {})
     out: list[str] = []
     counts = {"keys": 0, "tables": 0}

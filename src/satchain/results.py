@@ -16,7 +16,10 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import types
+import typing
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -45,6 +48,7 @@ __all__ = [
     "RunResult",
     "SceneResult",
     "SimulationResult",
+    "results_schema",
     "strict_json",
 ]
 
@@ -225,3 +229,121 @@ class RunResult:
         if geometry:
             out["image_geometry"] = geometry
         return strict_json(out)
+
+
+# ------------------------------------------------------------------------------------------------- its schema
+def _of_type(tp: Any) -> dict[str, Any]:
+    """A JSON Schema from a record's type hint (``float | None``, ``list``, ``dict[str, Any]`` ...)."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        return {"anyOf": [_of_type(a) for a in typing.get_args(tp)]}
+    if tp is type(None):
+        return {"type": "null"}
+    if tp is bool:
+        return {"type": "boolean"}
+    if tp is int:
+        return {"type": "integer"}
+    if tp is float:
+        return {"type": "number"}
+    if tp is str:
+        return {"type": "string"}
+    if tp in (list, tuple) or origin in (list, tuple):
+        return {"type": "array"}
+    if tp is dict or origin in (dict, typing.get_origin(typing.Mapping)):
+        return {"type": "object"}
+    return {}
+
+
+def _record_schema(cls: type, *, renames: dict[str, str] | None = None, drop: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The schema of a record dataclass as its ``to_dict`` writes it (``passed`` as ``pass``); fields with a
+    default may be left out."""
+    renames = {"passed": "pass", **(renames or {})}
+    hints = typing.get_type_hints(cls)
+    props: dict[str, Any] = {}
+    required: list[str] = []
+    for f in dataclasses.fields(cls):
+        if f.name in drop:
+            continue
+        key = renames.get(f.name, f.name)
+        props[key] = _of_type(hints[f.name])
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            required.append(key)
+    return {"type": "object", "properties": props, "required": required}
+
+
+def results_schema() -> dict[str, Any]:
+    """The JSON Schema of results.json (:meth:`satchain.results.RunResult.to_json_dict`)."""
+    from satchain.comparison.records import (  # the records that write the file
+        BarCheck,
+        CheckRow,
+        EdgeCheck,
+        NiirsCheck,
+        StarCheck,
+        WedgeCheck,
+        result_key,
+    )
+    from satchain.config.run import Tolerances
+    from satchain.config.schema import DRAFT, annotate_key
+    from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
+
+    num, opt_num = {"type": "number"}, {"type": ["number", "null"]}
+    per_axis = {"type": "object", "properties": {"act": opt_num, "alt": opt_num}, "required": ["act", "alt"]}
+    row = _record_schema(CheckRow, renames={"tolerance_text": "tolerance", "tolerance": "tolerance_value"})
+    row["properties"] |= {"z": opt_num, "tolerance_inside_noise": {"type": ["boolean", "null"]}}
+    row["required"] += ["z", "tolerance_inside_noise"]
+    tolerances = Tolerances.model_json_schema()
+    for name, prop in tolerances["properties"].items():
+        prop.pop("title", None)
+        annotate_key(name, prop)
+    defs = {
+        "CheckRow": row,
+        "EdgeCheck": _record_schema(EdgeCheck),
+        "StarCheck": _record_schema(StarCheck),
+        "BarCheck": _record_schema(BarCheck),
+        "WedgeCheck": _record_schema(WedgeCheck),
+        "NiirsCheck": _record_schema(NiirsCheck),
+        "Tolerances": {k: v for k, v in tolerances.items() if k != "title"},
+    }
+    props: dict[str, Any] = {
+        "format_version": {"const": RESULTS_FORMAT_VERSION, "description": "version of the results.json layout"},
+        "pass": {"type": ["boolean", "null"], "description": "overall: false if a check failed, null if none ran"},
+        "n_checks": {"type": "integer", "minimum": 0},
+        "n_checked": {"type": "integer", "minimum": 0},
+        "n_failed": {"type": "integer", "minimum": 0},
+        "null_means": {"type": "string"},
+        "warnings": {"type": "array", "items": {"type": "string"}},
+        "system": {"type": "string", "description": "the system's name"},
+        "gsd_m": {**num, "x-unit": "m"},
+        "gsd_act_m": {**num, "x-unit": "m"},
+        "gsd_alt_m": {**num, "x-unit": "m"},
+        "mtf_at_nyquist": {**per_axis, "description": "predicted system MTF at Nyquist"},
+        "mtfa": {**per_axis, "description": "predicted MTF area"},
+        "radiometry": {
+            "type": "object",
+            "properties": {k: opt_num for k in ("signal_e", "snr", "contrast_snr", "well_fill")}
+            | {"saturated": {"type": ["boolean", "null"]}},
+        },
+        "quality_predicted": {"type": "object", "description": "GIQE inputs and NIIRS predicted"},
+        "as_built_differences": {"type": "array"},
+        result_key(SlantedEdge.kind): {"type": "array", "items": {"$ref": "#/$defs/EdgeCheck"}},
+        result_key(SiemensStar.kind): {"type": "array", "items": {"$ref": "#/$defs/StarCheck"}},
+        result_key(BarTarget.kind): {"type": "array", "items": {"$ref": "#/$defs/BarCheck"}},
+        result_key(HyperbolicWedge.kind): {"type": "array", "items": {"$ref": "#/$defs/WedgeCheck"}},
+        "niirs": {"$ref": "#/$defs/NiirsCheck"},
+        "snr_measurement": {"type": "object"},
+        "summary": {"type": "array", "items": {"$ref": "#/$defs/CheckRow"}, "description": "one row per check"},
+        "skipped": {"type": "array"},
+        "tolerances": {"$ref": "#/$defs/Tolerances"},
+        "image_geometry": {"type": "object", "description": "pushbroom image geometry (a time-varying motion)"},
+    }
+    required = [k for k in props if k not in ("image_geometry",)]
+    return {
+        "$schema": DRAFT,
+        "title": "satchain results.json",
+        "description": "The results of one `satchain run` (strict JSON: null, never NaN, for what is not "
+        "available). Objects may hold more keys than listed (a renamed key is kept beside its new name).",
+        "type": "object",
+        "properties": props,
+        "required": required,
+        "$defs": defs,
+    }

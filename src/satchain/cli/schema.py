@@ -36,6 +36,12 @@ def schema(
     """
     import json
 
-    from satchain.config.schema import schema as make_schema
+    if kind.value == "results":
+        from satchain.results import results_schema
 
-    typer.echo(json.dumps(make_schema(kind.value), indent=2))
+        made = results_schema()
+    else:
+        from satchain.config.schema import schema as make_schema
+
+        made = make_schema(kind.value)
+    typer.echo(json.dumps(made, indent=2))

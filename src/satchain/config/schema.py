@@ -8,9 +8,8 @@ misspelt key fails validation. Keys that the loader takes besides the fields (``
 ``detector.fill_factor``, ``motion.line_of_sight.file``) are accepted, and the keys that such a key stands for
 (``pitch_x_m`` / ``pitch_y_m``; ``focal_length_m`` or ``f_number``) are required one way or the other.
 
-results.json has no pydantic model: its schema is built from the typed records that write it
-(:mod:`satchain.results`, :mod:`satchain.comparison.records`). It lists the documented keys and their types;
-an entry may hold more keys (a renamed key is kept beside its new name for a while), so its objects stay open.
+results.json has no pydantic model: its schema is built, a layer above, from the typed records that write it
+(:func:`satchain.results.results_schema`); ``satchain schema results`` prints it.
 
 Examples
 --------
@@ -22,18 +21,16 @@ Examples
 from __future__ import annotations
 
 import copy
-import dataclasses
 import re
-import types
-import typing
 from typing import Any
 
-__all__ = ["KINDS", "schema"]
+__all__ = ["DRAFT", "KINDS", "annotate_key", "run_schema", "schema", "system_schema", "unit_of_key"]
 
-#: The schemas ``satchain schema`` prints.
-KINDS = ("system", "run", "results")
+#: The configuration schemas (``satchain schema`` prints these and results.json's).
+KINDS = ("system", "run")
 
-_DRAFT = "https://json-schema.org/draft/2020-12/schema"
+#: The JSON Schema dialect of every schema satchain writes.
+DRAFT = "https://json-schema.org/draft/2020-12/schema"
 
 #: The unit a key's name ends in (the house rule: the unit in every name that carries one), longest first.
 _UNITS = (
@@ -84,7 +81,7 @@ _ONE_OF_REQUIRED: dict[str, tuple[tuple[str, ...], list[list[str]]]] = {
 }
 
 
-def _unit(name: str) -> str | None:
+def unit_of_key(name: str) -> str | None:
     for suffix, unit in _UNITS:
         if name.endswith(suffix):
             return unit
@@ -109,10 +106,10 @@ def _bounded(prop: dict[str, Any]) -> dict[str, Any]:
     return prop
 
 
-def _annotate(name: str, prop: dict[str, Any]) -> None:
+def annotate_key(name: str, prop: dict[str, Any]) -> None:
     """Add the unit (``x-unit`` and in words) and the allowed range to a property's description."""
     parts = [prop["description"]] if prop.get("description") else []
-    unit = _unit(name)
+    unit = unit_of_key(name)
     if unit is not None:
         prop["x-unit"] = unit
         if not re.search(rf"(^|[ ,(]){re.escape(unit)}([ ,)]|$)", prop.get("description", "")):
@@ -130,12 +127,12 @@ def _finish_model(name: str, model_schema: dict[str, Any]) -> None:
     if "description" in model_schema:  # the model's docstring, without its doctest examples
         model_schema["description"] = model_schema["description"].split("\n\nExamples\n", 1)[0].strip()
     for pname, prop in props.items():
-        _annotate(pname, prop)
+        annotate_key(pname, prop)
         prop.pop("title", None)
     for (model, key), sub in _INPUT_KEYS.items():
         if model == name:
             props[key] = copy.deepcopy(sub)
-            _annotate(key, props[key])
+            annotate_key(key, props[key])
     if name in _ONE_OF_REQUIRED:
         filled, alternatives = _ONE_OF_REQUIRED[name]
         model_schema["required"] = [r for r in model_schema.get("required", []) if r not in filled]
@@ -152,7 +149,7 @@ def _finish(top: dict[str, Any], title: str, description: str) -> dict[str, Any]
             _finish_model(name, sub)
     _finish_model(top.get("title", ""), top)
     rest = {k: v for k, v in top.items() if k not in ("title", "description")}
-    return {"$schema": _DRAFT, "title": title, "description": description, **rest}
+    return {"$schema": DRAFT, "title": title, "description": description, **rest}
 
 
 def system_schema() -> dict[str, Any]:
@@ -216,127 +213,10 @@ def run_schema() -> dict[str, Any]:
     return s
 
 
-# ------------------------------------------------------------------------------------------------- results.json
-def _of_type(tp: Any) -> dict[str, Any]:
-    """A JSON Schema from a record's type hint (``float | None``, ``list``, ``dict[str, Any]`` ...)."""
-    origin = typing.get_origin(tp)
-    if origin in (typing.Union, types.UnionType):
-        return {"anyOf": [_of_type(a) for a in typing.get_args(tp)]}
-    if tp is type(None):
-        return {"type": "null"}
-    if tp is bool:
-        return {"type": "boolean"}
-    if tp is int:
-        return {"type": "integer"}
-    if tp is float:
-        return {"type": "number"}
-    if tp is str:
-        return {"type": "string"}
-    if tp in (list, tuple) or origin in (list, tuple):
-        return {"type": "array"}
-    if tp is dict or origin in (dict, typing.get_origin(typing.Mapping)):
-        return {"type": "object"}
-    return {}
-
-
-def _record(cls: type, *, renames: dict[str, str] | None = None, drop: tuple[str, ...] = ()) -> dict[str, Any]:
-    """The schema of a record dataclass as its ``to_dict`` writes it (``passed`` as ``pass``); fields with a
-    default may be left out."""
-    renames = {"passed": "pass", **(renames or {})}
-    hints = typing.get_type_hints(cls)
-    props: dict[str, Any] = {}
-    required: list[str] = []
-    for f in dataclasses.fields(cls):
-        if f.name in drop:
-            continue
-        key = renames.get(f.name, f.name)
-        props[key] = _of_type(hints[f.name])
-        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
-            required.append(key)
-    return {"type": "object", "properties": props, "required": required}
-
-
-def results_schema() -> dict[str, Any]:
-    """The JSON Schema of results.json (:meth:`satchain.results.RunResult.to_json_dict`)."""
-    from satchain.comparison.records import (
-        BarCheck,
-        CheckRow,
-        EdgeCheck,
-        NiirsCheck,
-        StarCheck,
-        WedgeCheck,
-        result_key,
-    )
-    from satchain.config.run import Tolerances
-    from satchain.results import RESULTS_FORMAT_VERSION
-    from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
-
-    num, opt_num = {"type": "number"}, {"type": ["number", "null"]}
-    per_axis = {"type": "object", "properties": {"act": opt_num, "alt": opt_num}, "required": ["act", "alt"]}
-    row = _record(CheckRow, renames={"tolerance_text": "tolerance", "tolerance": "tolerance_value"})
-    row["properties"] |= {"z": opt_num, "tolerance_inside_noise": {"type": ["boolean", "null"]}}
-    row["required"] += ["z", "tolerance_inside_noise"]
-    tolerances = Tolerances.model_json_schema()
-    for name, prop in tolerances["properties"].items():
-        prop.pop("title", None)
-        _annotate(name, prop)
-    defs = {
-        "CheckRow": row,
-        "EdgeCheck": _record(EdgeCheck),
-        "StarCheck": _record(StarCheck),
-        "BarCheck": _record(BarCheck),
-        "WedgeCheck": _record(WedgeCheck),
-        "NiirsCheck": _record(NiirsCheck),
-        "Tolerances": {k: v for k, v in tolerances.items() if k != "title"},
-    }
-    props: dict[str, Any] = {
-        "format_version": {"const": RESULTS_FORMAT_VERSION, "description": "version of the results.json layout"},
-        "pass": {"type": ["boolean", "null"], "description": "overall: false if a check failed, null if none ran"},
-        "n_checks": {"type": "integer", "minimum": 0},
-        "n_checked": {"type": "integer", "minimum": 0},
-        "n_failed": {"type": "integer", "minimum": 0},
-        "null_means": {"type": "string"},
-        "warnings": {"type": "array", "items": {"type": "string"}},
-        "system": {"type": "string", "description": "the system's name"},
-        "gsd_m": {**num, "x-unit": "m"},
-        "gsd_act_m": {**num, "x-unit": "m"},
-        "gsd_alt_m": {**num, "x-unit": "m"},
-        "mtf_at_nyquist": {**per_axis, "description": "predicted system MTF at Nyquist"},
-        "mtfa": {**per_axis, "description": "predicted MTF area"},
-        "radiometry": {
-            "type": "object",
-            "properties": {k: opt_num for k in ("signal_e", "snr", "contrast_snr", "well_fill")}
-            | {"saturated": {"type": ["boolean", "null"]}},
-        },
-        "quality_predicted": {"type": "object", "description": "GIQE inputs and NIIRS predicted"},
-        "as_built_differences": {"type": "array"},
-        result_key(SlantedEdge.kind): {"type": "array", "items": {"$ref": "#/$defs/EdgeCheck"}},
-        result_key(SiemensStar.kind): {"type": "array", "items": {"$ref": "#/$defs/StarCheck"}},
-        result_key(BarTarget.kind): {"type": "array", "items": {"$ref": "#/$defs/BarCheck"}},
-        result_key(HyperbolicWedge.kind): {"type": "array", "items": {"$ref": "#/$defs/WedgeCheck"}},
-        "niirs": {"$ref": "#/$defs/NiirsCheck"},
-        "snr_measurement": {"type": "object"},
-        "summary": {"type": "array", "items": {"$ref": "#/$defs/CheckRow"}, "description": "one row per check"},
-        "skipped": {"type": "array"},
-        "tolerances": {"$ref": "#/$defs/Tolerances"},
-        "image_geometry": {"type": "object", "description": "pushbroom image geometry (a time-varying motion)"},
-    }
-    required = [k for k in props if k not in ("image_geometry",)]
-    return {
-        "$schema": _DRAFT,
-        "title": "satchain results.json",
-        "description": "The results of one `satchain run` (strict JSON: null, never NaN, for what is not "
-        "available). Objects may hold more keys than listed (a renamed key is kept beside its new name).",
-        "type": "object",
-        "properties": props,
-        "required": required,
-        "$defs": defs,
-    }
-
-
 def schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema ``satchain schema KIND`` prints: ``"system"``, ``"run"`` or ``"results"``."""
-    makers = {"system": system_schema, "run": run_schema, "results": results_schema}
+    """The JSON Schema of a configuration file: ``"system"`` or ``"run"`` (``satchain schema results`` prints
+    :func:`satchain.results.results_schema`)."""
+    makers = {"system": system_schema, "run": run_schema}
     if kind not in makers:
         from satchain.errors import ConfigError
 
