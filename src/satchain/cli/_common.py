@@ -192,6 +192,7 @@ def parse_numbers(name: str, text: str, n: int | None = None, *, minimum: float 
     return vals
 
 
+_LITERAL = re.compile(r"``(.+?)``")  # a reST inline literal
 _LIST_ITEM = re.compile(r"(?:[-*]\s|\d+[.)]\s)")
 
 
@@ -199,16 +200,20 @@ def reflow_help(text: str | None) -> str | None:
     """A command's help as typer/rich reflow it well: each paragraph one line (its source lines joined), so that
     it wraps at the terminal's width and not where the docstring was wrapped; paragraphs (a blank line between),
     list items (``- ``, ``* ``, ``1. ``) and click's verbatim blocks (a paragraph opening with ``\\b``) are kept,
-    and so is everything after ``\\f`` (click's cut).
+    and so is everything after ``\\f`` (click's cut). The docstrings' reST literals read as the terminal shows
+    them: an option as it is typed (``--center`` -> --center), anything else in quotes (``flags`` -> 'flags').
 
     Examples
     --------
     >>> reflow_help("A summary\\n    in two lines.\\n\\n- one\\n  item\\n- two")
     'A summary in two lines.\\n\\n- one item\\n- two'
+    >>> print(reflow_help("Give ``--center`` in pixels; see ``flags``."))
+    Give --center in pixels; see 'flags'.
     """
     if not text:
         return text
     head, cut, tail = inspect.cleandoc(text).partition("\f")
+    head = _LITERAL.sub(lambda m: m[1] if m[1].startswith("-") else f"'{m[1]}'", head)
     paragraphs = []
     for paragraph in re.split(r"\n\s*\n", head.strip()):
         if paragraph.startswith("\b"):
