@@ -15,6 +15,11 @@ Two kinds of command are skipped, nothing else:
   (``python -m pip install -e '.[test]' && python -m pytest -q -n 2``, the second of "the two commands", which
   docs/getting-started.md repeats): it is CI's test run itself (and would run this test again inside itself).
 
+The pages are marked ``doc_commands`` and left out of the default test run (pyproject's ``-m "not
+doc_commands"``: together they take ~3 CPU-minutes, most of it real ``satchain run``s); CI runs them as a step of
+their own, ``python -m pytest -q -n 2 -m doc_commands tests/test_doc_commands.py``, as does anyone editing a page
+(add ``-k PAGE``). The runner's own test runs by default.
+
 Each page runs within a budget (printed with the page's per-block times), enforced as the page's timeout and
 nothing more: benchmarks/ print ratios, tests never assert timings. ``SATCHAIN_DOC_BUDGET_S`` overrides every
 page's budget (a slow or loaded machine). On failure the message names the failing block and prints it
@@ -213,6 +218,7 @@ def failure_message(rel: str, blocks: list[Block], run: PageRun, budget_s: float
     )
 
 
+@pytest.mark.doc_commands
 @pytest.mark.parametrize("page", pages(), ids=lambda p: p.relative_to(REPO).as_posix())
 def test_page_commands_run(page: Path, tmp_path: Path) -> None:
     """The page's ```bash blocks, in order, in one shell in a fresh folder, within the page's budget."""
