@@ -12,8 +12,8 @@ Two kinds of command are skipped, nothing else:
 - ``python -m pip install ...`` anywhere (CI installs the project itself; a line ``python -m pip install -e .
   && satchain run`` runs ``satchain run``);
 - ``python -m pytest ...`` in the README's first block, and wherever it follows a skipped install on the same line
-  (``python -m pip install -e '.[test]' && python -m pytest -q -n 2``, the second of "the two commands", which
-  docs/getting-started.md repeats): it is CI's test run itself (and would run this test again inside itself).
+  (``python -m pip install -e '.[test]' && python -m pytest -q -n 2``, the second of "the two commands"): it is
+  CI's test run itself (and would run this test again inside itself).
 
 The pages are marked ``doc_commands`` and left out of the default test run (pyproject's ``-m "not
 doc_commands"``: together they take ~3 CPU-minutes, most of it real ``satchain run``s); CI runs them as a step of
@@ -44,9 +44,8 @@ REPO = Path(__file__).resolve().parents[1]
 #: Seconds a page's blocks may take together (its timeout). Pages should keep to ~40 s of work on 2 cores.
 DEFAULT_BUDGET_S = 120.0
 #: Pages allowed more. README.md's first block runs the default ``satchain run`` (the 49 Mpx reference scene,
-#: 16-30 s on a 2-core machine), and docs/getting-started.md repeats it: acceptable there, since it is the
-#: command a newcomer runs first.
-PAGE_BUDGET_S = {"README.md": 240.0, "docs/getting-started.md": 240.0}
+#: 16-30 s on a 2-core machine): acceptable there, since it is the command a newcomer runs first.
+PAGE_BUDGET_S = {"README.md": 240.0}
 
 FENCE = re.compile(r"^(?P<indent>[ \t]*)```bash[ \t]*\n(?P<body>.*?)^(?P=indent)```[ \t]*$", re.M | re.S)
 PIP_INSTALL = re.compile(r"^\s*python -m pip install\b")
