@@ -8,13 +8,16 @@ module). CHANGELOG.md lists every move (tests/test_changelog_aliases.py keeps th
 
 Examples
 --------
+The first import of an old name warns ("satchain.quality is deprecated in satchain 0.1 and will be removed in 0.2:
+it moved to satchain.prediction.quality"); what it gives is the new module's:
+
 >>> import warnings
->>> with warnings.catch_warnings(record=True) as w:
-...     warnings.simplefilter("always")
-...     from satchain.quality import giqe5
->>> from satchain.prediction.quality import giqe5 as new
->>> giqe5 is new, str(w[0].message).split(":")[0]
-(True, 'satchain.quality is deprecated in satchain 0.1 and will be removed in 0.2')
+>>> from satchain.prediction.quality import giqe5
+>>> with warnings.catch_warnings():
+...     warnings.simplefilter("ignore")
+...     from satchain.quality import giqe5 as old
+>>> old is giqe5
+True
 """
 
 from __future__ import annotations
