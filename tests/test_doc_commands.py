@@ -231,6 +231,7 @@ def test_page_commands_run(page: Path, tmp_path: Path) -> None:
     print(f"{rel}: {len(blocks)} bash block(s), budget {budget:.0f} s; {report or 'no block finished'}")
     if run.returncode != 0:
         pytest.fail(failure_message(rel, blocks, run, budget), pytrace=False)
+    assert run.running is None and len(run.durations_s) == len(blocks), f"{rel}: not every block ran to its end"
 
 
 def test_the_runner_itself(tmp_path: Path) -> None:
