@@ -15,13 +15,14 @@ import typer
 
 from satchain.cli._common import ReflowGroup, print_warning, set_debug
 from satchain.cli.budget import budget
+from satchain.cli.design import design
 from satchain.cli.measure import measure_app
 from satchain.cli.run import run
 from satchain.cli.scene import scene
 from satchain.cli.schema import schema
 from satchain.cli.simulate import simulate
 
-__all__ = ["app", "budget", "main", "run", "scene", "schema", "simulate"]
+__all__ = ["app", "budget", "design", "main", "run", "scene", "schema", "simulate"]
 
 app = typer.Typer(
     name="satchain",
@@ -70,6 +71,7 @@ app.command()(simulate)
 app.command()(run)
 app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find, jitter.")
 app.command("schema")(schema)
+app.command("design")(design)
 
 
 def main() -> None:  # pragma: no cover
