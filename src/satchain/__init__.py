@@ -7,7 +7,8 @@ independent measurement (``satchain.measure``) to check them.
 The public API (imported lazily, so ``import satchain`` stays fast and never touches matplotlib's backend):
 
 * design: :class:`ImagingSystem`, :func:`load_preset`, :func:`load_system`, :class:`SystemOTF`,
-  :func:`coltman_ctf`, :func:`predict_quality`;
+  :func:`coltman_ctf`, :func:`predict_quality`, :func:`budget` (the typed budget, :class:`SystemBudget`:
+  what ``satchain budget --json`` prints);
 * a whole run: :func:`run` (:class:`RunConfig` -> :class:`RunResult`), :func:`predict`, :func:`compare`;
 * images: :func:`simulate`, :func:`simulate_image` (an array or a raster path -> the image with its transform),
   :func:`simulate_file` (file to COG), :func:`simulate_sweep` (several inputs x parameter sweeps),
@@ -66,6 +67,8 @@ _LAZY = {
     "coltman_ctf": "satchain.tf.ctf",
     "mtf_from_ctf": "satchain.tf.ctf",
     "predict_quality": "satchain.prediction.quality",
+    "budget": "satchain.prediction.budget",
+    "SystemBudget": "satchain.prediction.budget",
     "simulate": "satchain.engine.simulate",
     "simulate_image": "satchain.engine.degrade",
     "SimulatedImage": "satchain.engine.degrade",
@@ -87,7 +90,7 @@ _LAZY = {
 #: entry points whose arguments are type-checked on the way in (satchain._argcheck; one-line errors)
 _CHECKED = {"simulate", "measure_edge", "measure_star", "measure_bars", "measure_wedge", "measure_auto", "measure_snr",
             "find_edges", "measure_found_edges", "coltman_ctf", "mtf_from_ctf", "load_layout", "read_truth", "compare",
-            "load_run_config"}  # fmt: skip
+            "load_run_config", "budget"}  # fmt: skip
 
 __all__ = [
     "ConfigError",
@@ -133,6 +136,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.snr import measure_snr  # noqa: F401
     from satchain.measure.star import measure_star  # noqa: F401
     from satchain.measure.wedge import measure_wedge  # noqa: F401
+    from satchain.prediction.budget import SystemBudget, budget  # noqa: F401
     from satchain.prediction.core import Predictions, predict  # noqa: F401
     from satchain.prediction.quality import predict_quality  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401

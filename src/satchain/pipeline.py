@@ -48,7 +48,7 @@ MANIFEST = "manifest.json"
 
 
 def _stage_budget(config: RunConfig, progress: Progress) -> BudgetResult:
-    from satchain.report.budget import budget_results
+    from satchain.prediction.budget import budget_results
     from satchain.tf.budget import SystemOTF
 
     s = config.load_system()

@@ -65,7 +65,7 @@ NULL_MEANING = (
 @dataclass(frozen=True)
 class BudgetResult:
     """The predicted budget: ``system``, ``otf`` (its SystemOTF) and ``budget`` (the dict of
-    :func:`satchain.report.budget.budget_results`: derived quantities, MTF/CTF tables, MTF at Nyquist, MTFA,
+    :func:`satchain.prediction.budget.budget_results`: derived quantities, MTF/CTF tables, MTF at Nyquist, MTFA,
     radiometry, GIQE)."""
 
     system: ImagingSystem

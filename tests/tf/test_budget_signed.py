@@ -8,7 +8,7 @@ import numpy as np
 from scipy.special import j0
 
 from satchain import load_preset, units
-from satchain.report.budget import budget_results
+from satchain.prediction.budget import budget_results
 
 
 def test_oscillation_column_is_the_signed_expected_otf():

@@ -1,5 +1,5 @@
 """``satchain budget``: the predicted MTF/CTF budget and derived quantities of a system, as tables or JSON
-(:func:`satchain.report.budget.budget_results`); ``-o DIR`` also writes CSV tables, JSON and plots.
+(:func:`satchain.prediction.budget.budget_results`); ``-o DIR`` also writes CSV tables, JSON and plots.
 
 Registered on the app by :mod:`satchain.cli.main`.
 """
@@ -94,7 +94,7 @@ def _print_motion_geometry(g: dict[str, Any]) -> None:
 
 
 def _budget(system_obj, freqs: list[float] | None) -> dict[str, Any]:
-    from satchain.report.budget import budget_results
+    from satchain.prediction.budget import budget_results
 
     return budget_results(system_obj, freqs)
 

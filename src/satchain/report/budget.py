@@ -1,7 +1,8 @@
 """Assemble the MTF/CTF budget of a system into JSON-ready results, tables and figures.
 
-This is where prediction is packaged for people: ``satchain budget`` prints :func:`budget_results`
-and, with ``-o DIR``, :func:`write_budget_outputs` writes ``budget.json``, ``mtf_alt.csv``,
+This is where prediction is packaged for people: ``satchain budget`` prints
+:func:`satchain.prediction.budget.budget_results` (computed there, in the prediction layer; still importable
+from here) and, with ``-o DIR``, :func:`write_budget_outputs` writes ``budget.json``, ``mtf_alt.csv``,
 ``mtf_act.csv``, ``fig2_spectral_radiance.png``, ``fig3a_mtf_budget.png`` and ``fig3b_square_wave.png``.
 """
 
@@ -15,80 +16,15 @@ from typing import Any
 
 import numpy as np
 
-from satchain import units
 from satchain.config.system import ImagingSystem
+from satchain.prediction.budget import DirectionalMTF, budget_results
 from satchain.tf import ctf as _ctf
-from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_at_nyquist, mtf_budget, mtfa
+from satchain.tf.budget import DIRECTIONS, SystemOTF, mtf_budget
 
 __all__ = ["DirectionalMTF", "budget_results", "square_wave_figure_data", "write_budget_outputs"]
 
 #: The paper's Figure 3(b) bar period on the ground.
 FIG3B_PERIOD_M = 16.0
-
-
-class DirectionalMTF:
-    """The system MTF along one axis as a callable of focal-plane frequency (cy/mm), with its cutoff."""
-
-    def __init__(self, otf: SystemOTF, direction: str):
-        self._otf, self.direction = otf, direction
-        self.cutoff = float(np.max(otf.system.optical_cutoff_cy_per_mm))
-
-    def __call__(self, f_cy_per_mm) -> np.ndarray:
-        f = np.asarray(f_cy_per_mm, dtype=float)
-        return np.abs(self._otf(*_cut(self.direction, f)))
-
-
-def _pitch(system: ImagingSystem, d: str) -> float:
-    return system.detector.pitch_y_m if d == "alt" else system.detector.pitch_x_m
-
-
-def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None) -> dict[str, Any]:
-    """Derived quantities, MTF per component, CTF (Coltman and the paper's synthesis), MTF at Nyquist, MTFA."""
-    otf = SystemOTF(system) if otf is None else otf
-    b = mtf_budget(system, f_cy_per_mm, otf=otf)
-    f = b.f_cy_per_mm
-    out: dict[str, Any] = {"system": system.name, "derived": system.derived()}
-    out.update(b.to_dict())
-    out["frequencies_cy_per_px"] = {
-        d: units.cy_per_mm_to_cy_per_px(f, pitch_m=_pitch(system, d)).tolist() for d in DIRECTIONS
-    }
-    out["frequencies_cy_per_m_ground"] = {
-        d: (f / system.focal_cy_per_mm_per_ground_cy_per_m(d)).tolist() for d in DIRECTIONS
-    }
-    out["ctf"] = {}
-    out["mtfa"] = {}
-    for d in DIRECTIONS:
-        m = DirectionalMTF(otf, d)
-        out["ctf"][d] = {
-            "coltman": np.asarray(_ctf.coltman_ctf(f, m)).tolist(),
-            "fourier_synthesis": np.asarray(_ctf.ctf_fourier_synthesis(f, m)).tolist(),
-        }
-        fpx = np.linspace(0.0, 0.5, 257)
-        fmm = units.cy_per_px_to_cy_per_mm(fpx, pitch_m=_pitch(system, d))
-        out["mtfa"][d] = mtfa(fpx, m(fmm), f_max_cy_per_px=0.5)
-    out["mtf_at_nyquist"] = mtf_at_nyquist(system, otf=otf)
-    pb = getattr(otf, "pushbroom", None)
-    geometry = pb.geometry() if pb is not None else None
-    if geometry is not None:
-        out["motion_geometry"] = geometry  # line displacement, TDI drift, Earth-rotation shear/scale/rotation
-    from satchain.prediction.quality import predict_quality
-    from satchain.radiometry import radiometric_budget
-
-    out["radiometry"] = radiometric_budget(system).to_dict()
-    out["quality"] = predict_quality(system, otf=otf).to_dict()
-    out["frequency_axis"] = (
-        "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
-        "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
-        "apart on the ground, and `run` predicts on the image's axis (f_y / alt_scale); the pushbroom motion "
-        "terms are their signed expected OTF"
-    )
-    out["ctf_notes"] = (
-        "coltman: the square-wave (bar) response by Coltman's series (physical, -> 1 at low frequency, "
-        "4/pi*MTF near cutoff); fourier_synthesis: the reference paper's method (10 odd harmonics, modulation of "
-        "the degraded truncated series / modulation of the input truncated series), which divides by the "
-        "Gibbs overshoot of the truncated input (~1.18)."
-    )
-    return out
 
 
 def square_wave_figure_data(system: ImagingSystem, *, period_m: float = FIG3B_PERIOD_M, otf: SystemOTF | None = None):

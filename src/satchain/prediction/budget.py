@@ -1,0 +1,221 @@
+"""The predicted budget of a system: its derived quantities, MTF/CTF per component, MTF at Nyquist, MTFA,
+radiometry and GIQE image quality, as one JSON-ready dict (:func:`budget_results`, what ``satchain budget --json``
+prints) and as a typed result with the figures a design study sweeps (:func:`budget`, :class:`SystemBudget`).
+
+The physics is here; :mod:`satchain.report.budget` only writes it out (CSV tables, JSON, figures).
+
+Examples
+--------
+>>> from satchain import load_preset
+>>> b = budget(load_preset("ankarasat3"))
+>>> round(b.gsd_m, 3), round(b.q, 3), round(b.mtf_at_nyquist_alt, 3), round(b.niirs, 2)
+(0.49, 1.074, 0.123, 5.2)
+>>> b.to_dict()["mtf_at_nyquist"]["alt"] == b.mtf_at_nyquist_alt
+True
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from satchain import units
+from satchain._argcheck import checked
+from satchain.errors import ParameterTypeError
+from satchain.tf import ctf as _ctf
+from satchain.tf.budget import DIRECTIONS, SystemOTF, _cut, mtf_at_nyquist, mtf_budget, mtfa
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from satchain.config.system import ImagingSystem
+
+__all__ = ["DirectionalMTF", "SystemBudget", "budget", "budget_results"]
+
+
+class DirectionalMTF:
+    """The system MTF along one axis as a callable of focal-plane frequency (cy/mm), with its cutoff."""
+
+    def __init__(self, otf: SystemOTF, direction: str):
+        self._otf, self.direction = otf, direction
+        self.cutoff = float(np.max(otf.system.optical_cutoff_cy_per_mm))
+
+    def __call__(self, f_cy_per_mm) -> np.ndarray:
+        f = np.asarray(f_cy_per_mm, dtype=float)
+        return np.abs(self._otf(*_cut(self.direction, f)))
+
+
+def _pitch(system: ImagingSystem, d: str) -> float:
+    return system.detector.pitch_y_m if d == "alt" else system.detector.pitch_x_m
+
+
+def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | None = None) -> dict[str, Any]:
+    """Derived quantities, MTF per component, CTF (Coltman and the paper's synthesis), MTF at Nyquist, MTFA,
+    radiometry and GIQE quality: the dict ``satchain budget --json`` prints (JSON-ready).
+
+    ``f_cy_per_mm``: the focal-plane frequencies of the tables (default:
+    :func:`satchain.tf.budget.default_frequencies_cy_per_mm`); ``otf``: a prebuilt :class:`SystemOTF` of ``system``.
+    """
+    otf = SystemOTF(system) if otf is None else otf
+    b = mtf_budget(system, f_cy_per_mm, otf=otf)
+    f = b.f_cy_per_mm
+    out: dict[str, Any] = {"system": system.name, "derived": system.derived()}
+    out.update(b.to_dict())
+    out["frequencies_cy_per_px"] = {
+        d: units.cy_per_mm_to_cy_per_px(f, pitch_m=_pitch(system, d)).tolist() for d in DIRECTIONS
+    }
+    out["frequencies_cy_per_m_ground"] = {
+        d: (f / system.focal_cy_per_mm_per_ground_cy_per_m(d)).tolist() for d in DIRECTIONS
+    }
+    out["ctf"] = {}
+    out["mtfa"] = {}
+    for d in DIRECTIONS:
+        m = DirectionalMTF(otf, d)
+        out["ctf"][d] = {
+            "coltman": np.asarray(_ctf.coltman_ctf(f, m)).tolist(),
+            "fourier_synthesis": np.asarray(_ctf.ctf_fourier_synthesis(f, m)).tolist(),
+        }
+        fpx = np.linspace(0.0, 0.5, 257)
+        fmm = units.cy_per_px_to_cy_per_mm(fpx, pitch_m=_pitch(system, d))
+        out["mtfa"][d] = mtfa(fpx, m(fmm), f_max_cy_per_px=0.5)
+    out["mtf_at_nyquist"] = mtf_at_nyquist(system, otf=otf)
+    pb = getattr(otf, "pushbroom", None)
+    geometry = pb.geometry() if pb is not None else None
+    if geometry is not None:
+        out["motion_geometry"] = geometry  # line displacement, TDI drift, Earth-rotation shear/scale/rotation
+    from satchain.prediction.quality import predict_quality
+    from satchain.radiometry import radiometric_budget
+
+    out["radiometry"] = radiometric_budget(system).to_dict()
+    out["quality"] = predict_quality(system, otf=otf).to_dict()
+    out["frequency_axis"] = (
+        "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
+        "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
+        "apart on the ground, and `run` predicts on the image's axis (f_y / alt_scale); the pushbroom motion "
+        "terms are their signed expected OTF"
+    )
+    out["ctf_notes"] = (
+        "coltman: the square-wave (bar) response by Coltman's series (physical, -> 1 at low frequency, "
+        "4/pi*MTF near cutoff); fourier_synthesis: the reference paper's method (10 odd harmonics, modulation of "
+        "the degraded truncated series / modulation of the input truncated series), which divides by the "
+        "Gibbs overshoot of the truncated input (~1.18)."
+    )
+    return out
+
+
+@dataclass(frozen=True, repr=False)
+class SystemBudget:
+    """The predicted budget of one system, typed: the figures a design study sweeps, and the whole budget.
+
+    ``system_name``; ``gsd_m``, ``gsd_act_m``, ``gsd_alt_m`` (ground sample distance at nadir, m);
+    ``f_number``; ``q``: the sampling ratio ``Q = lambda F# / p`` at the effective wavelength (geometric-mean
+    pitch; Q < 2: detector limited); ``limited_by`` (``"detector"`` or ``"optics"``); ``nyquist_act_cy_per_mm``,
+    ``nyquist_alt_cy_per_mm``; ``mtf_at_nyquist_act``, ``mtf_at_nyquist_alt`` (system MTF at the detector
+    Nyquist); ``mtfa_act``, ``mtfa_alt`` (area under the MTF, 0 to Nyquist, cy/px); ``rer``, ``rer_act``,
+    ``rer_alt`` (relative edge response, geometric mean and per axis); ``snr``: the GIQE contrast SNR;
+    ``signal_snr``: the SNR of the scene's mean signal (radiometry); ``niirs``: GIQE 5 NIIRS.
+    ``system``: the :class:`~satchain.config.system.ImagingSystem`; :meth:`to_dict`: the whole budget, exactly
+    as ``satchain budget --json`` prints it (MTF/CTF tables, radiometry, every GIQE).
+    """
+
+    system_name: str
+    gsd_m: float
+    gsd_act_m: float
+    gsd_alt_m: float
+    f_number: float
+    q: float
+    limited_by: str
+    nyquist_act_cy_per_mm: float
+    nyquist_alt_cy_per_mm: float
+    mtf_at_nyquist_act: float
+    mtf_at_nyquist_alt: float
+    mtfa_act: float
+    mtfa_alt: float
+    rer: float
+    rer_act: float
+    rer_alt: float
+    snr: float
+    signal_snr: float
+    niirs: float
+    system: ImagingSystem = field(compare=False)
+    results: Mapping[str, Any] = field(compare=False)
+
+    @classmethod
+    def from_results(cls, system: ImagingSystem, results: Mapping[str, Any]) -> SystemBudget:
+        """The typed budget of :func:`budget_results`' dict (kept whole for :meth:`to_dict`)."""
+        d, q, r = results["derived"], results["quality"], results["radiometry"]
+        ny, area = results["mtf_at_nyquist"], results["mtfa"]
+        return cls(
+            system_name=str(results["system"]),
+            gsd_m=float(d["gsd_m"]),
+            gsd_act_m=float(d["gsd_act_m"]),
+            gsd_alt_m=float(d["gsd_alt_m"]),
+            f_number=float(d["f_number"]),
+            q=float(d["q_effective"]),
+            limited_by=str(d["limited_by"]),
+            nyquist_act_cy_per_mm=float(d["nyquist_act_cy_per_mm"]),
+            nyquist_alt_cy_per_mm=float(d["nyquist_alt_cy_per_mm"]),
+            mtf_at_nyquist_act=float(ny["act"]),
+            mtf_at_nyquist_alt=float(ny["alt"]),
+            mtfa_act=float(area["act"]),
+            mtfa_alt=float(area["alt"]),
+            rer=float(q["rer"]),
+            rer_act=float(q["rer_act"]),
+            rer_alt=float(q["rer_alt"]),
+            snr=float(q["snr"]),
+            signal_snr=float(r["snr"]),
+            niirs=float(q["giqe5"]),
+            system=system,
+            results=copy.deepcopy(dict(results)),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The whole budget as ``satchain budget --json`` prints it (a copy: JSON-ready, free to change)."""
+        return copy.deepcopy(dict(self.results))
+
+    def __repr__(self) -> str:
+        return (
+            f"SystemBudget({self.system_name!r}: GSD {self.gsd_m:.4g} m, Q {self.q:.4g}, MTF at Nyquist "
+            f"ACT {self.mtf_at_nyquist_act:.4f} / ALT {self.mtf_at_nyquist_alt:.4f}, RER {self.rer:.4f}, "
+            f"SNR {self.snr:.4g}, NIIRS {self.niirs:.3f})"
+        )
+
+
+@checked
+def budget(system: ImagingSystem, f_cy_per_mm: ArrayLike | None = None) -> SystemBudget:
+    """The predicted budget of ``system``, typed: what ``satchain budget --json`` prints, in Python.
+
+    Parameters
+    ----------
+    system : ImagingSystem
+        The camera (:func:`satchain.load_preset`, :func:`satchain.load_system`, ``ImagingSystem.replace``).
+    f_cy_per_mm : array_like of float, optional
+        Focal-plane frequencies (cy/mm, >= 0) of the MTF/CTF tables in :meth:`SystemBudget.to_dict`
+        (``satchain budget --freqs``); the scalar figures do not depend on them. Default: 0 to the larger of the
+        optical cutoff and twice Nyquist, through both Nyquists.
+
+    Returns
+    -------
+    SystemBudget
+        GSD, Q, MTF at Nyquist, MTFA, RER, SNR, GIQE 5 NIIRS as attributes; the whole budget by ``to_dict()``.
+
+    Examples
+    --------
+    >>> import satchain
+    >>> s = satchain.load_preset("ankarasat3")
+    >>> [round(satchain.budget(s.replace({"optics.wfe_rms_waves": w})).mtf_at_nyquist_act, 3) for w in (0.0, 0.1)]
+    [0.199, 0.138]
+    """
+    if isinstance(f_cy_per_mm, (str, bytes, os.PathLike, Mapping, bool, np.bool_)):
+        shown = repr(f_cy_per_mm)
+        raise ParameterTypeError(
+            f"budget(): f_cy_per_mm = {shown if len(shown) <= 60 else shown[:57] + '...'}: must be a sequence or "
+            f"array of focal-plane frequencies in cy/mm (numbers >= 0), or None"
+        )
+    otf = SystemOTF(system)
+    return SystemBudget.from_results(system, budget_results(system, f_cy_per_mm, otf=otf))
