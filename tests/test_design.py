@@ -113,3 +113,25 @@ def test_parsers():
     assert parse_vary(f"{KEY}=0.2:1.5") == (KEY, 0.2, 1.5)
     with pytest.raises(ConfigError, match="unknown quantity"):
         parse_target("bogus<1")
+
+
+def test_two_keys_feasibility_map_agrees_with_the_one_key_answer(system, tmp_path):
+    """Each row of the map (one TDI count) is feasible exactly from the one-key answer's lower end up; the CLI writes
+    feasibility.csv (one row per cell) and feasibility.png."""
+    from satchain.study.design_map import feasibility_map
+
+    targets = [parse_target(t) for t in TARGETS]
+    fmap = feasibility_map(system, [(KEY, 0.4, 1.2), ("detector.tdi_stages", 8, 32)], targets, n=5)
+    assert fmap.x2.tolist() == [8, 14, 20, 26, 32]
+    for i2, tdi in enumerate(fmap.x2):
+        one = design(vary_system(system, "detector.tdi_stages", tdi), KEY, 0.4, 1.2, targets)
+        lo = one.intervals[0]["lo"] if one.intervals else np.inf
+        assert fmap.feasible[i2].tolist() == (fmap.x1 >= lo).tolist(), tdi
+    out = tmp_path / "map"
+    args = ["design", "--vary", f"{KEY}=0.4:1.2", "--vary", "detector.tdi_stages=8:32", "--grid", "4", "-o", str(out)]
+    res = CliRunner().invoke(app, args + sum((["--target", t] for t in TARGETS), []))
+    assert res.exit_code == 0, res.output
+    rows = (out / "feasibility.csv").read_text().splitlines()
+    assert len(rows) == 1 + 16 and rows[0].startswith(f"{KEY},detector.tdi_stages,")
+    assert (out / "feasibility.png").stat().st_size > 0
+    assert json.loads((out / "design.json").read_text())["cells"] == 16

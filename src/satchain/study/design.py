@@ -138,14 +138,27 @@ def fixed_and_following(system: ImagingSystem, key: str) -> tuple[str, str | Non
 
 def vary_system(system: ImagingSystem, key: str, value: float) -> ImagingSystem:
     """``system`` with the dotted ``key`` set to ``value``, validated (a bad key or value raises ConfigError naming
-    it). Varying the aperture holds the focal length fixed (the f-number follows)."""
+    it). Varying the aperture holds the focal length fixed (the f-number follows); an integer key (e.g.
+    ``detector.tdi_stages``) takes the nearest integer."""
     if key == "optics.aperture_diameter_m":
         d = system.to_dict()
         d["optics"]["focal_length_m"] = system.derived()["focal_length_m"]
         d["optics"].pop("f_number", None)
         d["optics"]["aperture_diameter_m"] = float(value)
         return ImagingSystem.from_dict(d)
-    return system.replace({key: float(value)})
+    current = _current(system, key)
+    v: float | int = int(round(value)) if isinstance(current, int) and not isinstance(current, bool) else float(value)
+    return system.replace({key: v})
+
+
+def _current(system: ImagingSystem, key: str) -> Any:
+    """The value of a dotted key in ``system`` (None where it is not a plain entry)."""
+    node: Any = system.to_dict()
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return node
 
 
 def _budget_results(system: ImagingSystem) -> dict[str, Any]:
