@@ -162,10 +162,8 @@ def _current(system: ImagingSystem, key: str) -> Any:
 
 
 def _budget_results(system: ImagingSystem) -> dict[str, Any]:
-    try:
-        from satchain.prediction.budget import budget_results  # type: ignore[import-not-found,unused-ignore]
-    except ImportError:
-        from satchain.report.budget import budget_results
+    from satchain.prediction.budget import budget_results
+
     out: dict[str, Any] = budget_results(system)
     return out
 
