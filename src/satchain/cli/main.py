@@ -21,8 +21,9 @@ from satchain.cli.run import run
 from satchain.cli.scene import scene
 from satchain.cli.schema import schema
 from satchain.cli.simulate import simulate
+from satchain.cli.study import study
 
-__all__ = ["app", "budget", "design", "main", "run", "scene", "schema", "simulate"]
+__all__ = ["app", "budget", "design", "main", "run", "scene", "schema", "simulate", "study"]
 
 app = typer.Typer(
     name="satchain",
@@ -72,6 +73,7 @@ app.command()(run)
 app.add_typer(measure_app, name="measure", help="Measure image quality: edge, star, bars, wedge, auto, find, jitter.")
 app.command("schema")(schema)
 app.command("design")(design)
+app.command("study")(study)
 
 
 def main() -> None:  # pragma: no cover
