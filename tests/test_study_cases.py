@@ -148,6 +148,8 @@ def test_study_file_inline_base_and_run_depth(tmp_path: Path):
     f.write_text(
         '[base.system]\npreset = "ankarasat3"\n[[axes]]\nkey = "detector.tdi_stages"\nstart = 8\nstop = 32\nstep = 8\n'
     )
+    assert load_study(f).study.depth == "budget"  # the default: predictions only
+    f.write_text(f.read_text() + '[study]\ndepth = "run"\n')
     s = load_study(f)
     assert (
         s.study.depth == "run"

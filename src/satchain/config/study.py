@@ -134,9 +134,9 @@ class StudySettings(_Frozen):
     """``[study]``: how the cases run."""
 
     depth: Literal["budget", "run"] = Field(
-        default="run",
-        description="'budget': the predicted budget per case only (fast); 'run': the whole chain per case "
-        "(simulate, measure, compare)",
+        default="budget",
+        description="'budget' (the default): the predicted budget per case only (fast); 'run': the whole chain "
+        "per case (simulate, measure, compare)",
     )
     repeats: int = Field(
         default=1, ge=1, le=10_000, description="noise realisations per case (each its own seed, from the base seed)"
