@@ -181,6 +181,7 @@ def test_run_depth_cases_carry_their_run_configuration():
     assert built is not None and built.optics.wfe_rms_waves == 0.1
     bad = [{"key": "as_built.optics.wfe_rms_waves", "values": [0.0, 9.0]}]
     with pytest.raises(ConfigError, match=r"case c0002 \(as_built.optics.wfe_rms_waves = 9\).*wfe_rms_waves"):
-        expand_cases(StudyFile.from_dict({"axes": bad}))
+        expand_cases(StudyFile.from_dict({"axes": bad, "study": {"depth": "run"}}))
     with pytest.raises(ConfigError, match=r"case c0001 \(scene.pixel_m = -1\).*scene.pixel_m"):
-        expand_cases(StudyFile.from_dict({"axes": [{"key": "scene.pixel_m", "values": [-1.0]}]}))
+        pixel = [{"key": "scene.pixel_m", "values": [-1.0]}]
+        expand_cases(StudyFile.from_dict({"axes": pixel, "study": {"depth": "run"}}))
