@@ -8,6 +8,7 @@ import csv
 import math
 from pathlib import Path
 
+import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
 
@@ -133,6 +134,14 @@ def test_budget_rows_equal_budget_of_systems_built_by_hand(tmp_path: Path):
         assert r["measured"] == r["error"] == r["sigma"] == r["z"] == r["pass"] == ""
         seen.add((r["case"], r["seed"]))
     assert len(seen) == 6 and len({s for _, s in seen}) == 6
+    table = pq.read_table(out / "study.parquet")  # the same table, typed
+    assert table.column_names == list(rows[0])
+    assert str(table.schema.field("case").type) == "string" and str(table.schema.field("seed").type) == "int64"
+    assert str(table.schema.field("pass").type) == "bool" and str(table.schema.field("predicted").type) == "double"
+    for r, p in zip(rows, table.to_pylist(), strict=True):
+        assert p["case"] == r["case"] and p["figure"] == r["figure"] and p["seed"] == int(r["seed"])
+        assert p["predicted"] == float(r["predicted"]) and p[AP] == float(r[AP]) and p["niirs"] == float(r["niirs"])
+        assert p["measured"] is None and p["pass"] is None
     gsd = {float(r["gsd_m"]) for r in rows}
     assert max(gsd) - min(gsd) < 1e-12  # the focal length is held: the GSD stays
     q = {float(r[AP]): float(r["q"]) for r in rows}

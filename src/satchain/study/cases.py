@@ -247,9 +247,9 @@ def _cell(v: Any) -> str:
 def run_study(
     study: StudyFile, out_dir: str | Path, *, max_cases: int | None = None, cases: Sequence[Case] | None = None
 ) -> Path:
-    """Run a budget-depth study: validate every case, then write ``out_dir/study.csv`` (atomically) and return
-    its path. ``out_dir`` is created; it must be missing, empty or an earlier study's output. ``cases``: those
-    :func:`expand_cases` gave (not expanded again).
+    """Run a budget-depth study: validate every case, then write ``out_dir/study.csv`` and ``study.parquet`` (the
+    same table, typed; each atomically) and return the CSV's path. ``out_dir`` is created; it must be missing,
+    empty or an earlier study's output. ``cases``: those :func:`expand_cases` gave (not expanded again).
 
     Raises
     ------
@@ -270,9 +270,33 @@ def run_study(
     write_run_marker(out, kind="study")
     header = [*study.axis_values(), *COLUMNS]
     path = out / "study.csv"
+    with atomic_path(out / "study.parquet") as tmp:
+        _write_parquet(tmp, header, rows)
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         for r in rows:
             w.writerow([_cell(r[h]) for h in header])
     return path
+
+
+#: the columns that are not numbers (the axes' values, figures and their derived quantities are float64)
+_TEXT, _INTEGER, _BOOLEAN = ("case", "figure"), ("seed",), ("pass",)
+
+
+def _write_parquet(path: Path, header: Sequence[str], rows: Sequence[dict[str, Any]]) -> None:
+    """study.csv's table as Parquet, typed: text for case and figure, int64 seeds, a nullable boolean pass and
+    float64 for everything else (empty cells are nulls)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    def kind(name: str) -> pa.DataType:
+        if name in _TEXT:
+            return pa.string()
+        if name in _INTEGER:
+            return pa.int64()
+        return pa.bool_() if name in _BOOLEAN else pa.float64()
+
+    schema = pa.schema([(h, kind(h)) for h in header])
+    table = pa.Table.from_pylist([{h: r[h] for h in header} for r in rows], schema=schema)
+    pq.write_table(table, path)
