@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from satchain.cli.main import app
 from satchain.config.system import load_preset
 from satchain.errors import ConfigError
-from satchain.study.design import design, design_figures, parse_target, parse_vary, vary_system
+from satchain.studies.design import design, design_figures, parse_target, parse_vary, vary_system
 
 KEY = "optics.aperture_diameter_m"
 TARGETS = ["niirs>=5.2", "mtf_nyquist_alt>=0.10", "snr>=60"]
@@ -118,7 +118,7 @@ def test_parsers():
 def test_two_keys_feasibility_map_agrees_with_the_one_key_answer(system, tmp_path):
     """Each row of the map (one TDI count) is feasible exactly from the one-key answer's lower end up; the CLI writes
     feasibility.csv (one row per cell) and feasibility.png."""
-    from satchain.study.design_map import feasibility_map
+    from satchain.studies.design_map import feasibility_map
 
     targets = [parse_target(t) for t in TARGETS]
     fmap = feasibility_map(system, [(KEY, 0.4, 1.2), ("detector.tdi_stages", 8, 32)], targets, n=5)

@@ -17,7 +17,7 @@ from satchain.config.study import Axis, StudyFile, load_study
 from satchain.config.system import load_preset
 from satchain.errors import ConfigError
 from satchain.prediction.budget import budget
-from satchain.study.cases import FIGURES, expand_cases, run_study
+from satchain.studies.cases import FIGURES, expand_cases, run_study
 
 AP = "optics.aperture_diameter_m"
 WFE = "optics.wfe_rms_waves"

@@ -1,5 +1,5 @@
 """``satchain design``: the inverse question by the budget, which values of a system key meet every target
-(:func:`satchain.study.design.design`). Registered on the app by :mod:`satchain.cli.main`."""
+(:func:`satchain.studies.design.design`). Registered on the app by :mod:`satchain.cli.main`."""
 
 from __future__ import annotations
 
@@ -57,8 +57,8 @@ def design(
     parsed).
     """
     from satchain.errors import ConfigError
-    from satchain.study.design import design as run_design
-    from satchain.study.design import parse_target, parse_vary
+    from satchain.studies.design import design as run_design
+    from satchain.studies.design import parse_target, parse_vary
 
     if len(vary) not in (1, 2):
         raise ConfigError(f"--vary given {len(vary)} times: give one key (a range) or two (a feasibility map)")
@@ -99,7 +99,7 @@ def _unreachable(lines: list[str]) -> None:
 
 
 def _map(sys_, ranges, targets, json_out: bool, out: Path | None, grid: int) -> None:
-    from satchain.study.design_map import feasibility_map
+    from satchain.studies.design_map import feasibility_map
 
     fmap = feasibility_map(sys_, ranges, targets, n=grid)
     d = fmap.to_dict()

@@ -1,5 +1,5 @@
 """``satchain study``: the cases of a study file, every one validated before any runs, and their table
-(:mod:`satchain.study.cases`; the study file: :mod:`satchain.config.study`). Registered on the app by
+(:mod:`satchain.studies.cases`; the study file: :mod:`satchain.config.study`). Registered on the app by
 :mod:`satchain.cli.main`."""
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def study(
     """
     from satchain._safety import check_dir_outputs, check_run_dir
     from satchain.config.study import load_study
-    from satchain.study.cases import expand_cases, held_fixed, run_study
+    from satchain.studies.cases import expand_cases, held_fixed, run_study
 
     spec = load_study(study_file)
     check_dir_outputs(out, ["study.csv"], {"STUDY": study_file})

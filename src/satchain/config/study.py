@@ -15,7 +15,7 @@ reports = "failed"
 
 Every key is validated (unknown keys refused, values named with their allowed range, one
 :class:`~satchain.errors.ConfigError` line); the cases themselves are expanded and validated by
-:mod:`satchain.study.cases`.
+:mod:`satchain.studies.cases`.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The feasibility map of ``satchain design`` with two keys (:class:`satchain.study.design_map.FeasibilityMap`):
+"""The feasibility map of ``satchain design`` with two keys (:class:`satchain.studies.design_map.FeasibilityMap`):
 ``feasibility.csv`` (one row per grid cell) and ``feasibility.png`` (each target's unmet side shaded, its
 margin = 0 line drawn and labelled: the white region meets every target). Draws, never computes physics."""
 
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from satchain.report._save import save_figure, write_text
 
 if TYPE_CHECKING:
-    from satchain.study.design_map import FeasibilityMap
+    from satchain.studies.design_map import FeasibilityMap
 
 __all__ = ["feasibility_csv_text", "write_feasibility_map"]
 

@@ -1,7 +1,7 @@
 """The inverse question over two keys: a feasibility map by the budget.
 
 ``feasibility_map(system, [(key1, lo1, hi1), (key2, lo2, hi2)], targets)`` computes every target's margin on an
-``n x n`` grid of the two keys (:func:`satchain.study.design.design_figures` per cell); a cell is feasible where every
+``n x n`` grid of the two keys (:func:`satchain.studies.design.design_figures` per cell); a cell is feasible where every
 margin is >= 0. :mod:`satchain.report.design_map` writes it as CSV and draws it (each target's margin = 0 line over the
 feasible cells).
 """
@@ -15,7 +15,7 @@ import numpy as np
 
 from satchain.config.system import ImagingSystem
 from satchain.errors import ConfigError
-from satchain.study.design import Target, _current, design_figures, fixed_and_following, vary_system
+from satchain.studies.design import Target, _current, design_figures, fixed_and_following, vary_system
 
 __all__ = ["FeasibilityMap", "feasibility_map"]
 
@@ -116,7 +116,7 @@ def feasibility_map(
     Examples
     --------
     >>> from satchain.config.system import load_preset
-    >>> from satchain.study.design import parse_target
+    >>> from satchain.studies.design import parse_target
     >>> m = feasibility_map(load_preset("ankarasat3"), [("optics.aperture_diameter_m", 0.5, 1.0),
     ...     ("detector.tdi_stages", 8, 32)], [parse_target("snr>=60")], n=3)
     >>> m.feasible.shape

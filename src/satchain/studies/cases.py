@@ -1,7 +1,7 @@
 """The cases of a study: its axes expanded (cartesian product, or zipped), each case named, seeded and validated.
 
 :func:`expand_cases` builds every case's system before any case runs, through
-:func:`satchain.study.design.vary_system` (which states what a variation holds fixed: varying the aperture holds
+:func:`satchain.studies.design.vary_system` (which states what a variation holds fixed: varying the aperture holds
 the focal length), so a bad value is refused naming its case, key and the allowed range. :func:`run_study` runs a
 budget-depth study and writes ``DIR/study.csv``: one row per case x figure, the figure's prediction and the
 budget's derived quantities of the case.
@@ -181,7 +181,7 @@ def _case_config(config: RunConfig, system: ImagingSystem, values: dict[str, flo
 
 
 def _case_system(design: ImagingSystem, values: dict[str, float], cid: str) -> ImagingSystem:
-    from satchain.study.design import vary_system
+    from satchain.studies.design import vary_system
 
     system = design
     for key, value in values.items():
@@ -196,7 +196,7 @@ def _case_system(design: ImagingSystem, values: dict[str, float], cid: str) -> I
 
 def held_fixed(study: StudyFile, base: RunConfig | None = None) -> list[str]:
     """One sentence per axis: what varying its key holds fixed, and the key that follows it."""
-    from satchain.study.design import fixed_and_following
+    from satchain.studies.design import fixed_and_following
 
     design = (study.run_config() if base is None else base).load_system()
     lines = []
