@@ -3,6 +3,7 @@ validate a system file, a run configuration and a results.json; a misspelt key f
 
 from __future__ import annotations
 
+import copy
 import json
 import re
 import warnings
@@ -123,3 +124,111 @@ def test_a_real_results_json_validates_against_the_results_schema(results_json):
     assert _errors("results", results_json) == []
     assert _errors("results", {k: v for k, v in results_json.items() if k != "summary"})  # a key missing
     assert _errors("results", {**results_json, "format_version": 1})
+
+
+# ------------------------------------------------------------------------------------------------- study files
+STUDY_FILE = """
+[base]
+file = "run.toml"
+[[axes]]
+key = "optics.aperture_diameter_m"
+values = [0.35, 0.45, 0.55, 0.70]
+[[axes]]
+key = "optics.wfe_rms_waves"
+start = 0.0
+stop = 0.1
+step = 0.05
+[study]
+depth = "budget"
+repeats = 2
+zip = false
+reports = "failed"
+"""
+
+INLINE_STUDY_FILE = """
+[base.system]
+preset = "ankarasat3"
+[base.simulation]
+seed = 7
+[[axes]]
+key = "orbit.altitude_m"
+start = 450000.0
+stop = 650000.0
+num = 5
+"""
+
+
+def _loader_refuses(data: dict, tmp_path: Path) -> bool:
+    from satchain.config.study import StudyFile
+    from satchain.errors import ConfigError
+
+    try:
+        StudyFile.from_dict(data, base_dir=tmp_path).run_config()
+    except ConfigError:
+        return True
+    return False
+
+
+def _bad_studies() -> dict[str, dict]:
+    """Study files that the loader refuses, one fault each."""
+    good = tomllib.loads(STUDY_FILE)
+    bad: dict[str, dict] = {}
+    for name, change in {
+        "unknown [study] key": lambda d: d["study"].update(deph="run"),
+        "unknown top-level key": lambda d: d.update(studdy={}),
+        "unknown [base] key beside file": lambda d: d["base"].update(seed=3),
+        "depth = 'deep'": lambda d: d["study"].update(depth="deep"),
+        "values = []": lambda d: d["axes"][0].update(values=[]),
+        "values and num": lambda d: d["axes"][0].update(start=0.3, stop=0.7, num=3),
+        "num and step": lambda d: d["axes"][1].update(num=3),
+        "step = 0": lambda d: d["axes"][1].update(step=0.0),
+        "repeats = 0": lambda d: d["study"].update(repeats=0),
+        "a string value": lambda d: d["axes"][0].update(values=[0.35, "0.45"]),
+        "an undotted key": lambda d: d["axes"][0].update(key="aperture"),
+        "no axes": lambda d: d.update(axes=[]),
+        "an unknown inline run key": lambda d: d.update(base={"simulation": {"sede": 1}}),
+    }.items():
+        data = copy.deepcopy(good)
+        change(data)
+        bad[name] = data
+    return bad
+
+
+def test_real_study_files_validate_against_the_study_schema(tmp_path):
+    (tmp_path / "run.toml").write_text('[system]\npreset = "ankarasat3"\n')
+    for text in (STUDY_FILE, INLINE_STUDY_FILE):
+        data = tomllib.loads(text)
+        assert not _loader_refuses(data, tmp_path)
+        assert _errors("study", data) == []
+    # a base with the run configuration's every default (as --print-config prints it) is a valid inline base
+    config = tomllib.loads(CliRunner().invoke(app, ["run", "--print-config"]).stdout)
+    assert _errors("study", {**tomllib.loads(INLINE_STUDY_FILE), "base": config}) == []
+
+
+@pytest.mark.parametrize("fault", sorted(_bad_studies()))
+def test_what_the_loader_refuses_fails_the_study_schema(fault, tmp_path):
+    (tmp_path / "run.toml").write_text('[system]\npreset = "ankarasat3"\n')
+    data = _bad_studies()[fault]
+    assert _loader_refuses(data, tmp_path), fault
+    assert _errors("study", data), fault
+
+
+def test_the_study_schema_describes_every_study_and_axis_key():
+    from satchain.config.study import Axis, StudyFile, StudySettings
+
+    s = _schema("study")
+    defs = s["$defs"]
+    for model, props in (
+        (Axis, defs["Axis"]["properties"]),
+        (StudySettings, defs["StudySettings"]["properties"]),
+        (StudyFile, s["properties"]),
+    ):
+        fields = {n: f for n, f in model.model_fields.items() if not f.exclude}
+        assert set(props) == set(fields), model
+        for name, field in fields.items():
+            assert field.description and props[name]["description"].startswith(field.description), (model, name)
+    # [base] is the run configuration itself (not a free table), or a file
+    base = s["properties"]["base"]["anyOf"]
+    assert {"$ref": "#/$defs/RunConfig"} in base
+    assert defs["RunConfig"]["properties"].keys() == _schema("run")["properties"].keys()
+    assert defs["StudySettings"]["properties"]["depth"]["enum"] == ["budget", "run"]

@@ -5,8 +5,9 @@
 * ``reference/api/<module>.md``: one mkdocstrings page per public package and module (``_private`` ones skipped),
   listed in the nav under "API modules" (the nav entry ``reference/api/modules.md`` is expanded here);
 * ``reference/cli.md``: every command and subcommand of the typer app, from its click objects;
-* ``reference/system-keys.md``, ``reference/run-keys.md``: every key of a system file and of a run configuration,
-  from the pydantic models' JSON Schemas (:mod:`satchain.config.schema`, as ``satchain schema system|run``);
+* ``reference/system-keys.md``, ``reference/run-keys.md``, ``reference/study-keys.md``: every key of a system
+  file, of a run configuration and of a study file, from the pydantic models' JSON Schemas
+  (:mod:`satchain.config.schema`, as ``satchain schema system|run|study``);
 * ``reference/results-json.md``: the fields of results.json (``satchain schema results``).
 
 Nothing here is committed as markdown: the pages exist only in the built site.
@@ -266,7 +267,8 @@ def cli_page() -> str:
 
 
 # ------------------------------------------------------------------------------------------------- keys
-_STOP = {"ImagingSystem": "system-keys.md"}  # a $ref not expanded here: linked to its own page
+#: a $ref not expanded here: linked to its own page
+_STOP = {"ImagingSystem": "system-keys.md", "RunConfig": "run-keys.md"}
 
 
 def _ref_name(prop: dict[str, Any]) -> str | None:
@@ -494,6 +496,15 @@ def on_files(files: Files, config: MkDocsConfig) -> Files:
             "prints the defaults), generated from `satchain.config.run.RunConfig` through the JSON Schema that "
             "`satchain schema run` prints, when the site is built. `[system] inline` and the sections of "
             "`[as_built]` take the keys of a [system file](system-keys.md).",
+        ),
+        "reference/study-keys.md": keys_page(
+            "study",
+            "Study file keys",
+            "Every key of a study file (`satchain study STUDY.toml -o DIR`; see the guide "
+            "[Which camera: design and studies](../guide/design-studies.md)), generated from "
+            "`satchain.config.study.StudyFile` through the JSON Schema that `satchain schema study` prints, when "
+            "the site is built. `[base]` is a [run configuration](run-keys.md), inline (`[base.system]`, "
+            '`[base.scene]`, ...) or `file = "run.toml"` (relative to the study file).',
         ),
         "reference/results-json.md": results_page(),
     }

@@ -1,4 +1,4 @@
-"""``satchain schema``: the JSON Schema of a system file, a run configuration or results.json, for editors
+"""``satchain schema``: the JSON Schema of a system file, a run configuration, a study file or results.json, for editors
 (taplo / Even Better TOML) and tools. Registered on the app by :mod:`satchain.cli.main`; the schemas come from
 :mod:`satchain.config.schema` (imported when the command runs, so that ``satchain --help`` stays fast)."""
 
@@ -17,16 +17,20 @@ __all__ = ["schema"]
 class SchemaKind(str, enum.Enum):
     system = "system"
     run = "run"
+    study = "study"
     results = "results"
 
 
 @handle_errors
 def schema(
     kind: Annotated[
-        SchemaKind, typer.Argument(help="system (a system file), run (a run configuration) or results (results.json)")
+        SchemaKind,
+        typer.Argument(
+            help="system (a system file), run (a run configuration), study (a study file) or results (results.json)"
+        ),
     ],
 ) -> None:
-    """Print the JSON Schema that validates a system file, a run configuration or a results.json.
+    """Print the JSON Schema that validates a system file, a run configuration, a study file or a results.json.
 
     Save it beside your files, e.g. satchain schema system > system.schema.json
 

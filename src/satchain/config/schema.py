@@ -1,12 +1,15 @@
-"""JSON Schemas of a system file, a run configuration and results.json (``satchain schema system|run|results``),
-for editors (taplo / Even Better TOML: completion, hover help, validation) and other tools.
+"""JSON Schemas of a system file, a run configuration, a study file and results.json (``satchain schema
+system|run|study|results``), for editors (taplo / Even Better TOML: completion, hover help, validation) and other
+tools.
 
 The system and run schemas come from the pydantic models (:class:`satchain.config.system.ImagingSystem`,
 :class:`satchain.config.run.RunConfig`), the one source of every key: each key carries its description, its unit
 and its allowed range, and a table refuses keys the loader refuses (``additionalProperties: false``), so a
 misspelt key fails validation. Keys that the loader takes besides the fields (``detector.pitch_m``,
 ``detector.fill_factor``, ``motion.line_of_sight.file``) are accepted, and the keys that such a key stands for
-(``pitch_x_m`` / ``pitch_y_m``; ``focal_length_m`` or ``f_number``) are required one way or the other.
+(``pitch_x_m`` / ``pitch_y_m``; ``focal_length_m`` or ``f_number``) are required one way or the other. The study
+file's schema (:class:`satchain.config.study.StudyFile`) holds the run configuration's: its ``[base]`` is a run
+configuration inline, or ``file = "run.toml"``.
 
 results.json has no pydantic model: its schema is built, a layer above, from the typed records that write it
 (:func:`satchain.results.results_schema`); ``satchain schema results`` prints it.
@@ -24,10 +27,10 @@ import copy
 import re
 from typing import Any
 
-__all__ = ["DRAFT", "KINDS", "annotate_key", "run_schema", "schema", "system_schema", "unit_of_key"]
+__all__ = ["DRAFT", "KINDS", "annotate_key", "run_schema", "schema", "study_schema", "system_schema", "unit_of_key"]
 
 #: The configuration schemas (``satchain schema`` prints these and results.json's).
-KINDS = ("system", "run")
+KINDS = ("system", "run", "study")
 
 #: The JSON Schema dialect of every schema satchain writes.
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
@@ -213,10 +216,76 @@ def run_schema() -> dict[str, Any]:
     return s
 
 
+def _axis_forms(axis: dict[str, Any]) -> None:
+    """An axis gives its values one way: ``values``, or ``start``/``stop``/``num``, or ``start``/``stop``/``step``
+    (the others absent, as :class:`satchain.config.study.Axis` refuses them); a listed axis is not empty and a
+    step is not zero."""
+
+    def without(*keys: str) -> dict[str, Any]:
+        return {"not": {"anyOf": [{"required": [k]} for k in keys]}}
+
+    axis["anyOf"] = [
+        {"required": ["values"], **without("start", "stop", "num", "step")},
+        {"required": ["start", "stop", "num"], **without("values", "step")},
+        {"required": ["start", "stop", "step"], **without("values", "num")},
+    ]
+    props = axis["properties"]
+    for alt in props["values"]["anyOf"]:
+        if alt.get("type") == "array":
+            alt["minItems"] = 1
+    for alt in props["step"]["anyOf"]:
+        if alt.get("type") == "number":
+            alt["not"] = {"const": 0}
+    # a dotted key '<section>.<key>', each part not blank (as the loader checks it)
+    props["key"]["pattern"] = r"^[^.]*[^.\s][^.]*(\.[^.]*[^.\s][^.]*)+$"
+    props["key"]["examples"] = ["optics.aperture_diameter_m", "optics.wfe_rms_waves", "orbit.altitude_m"]
+
+
+def study_schema() -> dict[str, Any]:
+    """The JSON Schema of a study file (:class:`satchain.config.study.StudyFile`); ``[base]`` is a run
+    configuration (the run schema, under ``$defs/RunConfig``) or ``file = "run.toml"``."""
+    from satchain.config.study import StudyFile
+
+    s = _finish(
+        StudyFile.model_json_schema(),
+        "satchain study file",
+        "A design study (`satchain study STUDY.toml -o DIR`): [base] (the run configuration the cases start "
+        "from, inline or file = 'run.toml'), one or more [[axes]] (a key and its values) and [study] (depth, "
+        "repeats, zip, reports).",
+    )
+    s["properties"].pop("base_dir", None)  # the study file's folder, set by the loader, not a key of the file
+    s["properties"]["axes"]["minItems"] = 1
+    defs = s.setdefault("$defs", {})
+    _axis_forms(defs["Axis"])
+    run = run_schema()
+    run_defs = run.pop("$defs")
+    clash = sorted(set(run_defs) & set(defs))
+    if clash:  # pragma: no cover - a model renamed into a clash must be caught by the tests, not merged
+        raise RuntimeError(f"study schema: $defs {clash} are in both the study and the run schema")
+    defs.update(run_defs)
+    defs["RunConfig"] = {k: v for k, v in run.items() if k != "$schema"}
+    base = s["properties"]["base"]
+    s["properties"]["base"] = {
+        "anyOf": [
+            {"$ref": "#/$defs/RunConfig"},
+            {
+                "type": "object",
+                "properties": {
+                    "file": {"type": "string", "description": "a run configuration file, relative to the study file"}
+                },
+                "required": ["file"],
+                "additionalProperties": False,
+            },
+        ],
+        "description": base.get("description", ""),
+    }
+    return s
+
+
 def schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema of a configuration file: ``"system"`` or ``"run"`` (``satchain schema results`` prints
-    :func:`satchain.results.results_schema`)."""
-    makers = {"system": system_schema, "run": run_schema}
+    """The JSON Schema of a configuration file: ``"system"``, ``"run"`` or ``"study"`` (``satchain schema
+    results`` prints :func:`satchain.results.results_schema`)."""
+    makers = {"system": system_schema, "run": run_schema, "study": study_schema}
     if kind not in makers:
         from satchain.errors import ConfigError
 
