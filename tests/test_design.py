@@ -135,3 +135,23 @@ def test_two_keys_feasibility_map_agrees_with_the_one_key_answer(system, tmp_pat
     assert len(rows) == 1 + 16 and rows[0].startswith(f"{KEY},detector.tdi_stages,")
     assert (out / "feasibility.png").stat().st_size > 0
     assert json.loads((out / "design.json").read_text())["cells"] == 16
+
+
+def test_python_entry_point_gives_the_cli_answer(system, result):
+    import satchain
+
+    r = satchain.design("ankarasat3", {KEY: (0.2, 1.5)}, TARGETS)  # a preset name, target strings
+    assert r.intervals == result.intervals and r.held_fixed == result.held_fixed
+    m = satchain.design(system, {KEY: (0.5, 1.0), "detector.tdi_stages": (8, 32)}, ["snr>=60"], grid=5)
+    assert m.feasible.shape == (5, 5)
+    # feasibility on the map's grid is the budget's SNR against the threshold, point by point
+    for i2, tdi in enumerate(m.x2):
+        for i1, ap in enumerate(m.x1):
+            s = vary_system(vary_system(system, KEY, float(ap)), "detector.tdi_stages", float(tdi))
+            assert m.feasible[i2, i1] == (design_figures(s)["snr"] >= 60)
+    with pytest.raises(ConfigError, match="must map one or two keys"):
+        satchain.design(system, {}, TARGETS)
+    with pytest.raises(ConfigError, match="lo must be below hi"):
+        satchain.design(system, {KEY: (1.0, 0.5)}, TARGETS)
+    with pytest.raises(ConfigError, match="unknown quantity 'nirs'"):
+        satchain.design(system, {KEY: (0.5, 1.0)}, ["nirs>=5"])

@@ -17,7 +17,8 @@ from satchain.config.study import Axis, StudyFile, load_study
 from satchain.config.system import load_preset
 from satchain.errors import ConfigError
 from satchain.prediction.budget import budget
-from satchain.studies.cases import FIGURES, expand_cases, run_study
+from satchain.studies.cases import expand_cases
+from satchain.studies.tables import FIGURES
 
 AP = "optics.aperture_diameter_m"
 WFE = "optics.wfe_rms_waves"
@@ -131,7 +132,8 @@ def test_budget_rows_equal_budget_of_systems_built_by_hand(tmp_path: Path):
         assert float(r["predicted"]) == pytest.approx(getattr(b, FIGURES[r["figure"]]), rel=1e-12, abs=1e-15)
         for k in ("gsd_m", "q", "mtf_at_nyquist_act", "mtf_at_nyquist_alt", "snr", "niirs"):
             assert float(r[k]) == pytest.approx(getattr(b, k), rel=1e-12, abs=1e-15)
-        assert r["measured"] == r["error"] == r["sigma"] == r["z"] == r["pass"] == ""
+        assert r["measured"] == r["error"] == r["sigma"] == r["z"] == r["pass"] == r["folder"] == ""
+        assert r["case_status"] == "ok" and r["kind"] == "budget" and r["repeat"] == "1"
         seen.add((r["case"], r["seed"]))
     assert len(seen) == 6 and len({s for _, s in seen}) == 6
     table = pq.read_table(out / "study.parquet")  # the same table, typed
@@ -166,9 +168,6 @@ def test_study_file_inline_base_and_run_depth(tmp_path: Path):
         and s.axis_values()["detector.tdi_stages"] == (8.0, 16.0, 24.0, 32.0)
     )
     assert [c.system.detector.tdi_stages for c in expand_cases(s)] == [8, 16, 24, 32]
-    with pytest.raises(ConfigError, match="depth = 'run': not available yet"):
-        run_study(s, tmp_path / "o")
-    assert not (tmp_path / "o").exists()
     f.write_text('[base]\nfile = "run.toml"\nsystem = {}\n[[axes]]\nkey = "optics.wfe_rms_waves"\nvalues = [0.0]\n')
     with pytest.raises(ConfigError, match="file and system are both given"):
         load_study(f)

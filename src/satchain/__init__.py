@@ -15,6 +15,8 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
   :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
   :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`;
+* design studies: :func:`study` (a study file's cases through the budget or the whole chain, on local processes
+  or Dask: :class:`StudyResult`), :func:`design` (the range of a key, or the map of two, that meets targets);
 * errors: :class:`SatchainError` and its subclasses.
 
 Every entry point checks the types of its arguments and refuses a wrong one (a string or a boolean for a
@@ -85,6 +87,9 @@ _LAZY = {
     "measure_auto": "satchain.measure.auto",
     "measure_snr": "satchain.measure.snr",
     "find_edges": "satchain.measure.find",
+    "study": "satchain.studies.api",
+    "StudyResult": "satchain.studies.api",
+    "design": "satchain.studies.api",
     "measure_found_edges": "satchain.measure.find_mtf",
 }
 #: entry points whose arguments are type-checked on the way in (satchain._argcheck; one-line errors)
@@ -141,5 +146,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.prediction.quality import predict_quality  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
+    from satchain.studies.api import StudyResult, design, study  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401
     from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401

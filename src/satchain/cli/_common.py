@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from satchain.config.system import ImagingSystem
 
 __all__ = [
+    "interrupted",
     "ReflowGroup",
     "console",
     "err_console",
@@ -242,3 +243,30 @@ class ReflowGroup(typer.core.TyperGroup):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         _reflow_command(self)
+
+
+def interrupted(exc: KeyboardInterrupt, out: Path, previous: bool, *, what: str = "run",
+                 kind: str = "staging folder") -> int:  # fmt: skip
+    """Say what an interrupted run (or ``what``) left (its staging ``kind`` is already removed); the exit status
+    128 + signal."""
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    # CPython sets an "unhandled KeyboardInterrupt" flag whenever one escapes an exec() of a string (scipy's
+    # array_api_compat runs one while it is imported), even though this one was handled; under `python -m` the
+    # flag then makes the interpreter kill itself with SIGINT (exit -2) instead of exiting 128 + signum.  Any
+    # exec() of a string that completes resets it.
+    exec("pass")  # noqa: S102 (a constant: resets the flag, see above)
+    kept = (
+        f"the previous results in {str(out)!r} were kept unchanged"
+        if previous
+        else f"nothing was written to {str(out)!r}"
+    )
+    removed = "were" if kind.endswith("s") else "was"
+    err_console.print(
+        Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
+        + Text(f"the {what} stopped and its {kind} {removed} removed; {kept}"),
+        highlight=False,
+        soft_wrap=True,
+    )
+    return 128 + int(signum)

@@ -16,6 +16,7 @@ from rich.text import Text
 
 from satchain._safety import check_inputs_outside
 from satchain.cli._common import console, err_console, handle_errors, handles_interrupts, print_warning, say
+from satchain.cli._common import interrupted as _interrupted
 from satchain.cli.options import PresetOpt
 
 __all__ = ["run"]
@@ -122,28 +123,3 @@ def run(
         raise typer.Exit(1)
 
 
-def _interrupted(exc: KeyboardInterrupt, out: Path, previous: bool, *, what: str = "run",
-                 kind: str = "staging folder") -> int:  # fmt: skip
-    """Say what an interrupted run (or ``what``) left (its staging ``kind`` is already removed); the exit status
-    128 + signal."""
-    import signal
-
-    signum = getattr(exc, "signum", signal.SIGINT)
-    # CPython sets an "unhandled KeyboardInterrupt" flag whenever one escapes an exec() of a string (scipy's
-    # array_api_compat runs one while it is imported), even though this one was handled; under `python -m` the
-    # flag then makes the interpreter kill itself with SIGINT (exit -2) instead of exiting 128 + signum.  Any
-    # exec() of a string that completes resets it.
-    exec("pass")  # noqa: S102 (a constant: resets the flag, see above)
-    kept = (
-        f"the previous results in {str(out)!r} were kept unchanged"
-        if previous
-        else f"nothing was written to {str(out)!r}"
-    )
-    removed = "were" if kind.endswith("s") else "was"
-    err_console.print(
-        Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
-        + Text(f"the {what} stopped and its {kind} {removed} removed; {kept}"),
-        highlight=False,
-        soft_wrap=True,
-    )
-    return 128 + int(signum)

@@ -168,7 +168,7 @@ def _interrupted_simulation(exc: KeyboardInterrupt, outputs: list[Path], committ
     import signal
 
     signum = getattr(exc, "signum", signal.SIGINT)
-    exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see satchain.cli.run._interrupted)
+    exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see satchain.cli._common.interrupted)
     names = ", ".join(repr(str(p)) for p in outputs)
     if committed:
         what = f"the simulation had finished: {names} were written"

@@ -88,7 +88,7 @@ def simulate_cases(
         if bars.started:
             _summary(read_manifest(out), out)
         signum = getattr(exc, "signum", signal.SIGINT)
-        exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see satchain.cli.run._interrupted)
+        exec("pass")  # noqa: S102 (resets CPython's unhandled-KeyboardInterrupt flag: see satchain.cli._common.interrupted)
         err_console.print(
             Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red")
             + Text(

@@ -2,20 +2,16 @@
 
 :func:`expand_cases` builds every case's system before any case runs, through
 :func:`satchain.studies.design.vary_system` (which states what a variation holds fixed: varying the aperture holds
-the focal length), so a bad value is refused naming its case, key and the allowed range. :func:`run_study` runs a
-budget-depth study and writes ``DIR/study.csv``: one row per case x figure, the figure's prediction and the
-budget's derived quantities of the case.
+the focal length), so a bad value is refused naming its case, key and the allowed range. The study table is
+:mod:`satchain.studies.tables`; running the cases, :mod:`satchain.studies.runner` and
+:func:`satchain.studies.api.study`.
 """
 
 from __future__ import annotations
 
-import csv
 import itertools
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -24,37 +20,10 @@ from satchain.config.study import StudyFile
 from satchain.config.system import ImagingSystem
 from satchain.errors import ConfigError
 
-__all__ = [
-    "DERIVED",
-    "FIGURES",
-    "MAX_CASES",
-    "Case",
-    "case_seeds",
-    "expand_cases",
-    "held_fixed",
-    "run_study",
-    "study_rows",
-]
+__all__ = ["MAX_CASES", "Case", "case_seeds", "expand_cases", "held_fixed"]
 
 #: more cases than this are refused unless ``max_cases`` allows them
 MAX_CASES = 10_000
-
-#: the figures of a budget-depth study (one row each per case) and the SystemBudget attribute each reads
-FIGURES: dict[str, str] = {
-    "niirs": "niirs",
-    "rer": "rer",
-    "rer_act": "rer_act",
-    "rer_alt": "rer_alt",
-    "snr": "snr",
-    "mtf_nyquist_act": "mtf_at_nyquist_act",
-    "mtf_nyquist_alt": "mtf_at_nyquist_alt",
-    "gsd_m": "gsd_m",
-    "q": "q",
-}
-#: the budget's derived quantities written on every row of a case
-DERIVED = ("gsd_m", "q", "mtf_at_nyquist_act", "mtf_at_nyquist_alt", "snr", "niirs")
-#: the columns after the axes' keys
-COLUMNS = ("case", "seed", "figure", "measured", "predicted", "error", "sigma", "z", "pass", *DERIVED)
 
 #: keys a case may vary at depth = "run" only (they change the simulation, not the predicted budget)
 _RUN_ONLY = ("scene.pixel_m", "simulation.seed")
@@ -207,96 +176,3 @@ def held_fixed(study: StudyFile, base: RunConfig | None = None) -> list[str]:
         fixed, follows = fixed_and_following(design, key)
         lines.append(f"{key}: {fixed}" + (f"; {follows} follows" if follows else ""))
     return lines
-
-
-def study_rows(cases: Sequence[Case]) -> list[dict[str, Any]]:
-    """The rows of a budget-depth study: one per case x figure (measured, error, sigma, z and pass empty)."""
-    from satchain.prediction.budget import budget
-
-    rows = []
-    for case in cases:
-        b = budget(case.system)
-        derived = {k: float(getattr(b, k)) for k in DERIVED}
-        for fig, attr in FIGURES.items():
-            rows.append(
-                {
-                    **case.values,
-                    "case": case.case_id,
-                    "seed": case.seeds[0],
-                    "figure": fig,
-                    "measured": None,
-                    "predicted": float(getattr(b, attr)),
-                    "error": None,
-                    "sigma": None,
-                    "z": None,
-                    "pass": None,
-                    **derived,
-                }
-            )
-    return rows
-
-
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return repr(v)
-    return str(v)
-
-
-def run_study(
-    study: StudyFile, out_dir: str | Path, *, max_cases: int | None = None, cases: Sequence[Case] | None = None
-) -> Path:
-    """Run a budget-depth study: validate every case, then write ``out_dir/study.csv`` and ``study.parquet`` (the
-    same table, typed; each atomically) and return the CSV's path. ``out_dir`` is created; it must be missing,
-    empty or an earlier study's output. ``cases``: those :func:`expand_cases` gave (not expanded again).
-
-    Raises
-    ------
-    ConfigError
-        A bad case (nothing written), or ``depth = "run"`` (its execution comes in a later release).
-    """
-    from satchain._safety import check_run_dir, write_run_marker
-    from satchain.io.images import atomic_path
-
-    if cases is None:
-        cases = expand_cases(study, max_cases=max_cases)
-    if study.study.depth != "budget":
-        raise ConfigError("[study] depth = 'run': not available yet; use depth = 'budget' (predictions only)")
-    out = Path(out_dir)
-    check_run_dir(out, kind="study")
-    rows = study_rows(cases)
-    out.mkdir(parents=True, exist_ok=True)
-    write_run_marker(out, kind="study")
-    header = [*study.axis_values(), *COLUMNS]
-    path = out / "study.csv"
-    with atomic_path(out / "study.parquet") as tmp:
-        _write_parquet(tmp, header, rows)
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        for r in rows:
-            w.writerow([_cell(r[h]) for h in header])
-    return path
-
-
-#: the columns that are not numbers (the axes' values, figures and their derived quantities are float64)
-_TEXT, _INTEGER, _BOOLEAN = ("case", "figure"), ("seed",), ("pass",)
-
-
-def _write_parquet(path: Path, header: Sequence[str], rows: Sequence[dict[str, Any]]) -> None:
-    """study.csv's table as Parquet, typed: text for case and figure, int64 seeds, a nullable boolean pass and
-    float64 for everything else (empty cells are nulls)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    def kind(name: str) -> pa.DataType:
-        if name in _TEXT:
-            return pa.string()
-        if name in _INTEGER:
-            return pa.int64()
-        return pa.bool_() if name in _BOOLEAN else pa.float64()
-
-    schema = pa.schema([(h, kind(h)) for h in header])
-    table = pa.Table.from_pylist([{h: r[h] for h in header} for r in rows], schema=schema)
-    pq.write_table(table, path)
