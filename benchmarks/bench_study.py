@@ -70,7 +70,7 @@ def bench_run(n_cases: int) -> None:
             assert r.n_ok + r.n_failed == n_cases, r.errors
     ratio = times[1] / times[2]
     print(f"run depth, {n_cases} cases: 1 worker {times[1]:.1f} s ({n_cases / times[1]:.2f} cases/s), 2 workers "
-          f"{times[2]:.1f} s ({n_cases / times[2]:.2f} cases/s); throughput ratio {ratio:.2f} (target >= 1.5)")  # fmt: skip
+          f"{times[2]:.1f} s ({n_cases / times[2]:.2f} cases/s); throughput ratio {ratio:.2f} (target >= 1.5)")
     print(f"peak RSS per worker: {rss[2]:.0f} MB with 2 workers (this process, 1 worker: {rss[1]:.0f} MB)")
 
 
