@@ -230,3 +230,14 @@ def test_dask_local_scheduler(tmp_path: Path, monkeypatch):
     monkeypatch.setattr(runner, "CONNECT_TIMEOUT_S", 2)
     bad = CliRunner().invoke(app, ["study", str(f), "-o", str(tmp_path / "q"), "--scheduler", "tcp://127.0.0.1:9"])
     assert bad.exit_code == 2 and "cannot reach the Dask scheduler" in bad.output
+
+
+def test_example_and_study_file_one_not_both(tmp_path: Path):
+    f = _study(tmp_path)
+    both = CliRunner().invoke(app, ["study", str(f), "--example", "aperture-aberration", "-o", str(tmp_path / "o")])
+    assert both.exit_code == 2 and "one, not both" in both.output
+    unknown = CliRunner().invoke(app, ["study", "--example", "apertures", "-o", str(tmp_path / "o")])
+    assert unknown.exit_code == 2 and "'apertures'" in unknown.output and "aperture-aberration" in unknown.output
+    neither = CliRunner().invoke(app, ["study", "-o", str(tmp_path / "o")])
+    assert neither.exit_code == 2
+    assert not (tmp_path / "o").exists()
