@@ -241,3 +241,53 @@ def test_example_and_study_file_one_not_both(tmp_path: Path):
     neither = CliRunner().invoke(app, ["study", "-o", str(tmp_path / "o")])
     assert neither.exit_code == 2
     assert not (tmp_path / "o").exists()
+
+
+MINIMAL = """name = "minimal"
+[orbit]
+altitude_m = 500000.0
+[optics]
+aperture_diameter_m = 0.5
+f_number = 10.0
+wavelengths_m = [6e-7]
+[detector]
+pitch_m = 5e-6
+"""
+
+
+def test_seams_minimal_system_as_built_and_pushbroom_axes(tmp_path: Path, monkeypatch):
+    """A minimal system file (only the required keys) as the base; the aperture (focal length held), the camera
+    as built and the pushbroom line-rate error varied together (zip), at run depth."""
+    import math
+
+    (tmp_path / "minimal.toml").write_text(MINIMAL)
+    (tmp_path / "scene.toml").write_text(TINY_SCENE)
+    spec = {
+        "base": {"system": {"file": "minimal.toml"}, "scene": {"layout": "scene.toml"}},
+        "axes": [
+            {"key": "optics.aperture_diameter_m", "values": [0.4, 0.5]},
+            {"key": "as_built.optics.wfe_rms_waves", "values": [0.0, 0.08]},
+            {"key": "motion.line_rate_error", "values": [0.0, 0.05]},
+        ],
+        "study": {"depth": "run", "zip": True},
+    }
+    monkeypatch.chdir(tmp_path)  # a dict's relative paths are relative to the current folder
+    r = satchain.study(spec, tmp_path / "out", workers=1)
+    assert r.n_error == 0, r.errors
+    assert any("optics.focal_length_m = 5 m" in line for line in r.held_fixed)
+    for case, ap, wfe, rate in (("c0001", 0.4, 0.0, 0.0), ("c0002", 0.5, 0.08, 0.05)):
+        cfg = satchain.load_run_config(tmp_path / "out" / "cases" / case / "config.toml")
+        system = cfg.load_system()
+        assert system.optics.aperture_diameter_m == ap and system.motion.line_rate_error == rate
+        assert system.derived()["focal_length_m"] == pytest.approx(5.0, rel=1e-12)  # held: f_number followed
+        res = json.loads((tmp_path / "out" / "cases" / case / "results.json").read_text())
+        changed = {d["key"] if isinstance(d, dict) else d for d in res["as_built_differences"]}
+        assert (wfe != 0.0) == any("wfe_rms_waves" in str(k) for k in changed)
+        rows = [row for row in r.rows if row["case"] == case and row["kind"] == "edge_angle"]
+        assert len(rows) == 1
+        if rate:  # the pushbroom geometry maps the 6-degree edge: the predicted angle follows (1 + eps) tan 6
+            assert "pushbroom image geometry" in rows[0]["figure"]
+            assert rows[0]["predicted"] != pytest.approx(6.0, abs=0.05)
+        else:
+            assert rows[0]["predicted"] == pytest.approx(6.0, abs=1e-9)
+        assert math.isfinite(rows[0]["measured"])
