@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from satchain.comparison._common import finite, sigma_or_why, within
+from satchain.comparison._common import NOISE_FLOOR_SIGMAS, finite, rice_mean, sigma_or_why, within
 from satchain.comparison.records import CheckRow, EdgeCheck
 from satchain.comparison.sigma import edge_angle_sigma
 from satchain.prediction.core import Predictions
@@ -28,6 +28,7 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
         p_nyq, run_flags = _compared_prediction(
             e, moved.get("mtf_at_nyquist_predicted_per_row"), p.mtf_at_nyquist, moved, flags
         )
+        p_nyq, model = _noise_floor(p_nyq, finite(e.get("mtf_at_nyquist_sigma", e.get("mtf_at_nyquist_std"))), moved)
         err = None if meas is None else meas - p_nyq
         f = np.asarray(e.get("f_cy_per_px", []), float)
         a, a_true = finite(e.get("angle_deg")), finite(e.get("angle_deg_truth"))
@@ -64,7 +65,8 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
             CheckRow(
                 f"edge {e['id']} MTF@Nyquist ({e['direction']})", "edge_mtf_at_nyquist", e["id"], meas,
                 p_nyq, err, tol.edge_mtf_at_nyquist, f"±{tol.edge_mtf_at_nyquist}",
-                within(err, tol.edge_mtf_at_nyquist), why, *sig, note=_as_imaged_note(details[-1]),
+                within(err, tol.edge_mtf_at_nyquist), why, *sig, model_prediction=model,
+                note=_noise_floor_note(details[-1]) or _as_imaged_note(details[-1]),
             )
         )  # fmt: skip
         why = None if a_err is not None else "no measured or true angle"
@@ -92,6 +94,30 @@ def edge_checks(entries: list[dict], pred: Predictions, tol: Any) -> tuple[list[
             )
         )  # fmt: skip
     return [EdgeCheck.from_dict(d) for d in details], rows
+
+
+def _noise_floor(predicted: float, sigma: float | None, moved: dict) -> tuple[float, float | None]:
+    """Where the predicted MTF at Nyquist lies within :data:`NOISE_FLOOR_SIGMAS` sigmas of zero (an optics cutoff
+    at or below Nyquist, Q >= 2), the measurement reads the magnitude of the MTF plus its noise, never below it:
+    the expected reading is the Rice mean of the prediction (:func:`rice_mean`), which the check compares with
+    (the model's value kept beside it). Returns ``(compared prediction, model value or None)``."""
+    if sigma is None or sigma <= 0 or not abs(predicted) < NOISE_FLOOR_SIGMAS * sigma:
+        return predicted, None
+    expected = rice_mean(predicted, sigma)
+    moved["mtf_at_nyquist_model"] = predicted
+    moved["mtf_at_nyquist_noise_floor"] = expected
+    return expected, predicted
+
+
+def _noise_floor_note(d: dict) -> str | None:
+    model = d.get("mtf_at_nyquist_model")
+    if model is None:
+        return None
+    return (
+        f"the model's MTF at Nyquist ({model:.4f}) is within {NOISE_FLOOR_SIGMAS:g} sigma of 0: the measured "
+        f"magnitude of MTF + noise reads {d['mtf_at_nyquist_noise_floor']:.4f} on average (the Rice mean), the "
+        "value compared"
+    )
 
 
 def _as_imaged(e: dict, p, pred: Predictions) -> dict:

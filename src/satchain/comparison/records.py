@@ -168,13 +168,18 @@ class EdgeCheck(_Detail):
     mtf_at_nyquist_predicted_as_located: float | None = None
     los_motion_rms_px_predicted: float | None = None
     fit_degree: int | None = None
+    # near zero (within 3 sigma: Q >= 2): the model's MTF at Nyquist, and the Rice mean of it and the measurement's
+    # noise, which mtf_at_nyquist_predicted then holds (a measured magnitude never reads below its noise)
+    mtf_at_nyquist_model: float | None = None
+    mtf_at_nyquist_noise_floor: float | None = None
     as_built: dict | None = None  # the prediction for the camera as built (written only for such a run)
 
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
         for k in ("angle_deg_expected", "mtf_as_imaged_at_nyquist_measured", "mtf_as_imaged_at_nyquist_predicted",
                   "los_motion_rms_px", "mtf_at_nyquist_compared", "mtf_at_nyquist_predicted_per_row",
-                  "mtf_at_nyquist_predicted_as_located", "los_motion_rms_px_predicted", "fit_degree"):  # fmt: skip
+                  "mtf_at_nyquist_predicted_as_located", "los_motion_rms_px_predicted", "fit_degree",
+                  "mtf_at_nyquist_model", "mtf_at_nyquist_noise_floor"):  # fmt: skip
             if d[k] is None:
                 del d[k]
         return d
