@@ -100,3 +100,47 @@ def test_measured_mtf_beyond_a_single_arrays_nyquist_matches_the_prediction(angl
     a, _ = staggered_samples(img)
     single = measure_edge(a[4:-4, 4:-4], pitch_m=P_M)
     assert single.f_cy_per_px[-1] <= 1.0 + 1e-9
+
+
+def _bars(n: int, period_mm: float, sigma_mm: float, sub: int = 12) -> np.ndarray:
+    """Bars along the rows (reflectance 0.1 / 0.6, ``period_mm``) blurred by a Gaussian and integrated over each
+    p-wide pixel centred on its point of the p/2 grid; exact: the blurred square wave as a sum of edges."""
+    u = (np.arange(sub) + 0.5) / sub - 0.5
+    x = np.arange(n) * 0.5
+    acc = np.zeros(n)
+    for du in u:
+        xx = x + du
+        k = np.arange(-2, int(xx.max() / period_mm) + 3)
+        rises, falls = k * period_mm, k * period_mm + period_mm / 2
+        acc += (ndtr((xx[:, None] - rises) / sigma_mm) - ndtr((xx[:, None] - falls) / sigma_mm)).sum(1)
+    row = 0.1 + 0.5 * acc / sub
+    return np.tile(row, (n, 1))
+
+
+def test_bars_above_a_single_arrays_nyquist_resolved_as_predicted():
+    """Bars of period 1.4 p (0.71 cy per array pixel, above one array's 0.5): the combined image holds them at
+    their own frequency with the predicted amplitude; one array alone cannot tell them from bars at the alias 0.29."""
+    period, sigma, f = 1.4, 0.2, 1 / 1.4
+    img = _bars(160, period, sigma)
+    combined = combine_staggered(*staggered_samples(img))
+    x = np.arange(combined.shape[1]) * 0.5
+
+    def amplitude(profile, xs, freq):
+        basis = np.stack([np.cos(2 * np.pi * freq * xs), np.sin(2 * np.pi * freq * xs), np.ones_like(xs)], 1)
+        c, *_ = np.linalg.lstsq(basis, profile, rcond=None)
+        return float(np.hypot(c[0], c[1]))
+
+    inner = slice(10, -10)
+    measured = amplitude(combined[40, inner], x[inner], f)
+    fundamental = 4 / np.pi * 0.25  # a square wave of peak-to-peak 0.5: its first harmonic's amplitude
+    predicted = fundamental * math.exp(-2 * (math.pi * sigma * f) ** 2) * np.sinc(f) * float(
+        combination_otf(f, 0.0, pitch_m=P_M)
+    )
+    assert predicted > 0.02
+    assert measured == pytest.approx(predicted, rel=0.1, abs=0.005)
+    a, _ = staggered_samples(img)
+    xa = np.arange(a.shape[1]) * 1.0
+    row = a[20, 5:-5]
+    at_true, at_alias = amplitude(row, xa[5:-5], f), amplitude(row, xa[5:-5], 1 - f)
+    assert at_true == pytest.approx(at_alias, rel=1e-9)  # one array: 0.71 and its alias 0.29 are the same samples
+    assert amplitude(combined[40, inner], x[inner], 1 - f) < 0.1 * measured  # combined: the bars at their own
