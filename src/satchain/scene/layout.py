@@ -26,7 +26,9 @@ Scene files (TOML or JSON)::
     center_m = [35.0, 35.0]
     angle_deg = 5.0
 
-Items are painted in file order (painter's order). Keys are the item classes' fields.
+Items are painted in file order (painter's order). Keys are the item classes' fields. A grey reflectance may be
+given as a material instead (``bright_material = "white_paint"``, ``[scene] background_material = "dry_grass"``, or
+a ``.csv`` spectrum file): see :mod:`satchain.scene.spectral`.
 """
 
 from __future__ import annotations
@@ -46,6 +48,13 @@ from satchain.errors import ConfigError, SatchainIOError
 from satchain.scene.base import Item, check_reflectance, item_from_dict
 from satchain.scene.objects import Car, House, Railway, Road, Wagon
 from satchain.scene.shapes import Window, check_window
+from satchain.scene.spectral import (
+    MaterialSlot,
+    apply_grey,
+    materials_to_dicts,
+    scene_grey,
+    split_materials,
+)
 from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
 if sys.version_info >= (3, 11):
@@ -106,6 +115,9 @@ class Scene:
     background: float = 0.2
     pixel_m: float = 0.035
     name: str = "custom"
+    #: materials filling grey slots (:mod:`satchain.scene.spectral`); the scene renders each as its mean over
+    #: the default band, :func:`~satchain.scene.spectral.layout_for_band` as a band sees it
+    materials: tuple[MaterialSlot, ...] = ()
 
     def __post_init__(self):
         check_positive("scene.width_m", self.width_m)
@@ -120,6 +132,14 @@ class Scene:
             if it.id in seen:
                 raise ConfigError(f"scene.items: duplicate id {it.id!r}; ids must be unique")
             seen.add(it.id)
+        object.__setattr__(self, "materials", tuple(self.materials))
+        if self.materials:
+            for s in self.materials:
+                if not isinstance(s, MaterialSlot):
+                    raise ConfigError(f"scene.materials: {s!r} is not a MaterialSlot")
+            items, background = apply_grey(self.items, self.background, self.materials, scene_grey)
+            object.__setattr__(self, "items", items)
+            object.__setattr__(self, "background", background)
         object.__setattr__(self, "_bboxes", tuple(it.bbox_m() for it in self.items))
 
     @property
@@ -186,6 +206,7 @@ class Scene:
                 "background": self.background,
                 "conventions": CONVENTIONS,
                 "items": items,
+                **({"materials": _materials_truth(self.materials)} if self.materials else {}),
             }
         )
 
@@ -264,23 +285,42 @@ def _jsonable(obj):
     return obj
 
 
-def layout_from_dict(d: dict[str, Any]) -> Scene:
-    """Build a :class:`Scene` from ``{"scene": {...}, "items": [...]}`` (the scene-file structure)."""
+def _materials_truth(slots: tuple[MaterialSlot, ...]) -> list[dict[str, Any]]:
+    return [
+        {"item": s.item_id, "slot": s.slot, "material": s.material.name, "key": s.key, "source": s.material.source}
+        for s in slots
+    ]
+
+
+def layout_from_dict(d: dict[str, Any], *, base_dir: str | os.PathLike | None = None) -> Scene:
+    """Build a :class:`Scene` from ``{"scene": {...}, "items": [...]}`` (the scene-file structure); spectrum files
+    named by ``*_material`` keys are relative to ``base_dir`` (default: the working directory)."""
     if not isinstance(d, dict) or "scene" not in d:
         raise ConfigError("layout: must have a [scene] table with width_m and height_m")
-    head = dict(d["scene"])
+    base = None if base_dir is None else Path(base_dir)
+    head, found = split_materials(dict(d["scene"]), "scene", None, base_dir=base)
+    slots = [MaterialSlot(None, slot, m, key) for slot, m, key in found]
     allowed = {"width_m", "height_m", "background", "pixel_m", "name"}
     unknown = sorted(set(head) - allowed)
     if unknown:
-        raise ConfigError(f"scene: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
+        raise ConfigError(f"scene: unknown key(s) {unknown}; allowed: {sorted(allowed | {'background_material'})}")
     for key in ("width_m", "height_m"):
         if key not in head:
             raise ConfigError(f"scene.{key}: missing")
-    items = tuple(item_from_dict(ITEM_KINDS, it, f"items[{i}]") for i, it in enumerate(d.get("items", [])))
+    items = []
+    for i, it in enumerate(d.get("items", [])):
+        kind = it.get("kind") if isinstance(it, dict) else None
+        if isinstance(it, dict) and kind in ITEM_KINDS:
+            it, found = split_materials(it, f"items[{i}] ({kind})", kind, base_dir=base)
+        else:
+            found = []
+        item = item_from_dict(ITEM_KINDS, it, f"items[{i}]")
+        slots += [MaterialSlot(item.id, slot, m, key) for slot, m, key in found]
+        items.append(item)
     unknown_top = sorted(set(d) - {"scene", "items"})
     if unknown_top:
         raise ConfigError(f"layout: unknown top-level key(s) {unknown_top}; allowed: ['items', 'scene']")
-    return Scene(items=items, **head)
+    return Scene(items=tuple(items), materials=tuple(slots), **head)
 
 
 def layout_to_dict(scene: Scene) -> dict[str, Any]:
@@ -293,6 +333,16 @@ def layout_to_dict(scene: Scene) -> dict[str, Any]:
         "name": scene.name,
     }
     items = [{"kind": it.kind, **dataclasses.asdict(it)} for it in scene.items]
+    if scene.materials:
+        keys = materials_to_dicts(scene.materials)
+        for target in [head, *items]:
+            own = keys.get(None if target is head else target["id"], {})
+            for k in own:
+                slot = k[: -len("_material")]
+                grey = ("mean", "amplitude") if target.get("kind") == "siemens_star" else (slot,)
+                for g in grey:
+                    target.pop(g, None)
+            target.update(own)
     return _jsonable({"scene": head, "items": items})
 
 
@@ -320,7 +370,7 @@ def load_layout(source: str | os.PathLike) -> Scene:
         raise not_utf8(path, exc, "layout") from None
     except OSError as exc:
         raise SatchainIOError(f"layout = {str(path)!r}: cannot read: {exc}") from None
-    return layout_from_dict(data)
+    return layout_from_dict(data, base_dir=path.parent)
 
 
 def paper_layout() -> Scene:
