@@ -71,6 +71,37 @@ def _print_budget(res: dict[str, Any]) -> None:
                 f"[bold]{key}[/]: "
                 + ", ".join(f"{k}={_fmt(v)}" for k, v in res[key].items() if not isinstance(v, (list, dict)))
             )
+    if res.get("bands"):
+        _print_bands(res["bands"])
+
+
+def _print_bands(bands: list[dict[str, Any]]) -> None:
+    """One row per ``[[bands]]`` entry: its own GSD, Nyquist, MTF there, signal, SNR, NIIRS and offset from PAN."""
+    ref = bands[0]["registration"]["reference_band"]
+    t = Table(title=f"bands: each at its own pixel, Nyquist and radiometry; offsets from {ref!r} in the band's px")
+    heads = ["band", "centre nm", "GSD m", "Nyquist cy/mm", "MTF@Ny ACT", "MTF@Ny ALT", "signal e-", "SNR", "NIIRS",
+             "delay ms", "offset ALT px", "offset ACT px", "oscillation px (amplitude)"]  # fmt: skip
+    for c in heads:
+        t.add_column(c, justify="left" if c == "band" else "right")
+    for b in bands:
+        reg = b["registration"]
+        osc = ", ".join(f"{o['axis']} {o['amplitude_px']:.3f} @ {o['frequency_hz']:g} Hz" for o in reg["oscillations"])
+        t.add_row(
+            b["name"],
+            f"{b['center_wavelength_m'] * 1e9:.1f}",
+            f"{b['gsd_m']:.4g}",
+            f"{b['nyquist_cy_per_mm']['alt']:.4g}",
+            f"{b['mtf_at_nyquist']['act']:.4f}",
+            f"{b['mtf_at_nyquist']['alt']:.4f}",
+            f"{b['signal_e']:.5g}",
+            f"{b['snr']:.4g}",
+            "-" if b["niirs"] is None else f"{b['niirs']:.3f}",
+            f"{reg['delay_s'] * 1e3:.2f}",
+            f"{reg['static_px']['alt']:+.3f}",
+            f"{reg['static_px']['act']:+.3f}",
+            osc or "-",
+        )
+    console.print(t)
 
 
 def _print_motion_geometry(g: dict[str, Any]) -> None:

@@ -48,6 +48,7 @@ _UNITS = (
     ("_px", "detector pixels"),
     ("_e", "electrons"),
     ("_s", "s"),
+    ("_mm", "mm"),
     ("_m", "m"),
 )
 

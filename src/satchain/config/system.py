@@ -37,6 +37,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from satchain.config._base import refuse_unknown_keys
+from satchain.config.response import response_table
 from satchain.config.sections import (  # noqa: F401  (re-exported: the sections are part of this module's API)
     EARTH_GM_M3_PER_S2,
     EARTH_RADIUS_M,
@@ -120,6 +121,9 @@ class ImagingSystem(_Frozen):
         los = data.get("motion", {}).get("line_of_sight") if isinstance(data.get("motion"), dict) else None
         if isinstance(los, dict) and isinstance(los.get("file"), str):
             los["file"] = str((Path(path).resolve().parent / los["file"]).resolve())
+        for band in data.get("bands", []) if isinstance(data.get("bands"), list) else []:
+            if isinstance(band, dict) and isinstance(band.get("response_file"), str):
+                band["response_file"] = str((Path(path).resolve().parent / band["response_file"]).resolve())
         return cls.from_dict(data)
 
     def to_dict(self) -> dict[str, Any]:
@@ -167,25 +171,73 @@ class ImagingSystem(_Frozen):
         return type(self).from_dict(d)
 
     def for_band(self, index: int) -> ImagingSystem:
-        """The system that forms band ``index`` (0-based) of a multiband input: its ``[[bands]]`` entry's
-        wavelengths (and radiometric band) in place of the optics' own; the system itself without ``bands``.
+        """The system that forms band ``index`` (0-based) of a multiband input: its ``[[bands]]`` entry's keys in
+        place of the system's own -- the optics' wavelengths and weights (a response's quadrature), the radiometric
+        band (a response's support), the QE (times the response), the (square) pixel pitch and active width, the TDI
+        stages; the same telescope (focal length). The system itself without ``bands``.
 
         Examples
         --------
         >>> s = load_preset("ankarasat3").replace({})
         >>> s.for_band(2) is s
         True
+        >>> ms = load_preset("ankarasat3-pms")
+        >>> round(ms.for_band(ms.band_index("red")).gsd_m, 3)
+        1.96
         """
         if not self.bands:
             return self
+        if not (isinstance(index, int) and 0 <= index < len(self.bands)):
+            raise ConfigError(f"band index = {index!r}: the system has {len(self.bands)} bands (0 to "
+                              f"{len(self.bands) - 1}: {', '.join(self.band_names)})")  # fmt: skip
         b = self.bands[index]
-        values: dict[str, Any] = {
-            "optics.wavelengths_m": b.wavelengths_m,
-            "optics.wavelength_weights": b.wavelength_weights,
-        }
-        if b.band_m is not None:
-            values["radiometry.band_m"] = b.band_m
-        return self.replace(values).model_copy(update={"bands": ()})
+        lam, weights = b.optics_wavelengths()
+        values: dict[str, Any] = {"optics.wavelengths_m": lam, "optics.wavelength_weights": weights}
+        band_m = b.radiometric_band_m
+        if band_m is not None:
+            values["radiometry.band_m"] = band_m
+        qe = _band_qe(b, self.detector)
+        if qe is not None:
+            values["detector.qe"], values["detector.qe_wavelengths_m"] = qe
+        if b.tdi_stages is not None:
+            values["detector.tdi_stages"] = b.tdi_stages
+        if b.pitch_m is not None:
+            values["detector.pitch_m"] = b.pitch_m
+        if b.active_width_m is not None:
+            values["detector.active_width_x_m"] = values["detector.active_width_y_m"] = b.active_width_m
+        out = self.replace(values)
+        if b.pitch_m is not None:  # the line-of-sight motion is an angle: fewer of the band's (larger) pixels
+            out = out.model_copy(update={"motion": _motion_in_pixels_of(self.motion, self.detector, b.pitch_m)})
+        return out.model_copy(update={"bands": ()})
+
+    @property
+    def band_names(self) -> tuple[str, ...]:
+        """The names of the ``[[bands]]`` in order (``band<i>``, 1-based, for a band without one); () without bands."""
+        return tuple(b.name or f"band{i + 1}" for i, b in enumerate(self.bands))
+
+    def band_index(self, name: str) -> int:
+        """The 0-based index of the band called ``name`` (case-insensitive); a ConfigError listing the names."""
+        names = [n.casefold() for n in self.band_names]
+        if name.casefold() not in names:
+            listed = ", ".join(map(repr, self.band_names)) or "none: the system has no [[bands]]"
+            raise ConfigError(f"band = {name!r}: not a band of {self.name!r}; its bands are {listed}")
+        return names.index(name.casefold())
+
+    @model_validator(mode="after")
+    def _bands_fit(self) -> ImagingSystem:
+        seen: dict[str, int] = {}
+        for i, b in enumerate(self.bands):
+            key = b.name.casefold()
+            if key and key in seen:
+                j = seen[key]
+                raise ValueError(f"bands[{i}].name = {b.name!r}: the same as bands[{j}].name = "
+                                 f"{self.bands[j].name!r}; every band needs its own name")  # fmt: skip
+            seen.setdefault(key, i)
+            pitch = b.pitch_m or min(self.detector.pitch_x_m, self.detector.pitch_y_m)
+            if b.active_width_m is not None and b.active_width_m > pitch * (1 + 1e-12):
+                raise ValueError(f"bands[{i}].active_width_m = {b.active_width_m!r}: must be <= the band's pitch "
+                                 f"({pitch!r})")  # fmt: skip
+        return self
 
     # ----------------------------------------------------------------- derived quantities
     @property
@@ -379,6 +431,49 @@ def _set_detector_area(sub: dict[str, Any], new: dict[str, Any]) -> None:
             continue  # the validator names the pitch
         if math.isfinite(pitch) and pitch > 0:
             sub[f"active_width_{ax}_m"] = old_width[ax] * (pitch / old_pitch[ax])
+
+
+def _band_qe(band: Band, detector: Detector) -> tuple[Any, Any] | None:
+    """``(qe, qe_wavelengths_m)`` of a band: its own QE (or the detector's) times its response, tabulated over the
+    response's support; its own QE alone without a response; None when neither changes the detector's."""
+    r = band.spectral_response
+    if r is None:
+        if band.qe is None:
+            return None
+        return band.qe, band.qe_wavelengths_m
+    lam, resp = response_table(r)
+    if isinstance(band.qe, tuple):
+        lo, hi = lam[0], lam[-1]
+        k = np.asarray(band.qe_wavelengths_m)  # Band._check: a qe table has its wavelengths
+        lam = np.union1d(lam, k[(k > lo) & (k < hi)])
+        resp = r(lam)
+        qe = np.interp(lam, k, band.qe, left=0.0, right=0.0)
+    elif band.qe is not None:
+        qe = np.full(lam.shape, float(band.qe))
+    else:
+        qe = detector.qe_at(lam)
+    return tuple(float(x) for x in np.clip(qe * resp, 0.0, 1.0)), tuple(float(x) for x in lam)
+
+
+def _motion_in_pixels_of(motion: Motion, detector: Detector, pitch_m: float) -> Motion:
+    """``motion`` (in ``detector``'s pixels) in pixels of pitch ``pitch_m``: the line-of-sight angles of the
+    oscillations, jitter, jitter PSDs and log scaled by the pitch ratio. The smears stay in pixels: they are the
+    motion over one integration time, which scales with the pitch as the line time does."""
+    k = {"act": detector.pitch_x_m / pitch_m, "alt": detector.pitch_y_m / pitch_m}
+    upd: dict[str, Any] = {"jitter_rms_px": motion.jitter_rms_px * math.sqrt(k["act"] * k["alt"])}
+    upd["oscillation"] = tuple(
+        o.model_copy(update={"amplitude_px": o.amplitude_px * k[o.axis]}) for o in motion.oscillation
+    )
+    upd["jitter_psd"] = tuple(
+        j.model_copy(update={"psd_px2_per_hz": tuple(v * k[j.axis] ** 2 for v in j.psd_px2_per_hz)})
+        for j in motion.jitter_psd
+    )
+    los = motion.line_of_sight
+    if los is not None:
+        upd["line_of_sight"] = los.model_copy(update={
+            f"{ax}_px": tuple(v * k[ax] for v in getattr(los, f"{ax}_px") or ()) for ax in ("act", "alt")
+        })  # fmt: skip
+    return motion.model_copy(update=upd)
 
 
 def _set(sub: dict[str, Any], field: str, value: Any, key: str) -> None:

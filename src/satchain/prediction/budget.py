@@ -17,6 +17,7 @@ True
 from __future__ import annotations
 
 import copy
+import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
 
     from satchain.config.system import ImagingSystem
 
-__all__ = ["DirectionalMTF", "SystemBudget", "budget", "budget_results"]
+__all__ = ["BandBudget", "DirectionalMTF", "SystemBudget", "band_budgets", "budget", "budget_results"]
 
 
 class DirectionalMTF:
@@ -93,6 +94,8 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
 
     out["radiometry"] = radiometric_budget(system).to_dict()
     out["quality"] = predict_quality(system, otf=otf).to_dict()
+    if system.bands:
+        out["bands"] = band_budgets(system)
     out["frequency_axis"] = (
         "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
         "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
@@ -108,6 +111,152 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
     return out
 
 
+def _pan_index(system: ImagingSystem) -> int:
+    """The band whose name is "pan" (case-insensitive), else the first."""
+    names = [n.casefold() for n in system.band_names]
+    return names.index("pan") if "pan" in names else 0
+
+
+def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
+    """Every ``[[bands]]`` entry's budget (JSON-ready, one dict per band, in order): its name, centre wavelength,
+    GSD, Nyquist (cy/mm, cy/px), system MTF at its own Nyquist, signal and SNR (its own band, QE, TDI and pixel),
+    GIQE 5 NIIRS for the PAN band (named "pan", else the first), and its predicted registration offset from the PAN
+    band. [] for a system without bands.
+
+    Registration: a band ``offset_alt_mm`` along-track from the system's own detector sees a ground point
+    ``delay_s = offset_alt / v`` after it (``v = pitch_y / line_time``: the image's speed on the focal plane),
+    ``offset_alt / pitch`` lines later; registered by that nominal delay (and its ``offset_act_mm`` / pitch
+    columns), its static offset from the PAN band is the injected ``registration_offset_px`` (the part that
+    ``oscillations`` gives what each ``[[motion.oscillation]]`` adds (:func:`_oscillation_offsets`); jitter PSDs,
+    line-of-sight logs and Earth rotation over the delay are not predicted here yet).
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> b = band_budgets(load_preset("ankarasat3-pms"))
+    >>> [(x["name"], round(x["gsd_m"], 2)) for x in b][:2]
+    [('pan', 0.49), ('blue', 1.96)]
+    """
+    from satchain.prediction.quality import predict_quality
+    from satchain.radiometry import radiometric_budget
+
+    pan = _pan_index(system)
+    ref = system.for_band(pan)
+    speed_m_per_s = system.detector.pitch_y_m / system.line_time_s  # the image on the focal plane
+    out = []
+    for i, band in enumerate(system.bands):
+        s = system.for_band(i)
+        otf = SystemOTF(s)
+        ny = mtf_at_nyquist(s, otf=otf)
+        rad = radiometric_budget(s)
+        offset_m = (band.offset_alt_mm - system.bands[pan].offset_alt_mm) / units.MM_PER_M
+        static = band.registration_offset_px
+        ref_static = system.bands[pan].registration_offset_px
+        px = {d: static[k] - ref_static[k] * _pitch(ref, d) / _pitch(s, d) for k, d in enumerate(("alt", "act"))}
+        entry: dict[str, Any] = {
+            "index": i,
+            "name": system.band_names[i],
+            "center_wavelength_m": band.center_wavelength_m,
+            "wavelengths_m": list(s.optics.wavelengths_m),
+            "band_m": list(s.radiometry.band_m),
+            "pitch_m": s.detector.pitch_x_m,
+            "tdi_stages": s.detector.tdi_stages,
+            "gsd_m": s.gsd_m,
+            "gsd_act_m": s.gsd_act_m,
+            "gsd_alt_m": s.gsd_alt_m,
+            "nyquist_cy_per_mm": {"act": s.nyquist_act_cy_per_mm, "alt": s.nyquist_alt_cy_per_mm},
+            "nyquist_cy_per_px": 0.5,
+            "mtf_at_nyquist": ny,
+            "signal_e": rad.signal_e,
+            "snr": rad.snr,
+            "contrast_snr": rad.contrast_snr,
+            "saturated": rad.saturated,
+            "niirs": predict_quality(s, otf=otf).giqe5 if i == pan else None,
+            "registration": {
+                "reference_band": system.band_names[pan],
+                "offset_alt_mm": band.offset_alt_mm,
+                "offset_act_mm": band.offset_act_mm,
+                "delay_s": offset_m / speed_m_per_s,
+                "delay_lines": offset_m / s.detector.pitch_y_m,
+                "static_px": px,
+                "static_m": {d: px[d] * (s.gsd_alt_m if d == "alt" else s.gsd_act_m) for d in ("alt", "act")},
+                "static_reference_px": {d: px[d] * _pitch(s, d) / _pitch(ref, d) for d in ("alt", "act")},
+                "oscillations": _oscillation_offsets(system, ref, s, offset_m / speed_m_per_s),
+                "oscillation_form": "amplitude_px sin(2 pi frequency_hz t_c + phase_deg), t_c: the reference row's "
+                "TDI window centre (s)",
+                "not_predicted": "jitter PSDs, line-of-sight logs and Earth rotation over delay_s",
+            },
+        }
+        out.append(entry)
+    return out
+
+
+def _oscillation_offsets(system: ImagingSystem, ref: ImagingSystem, band: ImagingSystem, delay_s: float) -> list:
+    """The offset (band minus reference band) each sinusoidal line-of-sight oscillation adds: a row's displacement
+    is the mean of ``A sin(2 pi f t + phi)`` over its TDI window (``A sinc(f T) sin(2 pi f t_c + phi)``, ``t_c`` the
+    window's centre: :mod:`satchain.tf.pushbroom`), and the band sees the ground point ``delay_s`` after the
+    reference, so the offset is ``A |z| sin(2 pi f t_c + phi + arg z)`` with ``z = sinc(f T_b) e^(2 pi i f delay)
+    - sinc(f T_ref)``, ``t_c`` the reference row's window centre. Amplitudes in the band's own pixels."""
+    out = []
+    for o in system.motion.oscillation:
+        f = o.frequency_hz
+        t_ref = ref.detector.tdi_stages * ref.line_time_s
+        t_band = band.detector.tdi_stages * band.line_time_s
+        z = np.sinc(f * t_band) * np.exp(2j * np.pi * f * delay_s) - np.sinc(f * t_ref)
+        to_band = _pitch(system, o.axis) / _pitch(band, o.axis)
+        amp = float(o.amplitude_px * abs(z) * to_band)
+        out.append({
+            "axis": o.axis,
+            "frequency_hz": f,
+            "amplitude_px": amp,
+            "rms_px": amp / math.sqrt(2.0),
+            "phase_deg": float(o.phase_deg + np.degrees(np.angle(z))),
+        })  # fmt: skip
+    return out
+
+
+@dataclass(frozen=True)
+class BandBudget:
+    """One band's budget (:func:`band_budgets`), typed: ``name``, ``center_wavelength_m``, ``gsd_m``,
+    ``nyquist_act_cy_per_mm`` / ``nyquist_alt_cy_per_mm``, ``mtf_at_nyquist_act`` / ``_alt`` (at its own Nyquist),
+    ``signal_e``, ``snr`` (its scene's mean signal), ``niirs`` (the PAN band's; None for the others),
+    ``delay_s`` (when it sees the ground after the PAN band) and ``registration_alt_px`` / ``_act_px`` (its predicted
+    offset from the PAN band, in its own pixels)."""
+
+    name: str
+    center_wavelength_m: float
+    gsd_m: float
+    nyquist_act_cy_per_mm: float
+    nyquist_alt_cy_per_mm: float
+    mtf_at_nyquist_act: float
+    mtf_at_nyquist_alt: float
+    signal_e: float
+    snr: float
+    niirs: float | None
+    delay_s: float
+    registration_alt_px: float
+    registration_act_px: float
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> BandBudget:
+        reg = d["registration"]
+        return cls(
+            name=str(d["name"]),
+            center_wavelength_m=float(d["center_wavelength_m"]),
+            gsd_m=float(d["gsd_m"]),
+            nyquist_act_cy_per_mm=float(d["nyquist_cy_per_mm"]["act"]),
+            nyquist_alt_cy_per_mm=float(d["nyquist_cy_per_mm"]["alt"]),
+            mtf_at_nyquist_act=float(d["mtf_at_nyquist"]["act"]),
+            mtf_at_nyquist_alt=float(d["mtf_at_nyquist"]["alt"]),
+            signal_e=float(d["signal_e"]),
+            snr=float(d["snr"]),
+            niirs=None if d["niirs"] is None else float(d["niirs"]),
+            delay_s=float(reg["delay_s"]),
+            registration_alt_px=float(reg["static_px"]["alt"]),
+            registration_act_px=float(reg["static_px"]["act"]),
+        )
+
+
 @dataclass(frozen=True, repr=False)
 class SystemBudget:
     """The predicted budget of one system, typed: the figures a design study sweeps, and the whole budget.
@@ -118,7 +267,8 @@ class SystemBudget:
     ``nyquist_alt_cy_per_mm``; ``mtf_at_nyquist_act``, ``mtf_at_nyquist_alt`` (system MTF at the detector
     Nyquist); ``mtfa_act``, ``mtfa_alt`` (area under the MTF, 0 to Nyquist, cy/px); ``rer``, ``rer_act``,
     ``rer_alt`` (relative edge response, geometric mean and per axis); ``snr``: the GIQE contrast SNR;
-    ``signal_snr``: the SNR of the scene's mean signal (radiometry); ``niirs``: GIQE 5 NIIRS.
+    ``signal_snr``: the SNR of the scene's mean signal (radiometry); ``niirs``: GIQE 5 NIIRS; ``bands``: each
+    ``[[bands]]`` entry's :class:`BandBudget` (() without bands).
     ``system``: the :class:`~satchain.config.system.ImagingSystem`; :meth:`to_dict`: the whole budget, exactly
     as ``satchain budget --json`` prints it (MTF/CTF tables, radiometry, every GIQE).
     """
@@ -173,6 +323,11 @@ class SystemBudget:
             system=system,
             results=copy.deepcopy(dict(results)),
         )
+
+    @property
+    def bands(self) -> tuple[BandBudget, ...]:
+        """Each ``[[bands]]`` entry's budget, typed (:func:`band_budgets`); () for a system without bands."""
+        return tuple(BandBudget.from_dict(b) for b in self.results.get("bands", ()))
 
     def to_dict(self) -> dict[str, Any]:
         """The whole budget as ``satchain budget --json`` prints it (a copy: JSON-ready, free to change)."""
