@@ -71,3 +71,47 @@ orientation = "horizontal"
 def reduced_scene_toml():
     """The reduced end-to-end scene (TOML text); see :data:`REDUCED_SCENE_TOML`."""
     return REDUCED_SCENE_TOML
+
+
+#: A one-edge scene (an ACT edge on 60 m x 60 m): a whole run in about a second.
+TINY_SCENE_TOML = """
+[scene]
+width_m = 60.0
+height_m = 60.0
+background = 0.2
+pixel_m = 0.07
+
+[[items]]
+kind = "slanted_edge"
+id = "edge_act"
+center_m = [30.0, 30.0]
+angle_deg = 6.0
+measures = "act"
+"""
+
+#: A system file with only the required keys.
+MINIMAL_SYSTEM_TOML = """name = "minimal"
+
+[orbit]
+altitude_m = 500000.0
+
+[optics]
+aperture_diameter_m = 0.5
+f_number = 10.0
+wavelengths_m = [6e-7]
+
+[detector]
+pitch_m = 5e-6
+"""
+
+
+@pytest.fixture(scope="session")
+def tiny_scene_toml():
+    """The one-edge scene (TOML text); see :data:`TINY_SCENE_TOML`."""
+    return TINY_SCENE_TOML
+
+
+@pytest.fixture(scope="session")
+def minimal_system_toml():
+    """A system file with only the required keys (TOML text); see :data:`MINIMAL_SYSTEM_TOML`."""
+    return MINIMAL_SYSTEM_TOML

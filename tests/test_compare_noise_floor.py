@@ -12,20 +12,6 @@ import satchain
 from satchain.comparison._common import NOISE_FLOOR_SIGMAS, rice_mean
 from satchain.studies.design import vary_system
 
-TINY_SCENE = """
-[scene]
-width_m = 60.0
-height_m = 60.0
-pixel_m = 0.07
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_act"
-center_m = [30.0, 30.0]
-angle_deg = 6.0
-measures = "act"
-"""
-
 
 @pytest.mark.parametrize("ratio", [0.0, 0.3, 1.0, 2.0, 3.0, 8.0])
 def test_rice_mean_is_the_mean_magnitude_of_a_noisy_phasor(ratio):
@@ -37,8 +23,8 @@ def test_rice_mean_is_the_mean_magnitude_of_a_noisy_phasor(ratio):
     assert rice_mean(nu, 0.0) == nu
 
 
-def _run(tmp_path, aperture_m: float, seed: int = 3):
-    (tmp_path / "scene.toml").write_text(TINY_SCENE)
+def _run(tmp_path, scene: str, aperture_m: float, seed: int = 3):
+    (tmp_path / "scene.toml").write_text(scene)
     base = satchain.load_preset("ankarasat3")
     system = vary_system(base, "optics.aperture_diameter_m", aperture_m)
     cfg = satchain.RunConfig.from_dict(
@@ -49,8 +35,8 @@ def _run(tmp_path, aperture_m: float, seed: int = 3):
     return system, row
 
 
-def test_q_above_2_compares_with_the_noise_floor(tmp_path):
-    system, row = _run(tmp_path, 0.35)
+def test_q_above_2_compares_with_the_noise_floor(tmp_path, tiny_scene_toml):
+    system, row = _run(tmp_path, tiny_scene_toml, 0.35)
     assert satchain.budget(system).q > 2  # the optics cut off below Nyquist: the model's MTF there is 0
     assert row.model_prediction == 0.0
     assert row.sigma is not None and row.predicted == pytest.approx(row.sigma * math.sqrt(math.pi / 2), rel=1e-12)
@@ -58,8 +44,8 @@ def test_q_above_2_compares_with_the_noise_floor(tmp_path):
     assert "Rice mean" in (row.note or "")
 
 
-def test_well_above_the_noise_the_prediction_is_the_model(tmp_path):
-    _, row = _run(tmp_path, 0.70)
+def test_well_above_the_noise_the_prediction_is_the_model(tmp_path, tiny_scene_toml):
+    _, row = _run(tmp_path, tiny_scene_toml, 0.70)
     assert row.model_prediction is None and row.sigma is not None
     assert row.predicted > NOISE_FLOOR_SIGMAS * row.sigma
     assert "Rice" not in (row.note or "")

@@ -16,20 +16,6 @@ from satchain.io import images as io
 runner = CliRunner()
 BUDGET = Path(__file__).resolve().parents[1] / "docs" / "guide" / "budget.md"
 
-TINY_SCENE = """
-[scene]
-width_m = 60.0
-height_m = 60.0
-background = 0.2
-pixel_m = 0.07
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_act"
-center_m = [30.0, 30.0]
-angle_deg = 6.0
-measures = "act"
-"""
 
 
 def _readme_system() -> str:
@@ -51,11 +37,11 @@ def test_readme_system_file_simulates_to_dn_within_the_adc_range(tmp_path):
     assert 0 < img.min() < img.max() < 4095
 
 
-def test_run_with_readme_system_is_reproduced_from_its_config_toml(tmp_path, monkeypatch):
+def test_run_with_readme_system_is_reproduced_from_its_config_toml(tmp_path, monkeypatch, tiny_scene_toml):
     work = tmp_path / "work"
     work.mkdir()
     (work / "mycamera.toml").write_text(_readme_system())
-    (work / "tiny.toml").write_text(TINY_SCENE)
+    (work / "tiny.toml").write_text(tiny_scene_toml)
     (work / "run.toml").write_text(
         '[system]\nfile = "mycamera.toml"\n[scene]\nlayout = "tiny.toml"\npixel_m = 0.07\n[simulation]\nseed = 5\n'
     )

@@ -19,26 +19,13 @@ import satchain
 from satchain.cli.main import app
 from satchain.errors import ConfigError, SatchainIOError
 
-#: a one-edge scene: each case runs in about a second
-TINY_SCENE = """
-[scene]
-width_m = 60.0
-height_m = 60.0
-background = 0.2
-pixel_m = 0.07
-
-[[items]]
-kind = "slanted_edge"
-id = "edge_act"
-center_m = [30.0, 30.0]
-angle_deg = 6.0
-measures = "act"
-"""
 WFE = "optics.wfe_rms_waves"
 
 
-def _study(tmp: Path, values=(0.0, 0.1), *, reports: str = "failed", repeats: int = 1, extra: str = "") -> Path:
-    (tmp / "scene.toml").write_text(TINY_SCENE)
+def _study(
+    scene: str, tmp: Path, values=(0.0, 0.1), *, reports: str = "failed", repeats: int = 1, extra: str = ""
+) -> Path:
+    (tmp / "scene.toml").write_text(scene)
     (tmp / "run.toml").write_text(f'[system]\npreset = "ankarasat3"\n[scene]\nlayout = "scene.toml"\n{extra}')
     f = tmp / "study.toml"
     f.write_text(
@@ -52,8 +39,8 @@ def _rows(path: Path) -> list[dict[str, str]]:
     return list(csv.DictReader(path.open()))
 
 
-def test_rows_equal_single_runs_of_the_same_cases_and_resume_keeps_them(tmp_path: Path, monkeypatch):
-    f = _study(tmp_path)
+def test_rows_equal_single_runs_of_the_same_cases_and_resume_keeps_them(tmp_path: Path, monkeypatch, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path)
     out = tmp_path / "out"
     r = satchain.study(f, out, workers=1)
     assert r.passed and r.n_cases == 2 and r.n_ok == 2 and r.resumed == 0
@@ -91,8 +78,9 @@ def test_rows_equal_single_runs_of_the_same_cases_and_resume_keeps_them(tmp_path
     assert _rows(out / "study.csv") == rows
 
 
-def test_failed_check_keeps_report_and_exit_1_error_case_recorded(tmp_path: Path, monkeypatch):
-    f = _study(tmp_path, extra="[tolerances]\nedge_mtf_at_nyquist = 1e-9\n")  # no measurement is that close
+def test_failed_check_keeps_report_and_exit_1_error_case_recorded(tmp_path: Path, monkeypatch, tiny_scene_toml):
+    no_measurement_is_that_close = "[tolerances]\nedge_mtf_at_nyquist = 1e-9\n"
+    f = _study(tiny_scene_toml, tmp_path, extra=no_measurement_is_that_close)
     out = tmp_path / "out"
     from satchain import pipeline
 
@@ -119,8 +107,8 @@ def test_failed_check_keeps_report_and_exit_1_error_case_recorded(tmp_path: Path
     assert (out / "study.html").is_file() and (out / "study.parquet").is_file()
 
 
-def test_bad_output_folders_refused_nothing_changed(tmp_path: Path):
-    f = _study(tmp_path)
+def test_bad_output_folders_refused_nothing_changed(tmp_path: Path, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path)
     user = tmp_path / "mine"
     user.mkdir()
     (user / "notes.txt").write_text("keep me")
@@ -144,8 +132,8 @@ def test_bad_output_folders_refused_nothing_changed(tmp_path: Path):
     assert not (tmp_path / "s").exists()
 
 
-def test_repeats_have_their_own_seeds_and_folders(tmp_path: Path):
-    f = _study(tmp_path, values=(0.0,), repeats=2)
+def test_repeats_have_their_own_seeds_and_folders(tmp_path: Path, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path, values=(0.0,), repeats=2)
     r = satchain.study(f, tmp_path / "out", workers=1)
     rows = _rows(tmp_path / "out" / "study.csv")
     assert {(row["repeat"], row["folder"]) for row in rows} == {("1", "cases/c0001-r1"), ("2", "cases/c0001-r2")}
@@ -172,8 +160,8 @@ def _wait_for(pred, timeout: float = 120.0) -> None:
         time.sleep(0.05)
 
 
-def test_sigterm_keeps_finished_cases_then_rerun_finishes(tmp_path: Path):
-    f = _study(tmp_path, values=(0.0, 0.02, 0.04, 0.06, 0.08, 0.1))
+def test_sigterm_keeps_finished_cases_then_rerun_finishes(tmp_path: Path, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path, values=(0.0, 0.02, 0.04, 0.06, 0.08, 0.1))
     out = tmp_path / "out"
     p = _satchain("study", str(f), "-o", str(out), "--workers", "2", cwd=tmp_path)
     _wait_for(lambda: any(out.glob("cases/c*/case.json")) or p.poll() is not None)
@@ -196,8 +184,8 @@ def test_sigterm_keeps_finished_cases_then_rerun_finishes(tmp_path: Path):
     assert len({row["case"] for row in _rows(out / "study.csv")}) == 6
 
 
-def test_a_killed_worker_is_retried(tmp_path: Path):
-    f = _study(tmp_path, values=(0.0, 0.05, 0.1))
+def test_a_killed_worker_is_retried(tmp_path: Path, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path, values=(0.0, 0.05, 0.1))
     out = tmp_path / "out"
     p = _satchain("study", str(f), "-o", str(out), "--workers", "2", cwd=tmp_path)
     owners: list[Path] = []
@@ -217,9 +205,9 @@ def test_a_killed_worker_is_retried(tmp_path: Path):
     assert not list(out.glob("cases/.*staging*"))
 
 
-def test_dask_local_scheduler(tmp_path: Path, monkeypatch):
+def test_dask_local_scheduler(tmp_path: Path, monkeypatch, tiny_scene_toml):
     pytest.importorskip("distributed")
-    f = _study(tmp_path)
+    f = _study(tiny_scene_toml, tmp_path)
     res = CliRunner().invoke(app, ["study", str(f), "-o", str(tmp_path / "o"), "--scheduler", "local",
                                    "--workers", "2"])  # fmt: skip
     assert res.exit_code == 0, res.output
@@ -232,8 +220,8 @@ def test_dask_local_scheduler(tmp_path: Path, monkeypatch):
     assert bad.exit_code == 2 and "cannot reach the Dask scheduler" in bad.output
 
 
-def test_example_and_study_file_one_not_both(tmp_path: Path):
-    f = _study(tmp_path)
+def test_example_and_study_file_one_not_both(tmp_path: Path, tiny_scene_toml):
+    f = _study(tiny_scene_toml, tmp_path)
     both = CliRunner().invoke(app, ["study", str(f), "--example", "aperture-aberration", "-o", str(tmp_path / "o")])
     assert both.exit_code == 2 and "one, not both" in both.output
     unknown = CliRunner().invoke(app, ["study", "--example", "apertures", "-o", str(tmp_path / "o")])
@@ -243,25 +231,15 @@ def test_example_and_study_file_one_not_both(tmp_path: Path):
     assert not (tmp_path / "o").exists()
 
 
-MINIMAL = """name = "minimal"
-[orbit]
-altitude_m = 500000.0
-[optics]
-aperture_diameter_m = 0.5
-f_number = 10.0
-wavelengths_m = [6e-7]
-[detector]
-pitch_m = 5e-6
-"""
-
-
-def test_seams_minimal_system_as_built_and_pushbroom_axes(tmp_path: Path, monkeypatch):
+def test_seams_minimal_system_as_built_and_pushbroom_axes(
+    tmp_path: Path, monkeypatch, minimal_system_toml, tiny_scene_toml
+):
     """A minimal system file (only the required keys) as the base; the aperture (focal length held), the camera
     as built and the pushbroom line-rate error varied together (zip), at run depth."""
     import math
 
-    (tmp_path / "minimal.toml").write_text(MINIMAL)
-    (tmp_path / "scene.toml").write_text(TINY_SCENE)
+    (tmp_path / "minimal.toml").write_text(minimal_system_toml)
+    (tmp_path / "scene.toml").write_text(tiny_scene_toml)
     spec = {
         "base": {"system": {"file": "minimal.toml"}, "scene": {"layout": "scene.toml"}},
         "axes": [
