@@ -396,3 +396,33 @@ def test_gaussian_response_in_closed_form_is_erf_between_the_half_maxima():
     r = SuperGaussianResponse(5e-7, 1e-7)
     lam = np.linspace(4.5e-7, 5.5e-7, 100001)
     assert np.trapezoid(r(lam), lam) / r.area_m == pytest.approx(special.erf(math.sqrt(math.log(2))), rel=1e-8)
+
+
+@pytest.mark.parametrize(("pass_direction", "latitude_deg"), [("descending", 40.0), ("ascending", -10.0)])
+def test_the_earths_rotation_over_the_delay_misregisters_the_bands_as_its_ground_velocity_says(
+    pass_direction, latitude_deg
+):
+    """No yaw steering: over the delay the ground moves at the Earth's surface velocity; its across-track part moves
+    the band's image across track (x m = v_act t), its along-track part changes the delay itself (the image crosses
+    the focal-plane offset at v_g - v_along instead of v_g)."""
+    from satchain.config.sections import EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S
+    from satchain.config.sections_motion import cos_heading
+
+    over = {"orbit.earth_rotation": True, "orbit.latitude_deg": latitude_deg, "orbit.inclination_deg": 97.7,
+            "orbit.pass_direction": pass_direction}  # fmt: skip
+    s = load_preset("ankarasat3-pms").replace(over)
+    v_e = EARTH_ROTATION_RAD_PER_S * EARTH_RADIUS_M * math.cos(math.radians(latitude_deg))
+    east, north = cos_heading(s.orbit)
+    v_along, v_act = v_e * east, -v_e * north  # on the track's (y, x) axes, x to the left of the track
+    v_g = s.orbit.ground_speed_m_per_s
+    for b in budget_results(s)["bands"][1:]:
+        reg = b["registration"]
+        ground_m = reg["offset_alt_mm"] * 1e-3 * 567000.0 / s.focal_length_m
+        t_nominal, t_actual = ground_m / v_g, ground_m / (v_g - v_along)
+        assert reg["delay_s"] == pytest.approx(t_nominal, rel=1e-9)
+        e = reg["earth_rotation"]
+        assert e["delay_s"] == pytest.approx(t_actual, rel=1e-9)
+        assert e["act_px"] == pytest.approx(v_act * t_actual / b["gsd_act_m"], rel=1e-9)
+        assert e["alt_px"] == pytest.approx((t_actual - t_nominal) / s.for_band(b["index"]).line_time_s, rel=1e-9)
+        assert abs(e["act_px"]) > 5  # tens of metres: what the ground processing must take out
+    assert budget_results(load_preset("ankarasat3-pms"))["bands"][1]["registration"]["earth_rotation"] is None

@@ -127,8 +127,9 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
     ``delay_s = offset_alt / v`` after it (``v = pitch_y / line_time``: the image's speed on the focal plane),
     ``offset_alt / pitch`` lines later; registered by that nominal delay (and its ``offset_act_mm`` / pitch
     columns), its static offset from the PAN band is the injected ``registration_offset_px`` (the part that
-    ``oscillations`` gives what each ``[[motion.oscillation]]`` adds (:func:`_oscillation_offsets`); jitter PSDs,
-    line-of-sight logs and Earth rotation over the delay are not predicted here yet).
+    ``oscillations`` gives what each ``[[motion.oscillation]]`` adds (:func:`_oscillation_offsets`),
+    ``earth_rotation`` what the Earth's rotation adds (:func:`_earth_offset`); jitter PSDs and line-of-sight logs
+    over the delay are not predicted here yet.
 
     Examples
     --------
@@ -143,6 +144,8 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
     pan = _pan_index(system)
     ref = system.for_band(pan)
     speed_m_per_s = system.detector.pitch_y_m / system.line_time_s  # the image on the focal plane
+    pb = SystemOTF(ref).pushbroom if system.orbit.earth_rotation else None
+    earth = (pb.geometry() or {}).get("earth_rotation") if pb is not None else None
     out = []
     for i, band in enumerate(system.bands):
         s = system.for_band(i)
@@ -184,7 +187,8 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
                 "oscillations": _oscillation_offsets(system, ref, s, offset_m / speed_m_per_s),
                 "oscillation_form": "amplitude_px sin(2 pi frequency_hz t_c + phase_deg), t_c: the reference row's "
                 "TDI window centre (s)",
-                "not_predicted": "jitter PSDs, line-of-sight logs and Earth rotation over delay_s",
+                "earth_rotation": None if earth is None else _earth_offset(earth, ref, s, offset_m),
+                "not_predicted": "jitter PSDs and line-of-sight logs over delay_s",
             },
         }
         out.append(entry)
@@ -215,13 +219,29 @@ def _oscillation_offsets(system: ImagingSystem, ref: ImagingSystem, band: Imagin
     return out
 
 
+def _earth_offset(earth: Mapping[str, Any], ref: ImagingSystem, band: ImagingSystem, offset_m: float) -> dict:
+    """Where the band images a ground point, minus where the reference band and the nominal delay place it, under the
+    Earth's rotation (:mod:`satchain.tf.pushbroom`: per reference line the ground moves ``(sigma, a)`` px, ACT and
+    ALT): the image crosses the ``L = offset / pitch`` lines in ``L / a`` line times, not ``L``, and meanwhile
+    drifts ``sigma L / a`` px across track -- ``act_px`` (+x columns) and ``alt_px`` (later rows), band pixels;
+    ``delay_s``: the actual delay."""
+    lines = offset_m / ref.detector.pitch_y_m
+    a, sigma = float(earth["alt_scale"]), float(earth["shear_act_px_per_line"])
+    return {
+        "delay_s": lines / a * ref.line_time_s,
+        "act_px": -sigma * lines / a * ref.gsd_act_m / band.gsd_act_m,
+        "alt_px": lines * (1.0 / a - 1.0) * ref.line_time_s / band.line_time_s,
+    }
+
+
 @dataclass(frozen=True)
 class BandBudget:
     """One band's budget (:func:`band_budgets`), typed: ``name``, ``center_wavelength_m``, ``gsd_m``,
     ``nyquist_act_cy_per_mm`` / ``nyquist_alt_cy_per_mm``, ``mtf_at_nyquist_act`` / ``_alt`` (at its own Nyquist),
     ``signal_e``, ``snr`` (its scene's mean signal), ``niirs`` (the PAN band's; None for the others),
-    ``delay_s`` (when it sees the ground after the PAN band) and ``registration_alt_px`` / ``_act_px`` (its predicted
-    offset from the PAN band, in its own pixels)."""
+    ``delay_s`` (when it sees the ground after the PAN band), ``registration_alt_px`` / ``_act_px`` (its predicted
+    static offset from the PAN band, in its own pixels) and ``earth_rotation_alt_px`` / ``_act_px`` (what the
+    Earth's rotation adds over the delay; None without it)."""
 
     name: str
     center_wavelength_m: float
@@ -236,10 +256,13 @@ class BandBudget:
     delay_s: float
     registration_alt_px: float
     registration_act_px: float
+    earth_rotation_alt_px: float | None = None
+    earth_rotation_act_px: float | None = None
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> BandBudget:
         reg = d["registration"]
+        earth = reg.get("earth_rotation")
         return cls(
             name=str(d["name"]),
             center_wavelength_m=float(d["center_wavelength_m"]),
@@ -254,6 +277,8 @@ class BandBudget:
             delay_s=float(reg["delay_s"]),
             registration_alt_px=float(reg["static_px"]["alt"]),
             registration_act_px=float(reg["static_px"]["act"]),
+            earth_rotation_alt_px=None if earth is None else float(earth["alt_px"]),
+            earth_rotation_act_px=None if earth is None else float(earth["act_px"]),
         )
 
 
