@@ -426,3 +426,32 @@ def test_the_earths_rotation_over_the_delay_misregisters_the_bands_as_its_ground
         assert e["alt_px"] == pytest.approx((t_actual - t_nominal) / s.for_band(b["index"]).line_time_s, rel=1e-9)
         assert abs(e["act_px"]) > 5  # tens of metres: what the ground processing must take out
     assert budget_results(load_preset("ankarasat3-pms"))["bands"][1]["registration"]["earth_rotation"] is None
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    values=st.lists(st.floats(0.0, 1.0), min_size=3, max_size=12).filter(lambda v: max(v[1:-1], default=0) > 0.05),
+    n=st.integers(5, 15),
+)
+def test_a_tables_quadrature_keeps_its_area_and_centroid_exactly(values, n):
+    """A table is linear between its points: area and first moment in closed form, segment by segment."""
+    lam = np.linspace(5e-7, 7e-7, len(values))
+    r = TabulatedResponse(tuple(lam), tuple(values))
+    nodes, w = response_quadrature(r, n)
+    y = np.asarray(values)
+    h = np.diff(lam)
+    area = np.sum(h * (y[:-1] + y[1:]) / 2)
+    # the first moment of a linear segment from (a, ya) to (b, yb): h (ya (2a + b) + yb (a + 2b)) / 6
+    moment = np.sum(h * (y[:-1] * (2 * lam[:-1] + lam[1:]) + y[1:] * (lam[:-1] + 2 * lam[1:])) / 6)
+    assert w.sum() == pytest.approx(area, rel=1e-9)
+    assert np.sum(w * nodes) == pytest.approx(moment, rel=1e-9)
+
+
+def test_a_bands_qe_curve_multiplies_its_response():
+    band = {"name": "g", "response": {"center_m": 5.6e-7, "fwhm_m": 8e-8, "order": 4},
+            "qe": [0.2, 0.8], "qe_wavelengths_m": [5e-7, 6.2e-7]}  # fmt: skip
+    b = _system(band).for_band(np.int64(0))
+    r = SuperGaussianResponse(5.6e-7, 8e-8, 4)
+    for lam in (5.2e-7, 5.6e-7, 5.95e-7):
+        qe = 0.2 + 0.6 * (lam - 5e-7) / 1.2e-7
+        assert float(b.detector.qe_at(lam)) == pytest.approx(qe * float(r(lam)), rel=2e-3)

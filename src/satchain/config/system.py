@@ -187,10 +187,11 @@ class ImagingSystem(_Frozen):
         """
         if not self.bands:
             return self
-        if not (isinstance(index, int) and 0 <= index < len(self.bands)):
+        i = index if isinstance(index, (int, np.integer)) and not isinstance(index, bool) else -1
+        if not 0 <= i < len(self.bands):
             raise ConfigError(f"band index = {index!r}: the system has {len(self.bands)} bands (0 to "
                               f"{len(self.bands) - 1}: {', '.join(self.band_names)})")  # fmt: skip
-        b = self.bands[index]
+        b = self.bands[int(i)]
         lam, weights = b.optics_wavelengths()
         values: dict[str, Any] = {"optics.wavelengths_m": lam, "optics.wavelength_weights": weights}
         band_m = b.radiometric_band_m
@@ -218,10 +219,10 @@ class ImagingSystem(_Frozen):
     def band_index(self, name: str) -> int:
         """The 0-based index of the band called ``name`` (case-insensitive); a ConfigError listing the names."""
         names = [n.casefold() for n in self.band_names]
-        if name.casefold() not in names:
+        if str(name).casefold() not in names:
             listed = ", ".join(map(repr, self.band_names)) or "none: the system has no [[bands]]"
             raise ConfigError(f"band = {name!r}: not a band of {self.name!r}; its bands are {listed}")
-        return names.index(name.casefold())
+        return names.index(str(name).casefold())
 
     @model_validator(mode="after")
     def _bands_fit(self) -> ImagingSystem:
