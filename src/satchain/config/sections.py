@@ -20,6 +20,7 @@ from satchain.config._base import (  # noqa: F401  (re-exported: other modules i
     _StrictNumbers,
     schema_bounds,
 )
+from satchain.config.sections_cfa import CFAPattern, CFAResponses
 from satchain.config.sections_light import Atmosphere, Band, Illumination, Radiometry
 from satchain.config.sections_motion import JitterPSD, LineOfSightLog, Oscillation, as_tables, check_earth_rotation
 
@@ -421,6 +422,16 @@ class Detector(_Frozen):
         description="photo-response non-uniformity, fraction of the signal rms (dimensionless): a fixed gain pattern",
     )
     dsnu_e: float = Field(default=0.0, ge=0, le=1e6, description="dark-signal non-uniformity, electrons rms")
+    cfa: CFAPattern | None = Field(
+        default=None,
+        description="colour filter array: the 2x2 Bayer cell read row by row from the first pixel ('RGGB': red at row "
+        "0, column 0), 'RGGB', 'GRBG', 'GBRG' or 'BGGR'; default: none (a monochrome array)",
+    )
+    cfa_responses: CFAResponses | None = Field(
+        default=None,
+        description="[detector.cfa_responses.red|green|blue]: each colour's relative spectral response (center_m and "
+        "fwhm_m, or wavelengths_m and values); needs cfa; default: the packaged Nikon D5100 (NPL) responses",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -501,6 +512,12 @@ class Detector(_Frozen):
                 f"detector.bit_depth = {self.bit_depth!r} needs detector.full_well_e (the ADC range is "
                 "mapped to the full well, which sets electrons per DN)"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _cfa_responses_need_cfa(self) -> Detector:
+        if self.cfa_responses is not None and self.cfa is None:
+            raise ValueError("detector.cfa_responses is given but detector.cfa is not: give cfa (e.g. 'RGGB')")
         return self
 
     def qe_at(self, wavelength_m) -> np.ndarray:
