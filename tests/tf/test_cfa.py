@@ -228,3 +228,32 @@ def test_detector_cfa_config():
     mine = s.replace({"detector.cfa": "RGGB", "detector.cfa_responses": {"red": {"center_m": 6.5e-7, "fwhm_m": 1e-7}}})
     assert float(cfa_response(mine.detector, "red").at(7.0e-7)) == pytest.approx(0.5)
     assert cfa_response(mine.detector, "green") == peaks["green"]
+
+
+def test_a_colours_system_sees_the_world_through_its_filter():
+    """colour_system: the optics' wavelengths and weights keep the response's centroid, the QE is the detector's
+    times the response, and a longer-wavelength colour has the lower diffraction MTF (a circular pupil)."""
+    from importlib import resources
+
+    from satchain.config.sections_cfa import colour_system
+
+    s = load_preset("ankarasat3").replace({"detector.cfa": "GRBG", "optics.obscuration_ratio": 0.0})
+    table = np.loadtxt(
+        str(resources.files("satchain") / "data" / "cfa" / "nikon_d5100_npl.csv"), delimiter=",", skiprows=1
+    )
+    fine = np.linspace(380.0, 780.0, 400_001)
+    diffraction = {}
+    for k, colour in enumerate(COLOURS):
+        c = colour_system(s, colour)
+        r = np.interp(fine, table[:, 0], table[:, k + 1])
+        centroid_nm = float(np.sum(fine * r) / np.sum(r))
+        assert c.optics.effective_wavelength_m * 1e9 == pytest.approx(centroid_nm, abs=0.05)
+        assert c.radiometry.band_m == pytest.approx((380e-9, 780e-9))
+        for lam_nm in (450.0, 530.0, 600.0, 655.5):
+            want = 0.6 * np.interp(lam_nm, table[:, 0], table[:, k + 1])  # the preset's QE 0.6 x the response
+            assert float(c.detector.qe_at(lam_nm * 1e-9)) == pytest.approx(want, abs=1e-12)
+        assert c.detector.cfa == "GRBG" and c.optics.focal_length_m == s.optics.focal_length_m
+        diffraction[colour] = abs(SystemOTF(c).components(85.034, 0.0)["diffraction"])
+    assert diffraction["red"] < diffraction["green"] < diffraction["blue"]
+    with pytest.raises(ConfigError, match=r"colour = 'red': detector\.cfa is not set"):
+        colour_system(load_preset("ankarasat3"), "red")

@@ -14,8 +14,24 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from satchain.config._base import _Frozen, schema_bounds
+from satchain.config.response import (
+    Response,
+    SuperGaussianResponse,
+    TabulatedResponse,
+    response_quadrature,
+    response_table,
+)
+from satchain.errors import ConfigError
 
-__all__ = ["CFA_COLOURS", "CFA_PATTERNS", "CFAResponse", "CFAResponses", "cfa_response", "default_cfa_response"]
+__all__ = [
+    "CFA_COLOURS",
+    "CFA_PATTERNS",
+    "CFAResponse",
+    "CFAResponses",
+    "cfa_response",
+    "colour_system",
+    "default_cfa_response",
+]
 
 #: The 2x2 Bayer cells satchain knows, read row by row from the first pixel (row 0, column 0).
 CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
@@ -83,6 +99,13 @@ class CFAResponse(_Frozen):
         assert self.wavelengths_m is not None and self.values is not None  # _one_kind
         return np.interp(lam, self.wavelengths_m, self.values, left=0.0, right=0.0)
 
+    def as_response(self) -> Response:
+        """The same response as :mod:`satchain.config.response` describes a band's (its support, quadrature)."""
+        if self.center_m is not None and self.fwhm_m is not None:
+            return SuperGaussianResponse(self.center_m, self.fwhm_m)
+        assert self.wavelengths_m is not None and self.values is not None  # _one_kind
+        return TabulatedResponse(self.wavelengths_m, self.values)
+
 
 class CFAResponses(_Frozen):
     """The spectral responses of the three colours of a colour filter array; a colour left out takes the
@@ -114,8 +137,6 @@ def default_cfa_response(colour: str) -> CFAResponse:
     595
     """
     if colour not in CFA_COLOURS:
-        from satchain.errors import ConfigError
-
         raise ConfigError(f"colour = {colour!r}: must be one of {', '.join(CFA_COLOURS)}")
     lam, values = _default_table()
     return CFAResponse(wavelengths_m=lam, values=values[colour])
@@ -126,6 +147,42 @@ def cfa_response(detector: Any, colour: str) -> CFAResponse:
     ``cfa_responses`` entry, or the packaged default."""
     given = getattr(getattr(detector, "cfa_responses", None), colour, None) if colour in CFA_COLOURS else None
     return given if given is not None else default_cfa_response(colour)
+
+
+def colour_system(system: Any, colour: str, *, nodes: int = 11) -> Any:
+    """The system that forms ``colour``'s photosites of a colour filter array (as ``ImagingSystem.for_band``
+    forms a band): the optics' wavelengths and weights are the quadrature of the colour's response (``nodes``
+    centroid nodes, :func:`satchain.config.response.response_quadrature`), the radiometric band its support,
+    the QE the detector's times the response over it. The same telescope, pixel and motion: its
+    :class:`~satchain.tf.budget.SystemOTF` is the colour plane's pre-sampling MTF (``satchain.tf.cfa``).
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> red = colour_system(load_preset("ankarasat3").replace({"detector.cfa": "RGGB"}), "red")
+    >>> round(red.optics.effective_wavelength_m * 1e9)
+    596
+    """
+    det = system.detector
+    if det.cfa is None:
+        raise ConfigError(f"colour = {colour!r}: detector.cfa is not set (a monochrome array has no colour planes)")
+    r = cfa_response(det, colour).as_response()
+    lam, w = response_quadrature(r, nodes)
+    tab, resp = response_table(r)
+    if isinstance(det.qe, tuple):
+        k = np.asarray(det.qe_wavelengths_m)
+        tab = np.union1d(tab, k[(k > tab[0]) & (k < tab[-1])])
+        resp = r(tab)
+    qe = np.clip(det.qe_at(tab) * resp, 0.0, 1.0)
+    return system.replace(
+        {
+            "optics.wavelengths_m": tuple(float(x) for x in lam),
+            "optics.wavelength_weights": tuple(float(x / w.sum()) for x in w),
+            "radiometry.band_m": r.support_m,
+            "detector.qe": tuple(float(x) for x in qe),
+            "detector.qe_wavelengths_m": tuple(float(x) for x in tab),
+        }
+    )
 
 
 CFAPattern = Literal["RGGB", "GRBG", "GBRG", "BGGR"]
