@@ -257,3 +257,30 @@ def test_a_colours_system_sees_the_world_through_its_filter():
     assert diffraction["red"] < diffraction["green"] < diffraction["blue"]
     with pytest.raises(ConfigError, match=r"colour = 'red': detector\.cfa is not set"):
         colour_system(load_preset("ankarasat3"), "red")
+
+
+def test_a_cfa_pattern_not_in_the_list_is_one_line_and_exit_2(tmp_path):
+    from typer.testing import CliRunner
+
+    from satchain.cli.main import app
+
+    system = """[orbit]
+altitude_m = 500000
+[optics]
+aperture_diameter_m = 0.5
+focal_length_m = 5.0
+wavelengths_m = [6.5e-7]
+[detector]
+pitch_m = 5e-6
+cfa = "{}"
+"""
+    bad, good = tmp_path / "bad.toml", tmp_path / "good.toml"
+    bad.write_text(system.format("RGBG"))
+    good.write_text(system.format("BGGR"))
+    result = CliRunner().invoke(app, ["budget", "--system", str(bad), "--json"])
+    assert result.exit_code == 2
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert lines == [
+        "error: invalid imaging system: detector.cfa = 'RGBG': input should be 'RGGB', 'GRBG', 'GBRG' or 'BGGR'"
+    ]
+    assert CliRunner().invoke(app, ["budget", "--system", str(good), "--json"]).exit_code == 0
