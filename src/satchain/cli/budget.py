@@ -73,6 +73,18 @@ def _print_budget(res: dict[str, Any]) -> None:
             )
     if res.get("bands"):
         _print_bands(res["bands"])
+    if "staggered" in res:
+        st = res["staggered"]
+        ny_st, one, comb = st["nyquist_cy_per_mm"], st["mtf_at_single_nyquist"], st["mtf_at_combined_nyquist"]
+        console.print(
+            f"staggered: two arrays combined onto {st['combined_pitch_m'] * 1e6:.3g} um "
+            f"({st['combined_gsd_m']['act']:.4g} m GSD); Nyquist {ny_st['axis']:.2f} cy/mm along the axes "
+            f"({ny_st['diagonal']:.2f} diagonally, one array {ny_st['single_array']:.2f}); MTF after the "
+            f"combination at the combined Nyquist ALT {comb['alt']:.4f}, "
+            f"ACT {comb['act']:.4f}, at one array's Nyquist ALT {one['alt']:.4f}, ACT {one['act']:.4f}",
+            markup=False,
+            highlight=False,
+        )
 
 
 def _print_bands(bands: list[dict[str, Any]]) -> None:

@@ -427,6 +427,11 @@ class Detector(_Frozen):
         description="colour filter array: the 2x2 Bayer cell read row by row from the first pixel ('RGGB': red at row "
         "0, column 0), 'RGGB', 'GRBG', 'GBRG' or 'BGGR'; default: none (a monochrome array)",
     )
+    layout: Literal["single", "staggered"] = Field(
+        default="single",
+        description="'single': one array; 'staggered': two arrays half a pixel apart along and across track, "
+        "combined onto the grid of half the pitch (SPOT-5's supermode; quincunx bilinear fill)",
+    )
     cfa_responses: CFAResponses | None = Field(
         default=None,
         description="[detector.cfa_responses.red|green|blue]: each colour's relative spectral response (center_m and "
@@ -518,6 +523,8 @@ class Detector(_Frozen):
     def _cfa_responses_need_cfa(self) -> Detector:
         if self.cfa_responses is not None and self.cfa is None:
             raise ValueError("detector.cfa_responses is given but detector.cfa is not: give cfa (e.g. 'RGGB')")
+        if self.layout == "staggered" and (self.pitch_x_m != self.pitch_y_m or self.cfa is not None):
+            raise ValueError("detector.layout = 'staggered': needs square pixels (pitch_x_m = pitch_y_m) and no cfa")
         return self
 
     def qe_at(self, wavelength_m) -> np.ndarray:

@@ -96,6 +96,8 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
     out["quality"] = predict_quality(system, otf=otf).to_dict()
     if system.bands:
         out["bands"] = band_budgets(system)
+    if system.detector.layout == "staggered":
+        out["staggered"] = staggered_budget(system, otf=otf)
     out["frequency_axis"] = (
         "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
         "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
@@ -108,6 +110,33 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
         "the degraded truncated series / modulation of the input truncated series), which divides by the "
         "Gibbs overshoot of the truncated input (~1.18)."
     )
+    return out
+
+
+def staggered_budget(system: ImagingSystem, *, otf: SystemOTF | None = None) -> dict[str, Any]:
+    """Two arrays half a pixel apart along and across track, combined onto the ``p / 2`` grid
+    (:mod:`satchain.tf.staggered`): the combined grid's pitch and GSD, its Nyquist (``1/p`` along each axis,
+    ``1/(sqrt(2) p)`` along the diagonals, against ``1/(2p)`` for one array), and per axis the MTF after the
+    combination (system MTF x the quincunx-bilinear fill's transfer function) at the combined and at the single
+    array's Nyquist. JSON-ready."""
+    from satchain.tf.staggered import combination_otf, nyquist_cy_per_mm
+
+    otf = SystemOTF(system) if otf is None else otf
+    p = system.detector.pitch_x_m  # square: the configuration checks it
+    out: dict[str, Any] = {
+        "combination": "quincunx_bilinear: each missing point of the p/2 grid is the mean of its 4 neighbours",
+        "combined_pitch_m": p / 2,
+        "combined_gsd_m": {d: system.derived()[f"gsd_{d}_m"] / 2 for d in DIRECTIONS},
+        "nyquist_cy_per_mm": {"axis": nyquist_cy_per_mm(p), "diagonal": nyquist_cy_per_mm(p, direction="diagonal"),
+                              "single_array": nyquist_cy_per_mm(p) / 2},  # fmt: skip
+        "aliasing": "unaliased inside |f_x| + |f_y| < 1/p; the first alias copies at (+-1/p, +-1/p)",
+    }
+    at = (("mtf_at_combined_nyquist", nyquist_cy_per_mm(p)), ("mtf_at_single_nyquist", nyquist_cy_per_mm(p) / 2))
+    for key, f in at:
+        out[key] = {}
+        for d in DIRECTIONS:
+            fx, fy = (f, 0.0) if d == "act" else (0.0, f)
+            out[key][d] = float(DirectionalMTF(otf, d)(f) * combination_otf(fx, fy, pitch_m=p))
     return out
 
 
