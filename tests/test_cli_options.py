@@ -48,7 +48,8 @@ def _infos(fn) -> dict:
 
 
 def test_every_command_is_registered_once_on_the_measure_app():
-    assert list(_click_commands()) == list(COMMANDS) == ["edge", "star", "bars", "wedge", "auto", "find", "jitter"]
+    assert list(_click_commands()) == list(COMMANDS) == ["edge", "star", "bars", "wedge", "auto", "find", "jitter",
+                                                            "registration"]
     assert [c.callback.__wrapped__ for c in measure_app.registered_commands] == [
         inspect.unwrap(f) for f in COMMANDS.values()
     ]
@@ -66,7 +67,7 @@ def test_a_shared_option_is_the_same_object_in_every_command():
             if long in shared_infos:
                 assert any(info is s for s in shared_infos[long]), f"{cmd}: {long} is redefined locally"
                 users[long].append(cmd)
-    assert users["--roi"] == ["edge", "star", "bars", "wedge", "jitter"]
+    assert users["--roi"] == ["edge", "star", "bars", "wedge", "jitter", "registration"]
     assert users["--pixel-m"] == users["--json"] == users["--out"] == list(COMMANDS)
     assert users["--truth"] == users["--origin-m"] == users["--threshold"] == ["wedge", "auto"]
 
@@ -117,6 +118,7 @@ REQUIRED = {
     "auto": ["--truth", "{truth}"],
     "find": [],
     "jitter": ["--line-time", "1e-3"],
+    "registration": ["--band", "1"],
 }
 
 

@@ -14,7 +14,8 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
   :func:`simulate_file` (file to COG), :func:`simulate_sweep` (several inputs x parameter sweeps),
   :func:`load_layout`, :func:`read_truth`, :class:`Rect`;
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
-  :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`;
+  :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`,
+  :func:`measure_registration` (band-to-band offset);
 * design studies: :func:`study` (a study file's cases through the budget or the whole chain, on local processes
   or Dask: :class:`StudyResult`), :func:`design` (the range of a key, or the map of two, that meets targets);
 * errors: :class:`SatchainError` and its subclasses.
@@ -86,6 +87,7 @@ _LAZY = {
     "measure_wedge": "satchain.measure.wedge",
     "measure_auto": "satchain.measure.auto",
     "measure_snr": "satchain.measure.snr",
+    "measure_registration": "satchain.measure.registration",
     "find_edges": "satchain.measure.find",
     "study": "satchain.studies.api",
     "StudyResult": "satchain.studies.api",
@@ -94,6 +96,7 @@ _LAZY = {
 }
 #: entry points whose arguments are type-checked on the way in (satchain._argcheck; one-line errors)
 _CHECKED = {"simulate", "measure_edge", "measure_star", "measure_bars", "measure_wedge", "measure_auto", "measure_snr",
+            "measure_registration",
             "find_edges", "measure_found_edges", "coltman_ctf", "mtf_from_ctf", "load_layout", "read_truth", "compare",
             "load_run_config", "budget"}  # fmt: skip
 
@@ -138,6 +141,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.edge import measure_edge  # noqa: F401
     from satchain.measure.find import find_edges  # noqa: F401
     from satchain.measure.find_mtf import measure_found_edges  # noqa: F401
+    from satchain.measure.registration import measure_registration  # noqa: F401
     from satchain.measure.snr import measure_snr  # noqa: F401
     from satchain.measure.star import measure_star  # noqa: F401
     from satchain.measure.wedge import measure_wedge  # noqa: F401

@@ -3,15 +3,16 @@
 
 Commands: ``edge``, ``star``, ``bars``, ``wedge`` (one target in a region; :mod:`satchain.cli.targets`),
 ``auto`` (every target of a scene, from its truth file; :mod:`satchain.cli.auto`), ``find`` (the slanted
-edges found in an image, no truth file; :mod:`satchain.cli.find`) and ``jitter`` (line-of-sight motion from a
-long straight edge; :mod:`satchain.cli.jitter`).  Images: TIFF (float or integer), PNG
+edges found in an image, no truth file; :mod:`satchain.cli.find`), ``jitter`` (line-of-sight motion from a
+long straight edge; :mod:`satchain.cli.jitter`) and ``registration`` (the subpixel offset between two bands;
+:mod:`satchain.cli.registration`).  Images: TIFF (float or integer), PNG
 (8/16-bit) and NPY, read by :func:`satchain.io.images.read_image`; the ground pixel size comes from ``--pixel-m`` or
 the file's metadata.  Regions are ``X0,Y0,X1,Y1`` in pixels (x = column, y = row), half-open.  ``--json``
 prints the result as JSON; ``-o DIR`` writes ``<command>.json`` and a figure there.  Bad input: one line on
 stderr, exit status 2.  The options the commands share are defined once, in :mod:`satchain.cli.options`.
 
 This module is where the commands are registered (the one place): imports flow one way,
-``main -> measure -> targets, auto, find, jitter -> options, output`` (modules of :mod:`satchain.cli`).
+``main -> measure -> targets, auto, find, jitter, registration -> options, output`` (modules of :mod:`satchain.cli`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from satchain.cli.output import fmt as _fmt
 from satchain.cli.output import kv_table as _kv_table
 from satchain.cli.output import pm as _pm
 from satchain.cli.output import wide_console as _console
+from satchain.cli.registration import registration
 from satchain.cli.targets import bars, edge, star, wedge
 
 __all__ = ["COMMANDS", "measure_app"]
@@ -50,7 +52,8 @@ measure_app = typer.Typer(
 )
 
 #: The ``measure`` commands, in the order ``--help`` lists them.
-COMMANDS = {"edge": edge, "star": star, "bars": bars, "wedge": wedge, "auto": auto, "find": find, "jitter": jitter}
+COMMANDS = {"edge": edge, "star": star, "bars": bars, "wedge": wedge, "auto": auto, "find": find, "jitter": jitter,
+            "registration": registration}
 for _name, _command in COMMANDS.items():
     measure_app.command(_name)(_command)
 
