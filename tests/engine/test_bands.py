@@ -107,6 +107,39 @@ def test_whole_pixel_offset_moves_the_image_by_whole_pixels(pms):
     np.testing.assert_allclose(moved[1:, :-2], ref[:-1, 2:], atol=1e-6)
 
 
+def _los_mean(amplitude_px: float, f_hz: float, phase_rad: float, t0_s: np.ndarray, window_s: float) -> np.ndarray:
+    """The mean of ``amplitude sin(2 pi f t + phase)`` over ``[t0, t0 + window]`` (closed form)."""
+    w = 2 * np.pi * f_hz
+    a, b = w * t0_s + phase_rad, w * (t0_s + window_s) + phase_rad
+    return amplitude_px * (np.cos(a) - np.cos(b)) / (w * window_s)
+
+
+def test_oscillation_misregisters_bands_by_their_delay(pms):
+    """A 20 Hz, 1 px ACT oscillation and the red band 10 mm behind the PAN line (seeing the ground 0.12 s later): the
+    offset of red from PAN measured in strips of 20 MS rows matches the closed form within 0.05 px -- content moves
+    against the line of sight (:mod:`satchain.engine.timepath`: a pixel sees ``x = j + LOS(t)``), so the offset
+    is minus (red's line of sight, averaged over its rows' TDI windows at their time + delay, less PAN's, in MS
+    pixels)."""
+    system = pms.replace({"motion.oscillation": [{"axis": "act", "amplitude_px": 1.0, "frequency_hz": 20.0}]})
+    red = system.band_index("red")
+    bands = tuple(b.model_copy(update={"offset_alt_mm": 10.0}) if k == red else b for k, b in enumerate(system.bands))
+    system = system.model_copy(update={"bands": bands})
+    rng = np.random.default_rng(1)  # squares at random angles: features of every orientation in every strip
+    corners = [(x, y) for y in np.arange(4.0, 172.0, 9.0) for x in np.arange(4.0, 74.0, 9.0)]
+    items = tuple(SlantedEdge(f"s{k}", center_m=(x + rng.uniform(0, 2), y + rng.uniform(0, 2)), size_m=5.0,
+                              angle_deg=float(rng.uniform(-30, 30))) for k, (x, y) in enumerate(corners))
+    result = simulate_bands(Scene(78.4, 176.4, items, 0.2), system, pixel_m=P_EDGE, noise=False, bands=["pan", "red"])
+    pan, ms = result["pan"].image, result["red"].image
+    dt, stages = system.line_time_s, system.detector.tdi_stages  # PAN: 16 stages; red: 1 stage of 4 line times
+    delay_s = 10e-3 * dt / system.detector.pitch_y_m
+    for r0 in range(0, ms.shape[0] - 19, 20):
+        got = measure_registration(pan[4 * r0 : 4 * r0 + 80], ms[r0 : r0 + 20], scale=4).offset_px
+        los_pan = _los_mean(1.0, 20.0, 0.0, np.arange(4 * r0, 4 * r0 + 80) * dt, stages * dt).mean() / 4
+        los_red = _los_mean(0.25, 20.0, 0.0, np.arange(r0, r0 + 20) * 4 * dt + delay_s, 4 * dt).mean()
+        assert got[1] == pytest.approx(-(los_red - los_pan), abs=0.05), (r0, got, los_red - los_pan)
+        assert got[0] == pytest.approx(0.0, abs=0.05)
+
+
 def test_single_band_and_grey_scene_identical_to_today(pms):
     """A system without bands, and the PAN band of a banded system on a grey scene, give exactly the image of
     satchain.engine.simulate.simulate (noise and DN included)."""

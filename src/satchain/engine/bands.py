@@ -21,8 +21,11 @@ arises, on the ground: the band's detector grid starts ``(-dy g_alt, -dx g_act)`
 where its transform puts it, in the sign convention of
 :func:`satchain.measure.registration.measure_registration` (``image(y, x) = reference(y - dy, x - dx)``). The
 transforms stay nominal: the offset is a misregistration, which measuring two bands recovers. Line-of-sight motion
-in time (oscillations, jitter, Earth rotation) is formed per band along the band's own time path from t = 0; the
-part its delay adds to the offset (the budget's ``oscillations`` and ``earth_rotation``) is not applied yet.
+in time is formed per band along its own time path (:mod:`satchain.engine.timepath`); a band's sinusoidal
+oscillations are those of its own time, ``delay_s`` (:func:`band_delay_s`) later than the system's detector line
+(each phase advanced by ``360 f delay_s``), which misregisters the bands as the budget's ``oscillations`` predict.
+Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
+on line-of-sight logs, and the Earth rotation's offset over the delay (the budget's ``earth_rotation``).
 
 **Noise** per band from its own radiometry (:func:`~satchain.engine.sensor.sensor_from_system` of the band's
 system), its generator derived from ``(seed, band index)`` (:func:`band_seed`; band 0 uses ``seed`` itself, so a
@@ -62,6 +65,7 @@ __all__ = [
     "PREVIEW_STRETCH_PCT",
     "BandImage",
     "BandImages",
+    "band_delay_s",
     "band_response",
     "band_seed",
     "simulate_bands",
@@ -240,7 +244,7 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     from satchain.scene.spectral import layout_for_band
 
     banded = bool(system.bands)
-    s = system.for_band(i) if banded else system
+    s = _at_own_time(system.for_band(i), band_delay_s(system, i)) if banded else system
     scene = layout_for_band(layout, *band_response(system, i)) if banded else layout
     offset = tuple(float(v) for v in system.bands[i].registration_offset_px) if banded else (0.0, 0.0)
     src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, offset)
@@ -257,6 +261,33 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     name = system.band_names[i] if banded else (s.name or "band1")
     return BandImage(i, name, image, s.gsd_alt_m, s.gsd_act_m, float(lam),
                      Affine(s.gsd_act_m, 0.0, x0, 0.0, -s.gsd_alt_m, -y0), s, (offset[0], offset[1]), bs)  # fmt: skip
+
+
+def band_delay_s(system: ImagingSystem, index: int) -> float:
+    """When band ``index`` sees a ground point after the system's own detector line: its ``offset_alt_mm`` over the
+    image's speed on the focal plane (``pitch_y / line_time``), s (the budget's ``delay_s`` is the difference of
+    two bands' delays).
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> round(band_delay_s(load_preset("ankarasat3-pms"), 1) * 1e3, 1)  # blue, 6 mm behind the PAN line
+    71.8
+    """
+    if not system.bands:
+        return 0.0
+    return system.bands[index].offset_alt_mm * 1e-3 * system.line_time_s / system.detector.pitch_y_m
+
+
+def _at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
+    """``s`` with its sinusoidal line-of-sight oscillations seen ``delay_s`` later (each phase advanced by ``360 f
+    delay_s`` degrees): the rows of a band behind the reference line see the motion of a later instant."""
+    m = s.motion
+    if not delay_s or not m.oscillation:
+        return s
+    osc = tuple(o.model_copy(update={"phase_deg": math.remainder(o.phase_deg + 360.0 * o.frequency_hz * delay_s,
+                                                                  360.0)}) for o in m.oscillation)  # fmt: skip
+    return s.model_copy(update={"motion": m.model_copy(update={"oscillation": osc})})
 
 
 def _centre(s: ImagingSystem) -> float:
