@@ -206,3 +206,19 @@ def test_bad_input_is_one_line(pms):
         simulate_bands(scene, pms, pixel_m=0.245, window=(0, 0, 4, 4))
     with pytest.raises(ConfigError, match="units"):
         simulate_bands(scene, pms, pixel_m=0.245, units="photons")
+
+
+def test_previews_found_by_wavelength_when_names_differ(pms, tmp_path):
+    """MS bands named b1..b4: the previews take them by centre wavelength (blue, green, red, NIR ranges)."""
+    names = ["pan", "b1", "b2", "b3", "b4"]
+    system = pms.model_copy(update={"bands": tuple(b.model_copy(update={"name": n})
+                                                   for b, n in zip(pms.bands, names, strict=True))})  # fmt: skip
+    result = simulate_bands(Scene(15.68, 15.68, background=0.3), system, pixel_m=0.245, noise=True, seed=4)
+    paths = write_band_rasters(result, tmp_path)
+    assert sorted(paths) == ["false_colour", "ms", "pan", "rgb"]
+    from PIL import Image
+
+    fc = np.asarray(Image.open(paths["false_colour"]))
+    lo, hi = np.percentile(result["b4"].image, PREVIEW_STRETCH_PCT)  # NIR (830 nm) in the red channel
+    want = np.round(np.clip((result["b4"].image - lo) * 255.0 / (hi - lo), 0, 255)).astype(np.uint8)
+    np.testing.assert_array_equal(fc[..., 0], want)

@@ -62,6 +62,7 @@ from satchain.engine.tiling import Window
 from satchain.errors import ConfigError
 
 __all__ = [
+    "COLOUR_RANGES_M",
     "PREVIEW_STRETCH_PCT",
     "BandImage",
     "BandImages",
@@ -76,6 +77,9 @@ __all__ = [
 PREVIEW_STRETCH_PCT = (2.0, 98.0)
 #: The previews written by :func:`write_band_rasters`: file stem -> the bands (red, green, blue channels).
 PREVIEWS = {"rgb": ("red", "green", "blue"), "false_colour": ("nir", "red", "green")}
+#: A colour's band when no band bears its name: the first whose centre wavelength lies in this range (m).
+COLOUR_RANGES_M = {"blue": (4.0e-7, 5.2e-7), "green": (5.0e-7, 6.0e-7), "red": (6.0e-7, 7.0e-7),
+                   "nir": (7.4e-7, 1.0e-6)}  # fmt: skip
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -367,7 +371,7 @@ def simulate_bands(
 
 def _raster_name(group: tuple[BandImage, ...], k: int, n_multi: int) -> str:
     if len(group) == 1:
-        return group[0].name
+        return "".join(c if c.isalnum() or c in "-_" else "_" for c in group[0].name)
     return "ms" if n_multi <= 1 or k == 0 else f"ms{k + 1}"
 
 
@@ -437,10 +441,10 @@ def write_band_rasters(result: BandImages, out_dir: str | os.PathLike) -> dict[s
     """Write ``result`` into ``out_dir``: one GeoTIFF per pixel grid -- a grid of one band as ``<name>.tif`` (the
     PAN image: ``pan.tif``), a grid of several as ``ms.tif`` (``ms2.tif``, ... for more) -- with band names
     (descriptions) and centre wavelengths (tags), georeferenced as today's images (pixel size, the window's
-    corner at ``(x0, -y0)``, no CRS), each written atomically; and, where the bands exist on one grid, an RGB
-    (``rgb.png``: red, green, blue) and a false-colour (``false_colour.png``: NIR, red, green) preview, each
-    channel stretched between its 2nd and 98th percentiles (:data:`PREVIEW_STRETCH_PCT`). Returns the paths by
-    stem.
+    corner at ``(x0, -y0)``, no CRS), each written atomically; and, where the bands exist on one grid (by name,
+    else by centre wavelength: :data:`COLOUR_RANGES_M`), an RGB (``rgb.png``: red, green, blue) and a false-colour
+    (``false_colour.png``: NIR, red, green) preview, each channel stretched between its 2nd and 98th percentiles
+    (:data:`PREVIEW_STRETCH_PCT`). Returns the paths by stem.
 
     Examples
     --------
@@ -465,9 +469,18 @@ def write_band_rasters(result: BandImages, out_dir: str | os.PathLike) -> dict[s
         _write_grid(paths[stem], g, result)
     for stem, want in PREVIEWS.items():
         for g in grids:
-            by_name = {b.name.casefold(): b for b in g}
-            if all(w in by_name for w in want):
+            picked = [_colour_band(g, w) for w in want]
+            if all(b is not None for b in picked) and len({id(b) for b in picked}) == len(want):
                 paths[stem] = out / f"{stem}.png"
-                _write_preview(paths[stem], tuple(by_name[w] for w in want))
+                _write_preview(paths[stem], tuple(b for b in picked if b is not None))
                 break
     return paths
+
+
+def _colour_band(group: tuple[BandImage, ...], colour: str) -> BandImage | None:
+    """The band of ``group`` named ``colour``, else the first whose centre lies in :data:`COLOUR_RANGES_M`."""
+    for b in group:
+        if b.name.casefold() == colour:
+            return b
+    lo, hi = COLOUR_RANGES_M[colour]
+    return next((b for b in group if lo <= b.center_wavelength_m < hi), None)
