@@ -23,7 +23,9 @@ where its transform puts it, in the sign convention of
 transforms stay nominal: the offset is a misregistration, which measuring two bands recovers. Line-of-sight motion
 in time is formed per band along its own time path (:mod:`satchain.engine.timepath`); a band's sinusoidal
 oscillations are those of its own time, ``delay_s`` (:func:`band_delay_s`) later than the system's detector line
-(each phase advanced by ``360 f delay_s``), which misregisters the bands as the budget's ``oscillations`` predict.
+(each phase advanced by ``360 f delay_s``). A pixel sees the ground at ``x = j + LOS(t)``, so a band's content
+moves by minus its line of sight: the offset from PAN is minus the difference of their lines of sight (the
+budget's ``oscillations`` give that difference, line-of-sight signed; tests/engine/test_bands.py).
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
 on line-of-sight logs, and the Earth rotation's offset over the delay (the budget's ``earth_rotation``).
 
