@@ -44,7 +44,7 @@ from satchain.scene.materials import (
     materials,
     read_spectrum,
 )
-from satchain.scene.targets import SiemensStar
+from satchain.scene.targets import BarTarget, HyperbolicWedge, SiemensStar, SlantedEdge
 
 __all__ = [
     "MATERIAL_SLOTS",
@@ -58,10 +58,10 @@ __all__ = [
 #: The grey reflectance slots of each item kind that a material may fill (``<slot>_material`` in a scene file).
 #: A Siemens star's ``bright`` and ``dark`` are ``mean +- amplitude``.
 MATERIAL_SLOTS: dict[str, tuple[str, ...]] = {
-    "slanted_edge": ("bright", "dark"),
-    "bar_target": ("bright", "dark"),
-    "hyperbolic_wedge": ("bright", "dark"),
-    "siemens_star": ("bright", "dark"),
+    SlantedEdge.kind: ("bright", "dark"),
+    BarTarget.kind: ("bright", "dark"),
+    HyperbolicWedge.kind: ("bright", "dark"),
+    SiemensStar.kind: ("bright", "dark"),
     "road": ("asphalt", "shoulder", "white", "yellow"),
     "car": ("body", "glass", "wiper"),
     "railway": ("ballast", "tie", "rail"),
@@ -69,7 +69,7 @@ MATERIAL_SLOTS: dict[str, tuple[str, ...]] = {
     "house": ("roof_lit", "roof_shaded", "ridge"),
 }
 SUFFIX = "_material"
-_STAR = "siemens_star"
+_STAR = SiemensStar.kind
 
 
 @dataclasses.dataclass(frozen=True)
