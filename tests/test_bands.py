@@ -372,7 +372,8 @@ def test_an_oscillation_misregisters_the_bands_as_the_window_means_at_the_two_ti
                 t = np.linspace(lo, lo + width, 4001)
                 return float(np.mean(np.sin(2 * np.pi * f_hz * t + np.radians(phase_deg))))
 
-            numeric = (mean(t_c + dt - t_b / 2, t_b) - mean(t_c - t_p / 2, t_p)) / 4  # PAN px -> MS px
+            # content moves against the line of sight: the band's content offset is minus the LOS difference
+            numeric = -(mean(t_c + dt - t_b / 2, t_b) - mean(t_c - t_p / 2, t_p)) / 4  # PAN px -> MS px
             predicted = o["amplitude_px"] * math.sin(2 * math.pi * f_hz * t_c + math.radians(o["phase_deg"]))
             assert predicted == pytest.approx(numeric, abs=2e-4)
         if f_hz == 20.0:  # windows short against the period: 2 A |sin(pi f dt)|, PAN px -> MS px

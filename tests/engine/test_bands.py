@@ -137,6 +137,11 @@ def test_oscillation_misregisters_bands_by_their_delay(pms):
         los_pan = _los_mean(1.0, 20.0, 0.0, np.arange(4 * r0, 4 * r0 + 80) * dt, stages * dt).mean() / 4
         los_red = _los_mean(0.25, 20.0, 0.0, np.arange(r0, r0 + 20) * 4 * dt + delay_s, 4 * dt).mean()
         assert got[1] == pytest.approx(-(los_red - los_pan), abs=0.05), (r0, got, los_red - los_pan)
+        (o,) = [b for b in band_budgets(system) if b["name"] == "red"][0]["registration"]["oscillations"]
+        t_c = np.arange(4 * r0, 4 * r0 + 80) * dt  # the PAN rows' window centres, as the budget's t_c
+        phase = 2 * np.pi * o["frequency_hz"] * t_c + np.radians(o["phase_deg"])
+        budget_px = np.mean(o["amplitude_px"] * np.sin(phase))
+        assert got[1] == pytest.approx(budget_px, abs=0.05), (r0, got, budget_px)  # issue 32: within 0.05 px
         assert got[0] == pytest.approx(0.0, abs=0.05)
 
 

@@ -229,7 +229,10 @@ def _oscillation_offsets(system: ImagingSystem, ref: ImagingSystem, band: Imagin
     is the mean of ``A sin(2 pi f t + phi)`` over its TDI window (``A sinc(f T) sin(2 pi f t_c + phi)``, ``t_c`` the
     window's centre: :mod:`satchain.tf.pushbroom`), and the band sees the ground point ``delay_s`` after the
     reference, so the offset is ``A |z| sin(2 pi f t_c + phi + arg z)`` with ``z = sinc(f T_b) e^(2 pi i f delay)
-    - sinc(f T_ref)``, ``t_c`` the reference row's window centre. Amplitudes in the band's own pixels."""
+    - sinc(f T_ref)``, ``t_c`` the reference row's window centre. Amplitudes in the band's own pixels. The offset is
+    that of the band's content, as :func:`satchain.measure.registration.measure_registration` gives it: a pixel
+    sees ``x = j + LOS(t)``, so content moves against the line of sight -- the phase is the line of sight's + 180
+    degrees."""
     out = []
     for o in system.motion.oscillation:
         f = o.frequency_hz
@@ -243,7 +246,7 @@ def _oscillation_offsets(system: ImagingSystem, ref: ImagingSystem, band: Imagin
             "frequency_hz": f,
             "amplitude_px": amp,
             "rms_px": amp / math.sqrt(2.0),
-            "phase_deg": float(o.phase_deg + np.degrees(np.angle(z))),
+            "phase_deg": float((o.phase_deg + np.degrees(np.angle(z)) + 180.0 + 180.0) % 360.0 - 180.0),
         })  # fmt: skip
     return out
 
