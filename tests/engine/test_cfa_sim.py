@@ -187,3 +187,14 @@ def test_bad_input_is_one_line():
         simulate_cfa(np.full((70, 70), 0.2), camera(), pixel_m=0.098, units="radiance")
     with pytest.raises(ConfigError, match=r"window = .*must fall on a photosite's edge"):
         simulate_cfa(np.full((70, 70), 0.2), camera(), pixel_m=0.098, window=(3, 0, 20, 20))
+
+
+def test_a_vegetation_scene_through_a_bayer_camera():
+    """PROSAIL vegetation (400-2500 nm) seen through the default colour responses (380-780 nm, their noise floor
+    below 400 nm): green vegetation is greener than it is red or blue, on the raw mosaic's own photosites."""
+    cam = camera("RGGB")
+    gsd = cam.gsd_act_m
+    lay = edge_layout(gsd, n=32, bright_material="green_vegetation", dark_material="asphalt")
+    img = simulate_cfa(lay, cam, pixel_m=gsd / 5, methods=())
+    far = {c: float(img.planes[c][16, 29]) for c in COLOURS}  # the vegetation plateau
+    assert far["green"] > far["red"] and far["green"] > far["blue"]

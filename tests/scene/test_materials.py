@@ -401,3 +401,22 @@ def test_cli_unknown_material_exits_2(tmp_path):
     )  # fmt: skip
     assert r.returncode == 2, r.stderr
     assert "background_material = 'lava': not in the material library; known: asphalt" in r.stderr
+
+
+def test_a_response_with_a_sliver_outside_the_range_is_integrated_more_is_refused():
+    """A measured response's noise floor outside a material's range (the default Bayer red's 0.2 % of peak at
+    380-395 nm against PROSAIL's 400 nm start) is integrated with the spectrum's end value; a band with more than
+    0.1 % of its response outside is refused, naming both ranges."""
+    from satchain.scene.materials import OUTSIDE_WEIGHT, band_reflectance, material
+
+    veg = material("green_vegetation")
+    lam = np.arange(380e-9, 781e-9, 5e-9)
+    response = np.exp(-0.5 * ((lam - 600e-9) / 40e-9) ** 2)
+    response[lam < 400e-9] = 0.002  # the sliver: 4 samples at 0.2 % of the peak
+    inside = lam >= 400e-9
+    got = band_reflectance(veg, lam, response)
+    ref = band_reflectance(veg, lam[inside], response[inside])
+    assert abs(got - ref) < OUTSIDE_WEIGHT  # at most the sliver's share of the reflectance range
+    wide = np.exp(-0.5 * ((lam - 450e-9) / 40e-9) ** 2)  # ~8 % of it below 400 nm
+    with pytest.raises(ConfigError, match=r"reaches outside material 'green_vegetation'.*400.0-2500.0 nm"):
+        band_reflectance(veg, lam, wide)
