@@ -16,6 +16,10 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
   :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`,
   :func:`measure_registration` (band-to-band offset);
+* the focal plane as flown (first pieces): :func:`simulate_bands` / :func:`write_band_rasters` (every band of a
+  ``[[bands]]`` camera from a spectral scene), :func:`simulate_cfa` / :func:`measure_cfa` / :func:`predict_cfa`
+  (a Bayer camera's raw mosaic, demosaicing, per-plane MTF and false colour), :func:`simulate_staggered` (two
+  staggered arrays combined onto the half-pitch grid);
 * design studies: :func:`study` (a study file's cases through the budget or the whole chain, on local processes
   or Dask: :class:`StudyResult`), :func:`design` (the range of a key, or the map of two, that meets targets);
 * errors: :class:`SatchainError` and its subclasses.
@@ -89,6 +93,15 @@ _LAZY = {
     "measure_snr": "satchain.measure.snr",
     "measure_registration": "satchain.measure.registration",
     "find_edges": "satchain.measure.find",
+    "simulate_bands": "satchain.engine.bands",
+    "write_band_rasters": "satchain.engine.bands",
+    "BandImages": "satchain.engine.bands",
+    "simulate_cfa": "satchain.engine.cfa_sim",
+    "CFAImages": "satchain.engine.cfa_sim",
+    "measure_cfa": "satchain.prediction.cfa",
+    "predict_cfa": "satchain.prediction.cfa",
+    "simulate_staggered": "satchain.engine.staggered",
+    "StaggeredImages": "satchain.engine.staggered",
     "study": "satchain.studies.api",
     "StudyResult": "satchain.studies.api",
     "design": "satchain.studies.api",
@@ -150,6 +163,10 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.prediction.quality import predict_quality  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
+    from satchain.engine.bands import BandImages, simulate_bands, write_band_rasters  # noqa: F401
+    from satchain.engine.cfa_sim import CFAImages, simulate_cfa  # noqa: F401
+    from satchain.engine.staggered import StaggeredImages, simulate_staggered  # noqa: F401
+    from satchain.prediction.cfa import measure_cfa, predict_cfa  # noqa: F401
     from satchain.studies.api import StudyResult, design, study  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401
     from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
