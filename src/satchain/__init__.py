@@ -147,7 +147,10 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.comparison import CheckRow, Comparison, compare  # noqa: F401
     from satchain.config.run import RunConfig, Tolerances, load_run_config  # noqa: F401
     from satchain.config.system import ImagingSystem, load_preset, load_system  # noqa: F401
+    from satchain.engine.bands import BandImages, simulate_bands, write_band_rasters  # noqa: F401
+    from satchain.engine.cfa_sim import CFAImages, simulate_cfa  # noqa: F401
     from satchain.engine.simulate import simulate  # noqa: F401
+    from satchain.engine.staggered import StaggeredImages, simulate_staggered  # noqa: F401
     from satchain.geometry import Rect  # noqa: F401
     from satchain.measure.auto import measure_auto  # noqa: F401
     from satchain.measure.bars import measure_bars  # noqa: F401
@@ -159,14 +162,11 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.measure.star import measure_star  # noqa: F401
     from satchain.measure.wedge import measure_wedge  # noqa: F401
     from satchain.prediction.budget import SystemBudget, budget  # noqa: F401
+    from satchain.prediction.cfa import measure_cfa, predict_cfa  # noqa: F401
     from satchain.prediction.core import Predictions, predict  # noqa: F401
     from satchain.prediction.quality import predict_quality  # noqa: F401
     from satchain.scene import load_layout  # noqa: F401
     from satchain.scene.truth import Truth, read_truth  # noqa: F401
-    from satchain.engine.bands import BandImages, simulate_bands, write_band_rasters  # noqa: F401
-    from satchain.engine.cfa_sim import CFAImages, simulate_cfa  # noqa: F401
-    from satchain.engine.staggered import StaggeredImages, simulate_staggered  # noqa: F401
-    from satchain.prediction.cfa import measure_cfa, predict_cfa  # noqa: F401
     from satchain.studies.api import StudyResult, design, study  # noqa: F401
     from satchain.tf.budget import SystemOTF  # noqa: F401
     from satchain.tf.ctf import coltman_ctf, mtf_from_ctf  # noqa: F401
