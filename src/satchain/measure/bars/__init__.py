@@ -140,7 +140,7 @@ def mtf_from_ctf_samples(f_cy_per_px, ctf, *, n_terms: int = 40) -> np.ndarray:
     Examples
     --------
     >>> f = np.array([0.2, 0.4])
-    >>> np.round(mtf_from_ctf_samples(f, 4 / np.pi * np.array([0.5, 0.0])), 3)
+    >>> np.round(mtf_from_ctf_samples(f, 4 / np.pi * np.array([0.5, 0.0])), 3) + 0.0  # -0.0 printed as 0.0
     array([0.5, 0. ])
     >>> mtf_from_ctf_samples([], []).size  # no usable group (a run whose bars were all refused)
     0
