@@ -88,8 +88,8 @@ def test_injected_ms_offset_is_recovered_by_registration(pms, offset_px):
     system = _with_offset(pms, "red", offset_px)
     predicted = band_budgets(system)[system.band_index("red")]["registration"]["static_px"]
     assert (predicted["alt"], predicted["act"]) == pytest.approx(offset_px)
-    result = simulate_bands(_edges("white_paint", "black_paint", "black_paint"), system, pixel_m=P_EDGE,
-                            noise=False, bands=["green", "red"])  # fmt: skip
+    result = simulate_bands(_edges("white_paint", "black_paint", "black_paint"), system, pixel_m=0.245,
+                            noise=False, bands=["green", "red"])  # fmt: skip  (8 scene px per MS px: MS only)
     got = measure_registration(result["green"].image, result["red"].image).offset_px
     assert got == pytest.approx(offset_px, abs=0.02)
     assert result["red"].transform == result["green"].transform  # the transforms stay nominal
