@@ -1,0 +1,116 @@
+"""What the bands of one :func:`~satchain.engine.bands.simulate_bands` call share, so that forming every band costs
+little more than its own image chain (benchmarks/bench_bands.py): the ground rendered once per distinct grey
+layout, and each band's OTF over the fewest spectral quadrature nodes that keep its MTF within
+:data:`OTF_TOLERANCE` of the system's own. Nothing outlives the call: the store is a dict the call owns.
+
+Examples
+--------
+>>> from satchain.scene.layout import Scene
+>>> store, scene = {}, Scene(4.0, 4.0, background=0.3)
+>>> shared_render(store, scene, 0.5, 2**20) is shared_render(store, scene, 0.5, 2**20)
+True
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from satchain.config.system import ImagingSystem
+
+__all__ = ["OTF_NODES_TRIED", "OTF_TOLERANCE", "band_otf", "shared_render"]
+
+
+#: The simulation's OTF of a band with a response: the fewest quadrature nodes (of these) whose diffraction MTF is
+#: within :data:`OTF_TOLERANCE` of the system's own (:data:`~satchain.config.sections_light.RESPONSE_NODES` nodes)
+#: at every frequency up to the optics' cutoff (:func:`band_otf`).
+OTF_NODES_TRIED = (3, 4, 5, 7)
+#: Largest change of a band's diffraction MTF that :func:`band_otf`'s fewer nodes may make (absolute).
+OTF_TOLERANCE = 1e-3
+
+
+def _diffraction_mtf(otf, f: np.ndarray) -> np.ndarray:
+    """|diffraction OTF| along x, y and the diagonal at radial frequencies ``f`` (cy/mm), stacked."""
+    others = tuple(n for n in otf.component_names if n != "diffraction")
+    d = f / math.sqrt(2.0)
+    return np.abs(np.stack([otf(f, 0 * f, exclude=others), otf(0 * f, f, exclude=others), otf(d, d, exclude=others)]))
+
+
+def band_otf(s: ImagingSystem, band) -> Any:
+    """The :class:`~satchain.tf.budget.SystemOTF` the simulation uses for band system ``s`` (from
+    :meth:`~satchain.config.system.ImagingSystem.for_band`) of ``[[bands]]`` entry ``band``: for a band with a
+    spectral response, its diffraction over the fewest nodes of :data:`OTF_NODES_TRIED` (the same centroid
+    quadrature, :func:`~satchain.config.response.response_quadrature`) whose MTF differs from that over the system's
+    nodes by less than :data:`OTF_TOLERANCE` at every frequency up to the optics' cutoff (along x, y and the
+    diagonal); every other component unchanged. Else (no response, or no fewer nodes that close) ``s``'s own OTF.
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> ms = load_preset("ankarasat3-pms")
+    >>> i = ms.band_index("red")
+    >>> s = ms.for_band(i)
+    >>> len(s.optics.wavelengths_m), len(band_otf(s, ms.bands[i]).system.optics.wavelengths_m)
+    (11, 3)
+    """
+    from satchain.config.response import response_quadrature
+    from satchain.tf.budget import SystemOTF
+
+    full = SystemOTF(s)
+    curve = band.spectral_response
+    n_full = len(s.optics.wavelengths_m)
+    if curve is None or "diffraction" not in full.component_names:
+        return full
+    f = np.linspace(0.0, full.cutoff_cy_per_mm, 257)
+    ref = _diffraction_mtf(full, f)
+    for n in (k for k in OTF_NODES_TRIED if k < n_full):
+        lam, w = response_quadrature(curve, n)
+        lighter = SystemOTF(s.replace({"optics.wavelengths_m": tuple(float(x) for x in lam),
+                                       "optics.wavelength_weights": tuple(float(x) for x in w / w.sum())}))  # fmt: skip
+        if float(np.max(np.abs(_diffraction_mtf(lighter, f) - ref))) < OTF_TOLERANCE:
+            return lighter
+    return full
+
+
+class _RenderOnce:
+    """``scene`` rendered whole once at ``pixel_m`` (on the first read); windows inside it are copies of that
+    render (a renderer's pixel does not depend on the window: tests/engine/test_bands_speed.py), others rendered."""
+
+    def __init__(self, scene, pixel_m: float):
+        self.scene, self.pixel_m = scene, pixel_m
+        self.full: np.ndarray | None = None
+
+    def shape_px(self, pixel_m: float | None = None) -> tuple[int, int]:
+        return self.scene.shape_px(pixel_m)
+
+    def render(self, window, *, pixel_m: float | None = None) -> np.ndarray:
+        r0, c0, h, w = (int(v) for v in window)
+        ny, nx = (int(v) for v in self.scene.shape_px(self.pixel_m))
+        if pixel_m != self.pixel_m or r0 < 0 or c0 < 0 or r0 + h > ny or c0 + w > nx:
+            return self.scene.render(tuple(window), pixel_m=pixel_m)
+        if self.full is None:
+            self.full = np.asarray(self.scene.render((0, 0, ny, nx), pixel_m=self.pixel_m))
+        return self.full[r0 : r0 + h, c0 : c0 + w].copy()
+
+
+def _same_layout(a, b) -> bool:
+    if a is b:
+        return True
+    try:
+        return type(a) is type(b) and bool(a == b)
+    except (TypeError, ValueError):  # fields that do not compare (arrays): not known equal
+        return False
+
+
+def shared_render(reuse: dict, scene, pixel_m: float, max_bytes: float):
+    """``scene`` behind the call's latest whole render when the grey layouts are equal (a new one otherwise; the
+    previous one dropped), or ``scene`` itself when its whole render would exceed ``max_bytes`` (8 B a pixel)."""
+    ny, nx = (int(v) for v in scene.shape_px(pixel_m))
+    if 8.0 * ny * nx > max_bytes:
+        return scene
+    held = reuse.get("ground")
+    if held is None or held.pixel_m != pixel_m or not _same_layout(held.scene, scene):
+        held = reuse["ground"] = _RenderOnce(scene, pixel_m)
+    return held
