@@ -26,8 +26,11 @@ oscillations are those of its own time, ``delay_s`` (:func:`band_delay_s`) later
 (each phase advanced by ``360 f delay_s``). A pixel sees the ground at ``x = j + LOS(t)``, so a band's content
 moves by minus its line of sight: the offset from PAN is minus the difference of their lines of sight (the
 budget's ``oscillations`` give that difference, line-of-sight signed; tests/engine/test_bands.py).
+Under ``orbit.earth_rotation`` (no yaw steering) each band's detector grid starts where the ground has moved by
+its own time (:func:`_earth_lead_px`), so its content lies where the budget's ``earth_rotation`` puts it.
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
-on line-of-sight logs, and the Earth rotation's offset over the delay (the budget's ``earth_rotation``).
+on line-of-sight logs, the Earth's rotation with yaw steering, and the actual delay (``offset / pitch / a`` lines)
+in the oscillations' phases.
 
 **Noise** per band from its own radiometry (:func:`~satchain.engine.sensor.sensor_from_system` of the band's
 system), its generator derived from ``(seed, band index)`` (:func:`band_seed`; band 0 uses ``seed`` itself, so a
@@ -258,7 +261,8 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     offset = tuple(float(v) for v in system.bands[i].registration_offset_px) if banded else (0.0, 0.0)
     if reuse is not None and banded:  # one render per distinct grey layout (reuse["ground"]); the band's lighter OTF
         scene = shared_render(reuse, scene, pixel_m, params.max_tile_bytes)
-    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, offset)
+    earth = _earth_lead_px(system, i, s) if banded else (0.0, 0.0)  # the ground moved by the band's own time
+    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, (offset[0] - earth[0], offset[1] - earth[1]))
     src = SceneSource(src_scene, pixel_m=pixel_m)
     p = params if phase == params.phase_px else dataclasses.replace(params, phase_px=phase)
     otf = band_otf(s, system.bands[i]) if banded and reuse is not None else None
@@ -289,6 +293,24 @@ def band_delay_s(system: ImagingSystem, index: int) -> float:
     if not system.bands:
         return 0.0
     return system.bands[index].offset_alt_mm * 1e-3 * system.line_time_s / system.detector.pitch_y_m
+
+
+def _earth_lead_px(system: ImagingSystem, index: int, s: ImagingSystem) -> tuple[float, float]:
+    """(ALT, ACT) band px the ground under band ``index`` (system ``s``) has moved under the Earth's rotation (drift
+    ``(eps, sigma)`` px a line: :mod:`satchain.engine.timepath`) when its row 0 starts, from the system's row 0
+    start: ``n = [offset g / pitch + (g_b (1 - N_b) - g (1 - N)) / 2] / g_b`` of its lines later (``offset_alt_mm``
+    places centre lines, crossed mid-TDI window; ``g``, ``N``: GSD ALT, TDI stages; ``_b``: the band's). On nominal
+    grids the TDI terms cancel: the budget's ``earth_rotation``. (0, 0) without it or with yaw steering."""
+    if not system.orbit.earth_rotation or system.orbit.yaw_steering:
+        return (0.0, 0.0)
+    from satchain.tf.pushbroom import PushbroomTerms
+
+    earth = PushbroomTerms(s).earth or {"tdi_drift_px_per_stage": (0.0, 0.0)}
+    sigma, eps = earth["tdi_drift_px_per_stage"]
+    g, n_st, g_b, n_b = system.gsd_alt_m, system.detector.tdi_stages, s.gsd_alt_m, s.detector.tdi_stages
+    lead_m = system.bands[index].offset_alt_mm * 1e-3 * g / system.detector.pitch_y_m
+    n = (lead_m + (g_b * (1 - n_b) - g * (1 - n_st)) / 2.0) / g_b
+    return (float(eps) * n, float(sigma) * n)
 
 
 def _at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
