@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 from satchain import load_preset
 from satchain.config.sections_light import RESPONSE_NODES
 from satchain.engine.bands import band_seed, simulate_bands
-from satchain.engine.bands_shared import OTF_TOLERANCE, band_otf
+from satchain.engine.bands_shared import OTF_TOLERANCE, band_otf, band_params
 from satchain.engine.sensor import sensor_from_system
-from satchain.engine.simulate import Simulator
+from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import SceneSource
 from satchain.scene.layout import Scene, layout_from_dict, paper_layout
 from satchain.scene.spectral import layout_for_band
@@ -84,15 +84,17 @@ def test_a_window_of_the_whole_render_is_the_window_rendered(paper_whole, r0, c0
     assert np.array_equal(scene.render((r0, c0, h, w), pixel_m=1.75), whole[r0 : r0 + h, c0 : c0 + w])
 
 
-def _engine_alone(layout, system, i, pixel_m, *, seed):
-    """Band i formed by the unchanged engine on its own, the scene rendered window by window (no offsets)."""
+def _engine_alone(layout, system, i, pixel_m, *, seed, margin_as_system=True, units="dn", noise=True):
+    """Band i formed by the unchanged engine on its own, the scene rendered window by window (no offsets), with
+    the band's far margin (band_params) or the engine's default one."""
     from satchain.engine.bands import band_response
 
     s = system.for_band(i)
     src = SceneSource(layout_for_band(layout, *band_response(system, i)), pixel_m=pixel_m)
-    sim = Simulator(s, input_pixel_m=pixel_m, input_shape=src.shape_px, motion_seed=seed,
+    params = band_params(SimParams(), system, s) if margin_as_system else SimParams()
+    sim = Simulator(s, input_pixel_m=pixel_m, input_shape=src.shape_px, motion_seed=seed, params=params,
                     otf=band_otf(s, system.bands[i]))  # fmt: skip
-    return sim.run(src, sensor=sensor_from_system(s), units="dn", noise=True, seed=band_seed(seed, i))
+    return sim.run(src, sensor=sensor_from_system(s), units=units, noise=noise, seed=band_seed(seed, i))
 
 
 @pytest.mark.parametrize("spectral", [False, True])
@@ -112,3 +114,17 @@ def test_shared_render_gives_each_band_the_engine_image_exactly(pms, spectral):
     for name in which:
         i = pms.band_index(name)
         assert np.array_equal(got[name].image, _engine_alone(scene, pms, i, 0.49, seed=4)), name
+
+
+def test_ms_far_margin_at_the_systems_ground_distance_changes_images_below_1e4(pms):
+    """An MS band's coarse frame extends 32 of its pixels (the 128 PAN pixels' 62.7 m) instead of 128: on a
+    scene of full-contrast edges up to its border (reflectance 0.02-0.98), every pixel of every MS band within
+    1e-4 of the image with the engine's default 128-pixel margin."""
+    items = (SlantedEdge("a", center_m=(9.8, 9.8), size_m=19.6, angle_deg=5.0, bright=0.98, dark=0.02),)
+    scene = Scene(19.6, 19.6, items, 0.5)
+    got = simulate_bands(scene, pms, pixel_m=0.49, noise=False, bands=["blue", "nir"])
+    for name in ("blue", "nir"):
+        i = pms.band_index(name)
+        assert band_params(SimParams(), pms, pms.for_band(i)).far_margin_px == 32
+        ref = _engine_alone(scene, pms, i, 0.49, seed=0, margin_as_system=False, units="reflectance", noise=False)
+        assert np.abs(got[name].image - ref).max() < 1e-4, name

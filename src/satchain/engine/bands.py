@@ -60,7 +60,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.config.system import ImagingSystem
-from satchain.engine.bands_shared import band_otf, shared_render
+from satchain.engine.bands_shared import band_otf, band_params, shared_render
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import SceneSource
@@ -265,6 +265,7 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, (offset[0] - earth[0], offset[1] - earth[1]))
     src = SceneSource(src_scene, pixel_m=pixel_m)
     p = params if phase == params.phase_px else dataclasses.replace(params, phase_px=phase)
+    p = band_params(p, system, s) if banded and reuse is not None else p  # its far margin: the system's metres
     otf = band_otf(s, system.bands[i]) if banded and reuse is not None else None
     sim = Simulator(s, input_pixel_m=pixel_m, input_shape=src.shape_px, params=p, motion_seed=seed, otf=otf)
     if sim.output_shape != n_out:  # _band_source sized the input for exactly these pixels
