@@ -1,12 +1,16 @@
 """``satchain simulate``: the satellite image of a scene or an image (exact, tiled, any size), its preview and
 optionally its focal-plane image, written together (all or none); with several inputs or ``--sweep``, one image per
-case into a directory (:mod:`satchain.cli.sweep`).
+case into a directory (:mod:`satchain.cli.sweep`); with a banded system (``[[bands]]`` with spectral responses) and
+a scene, every band (:func:`satchain.engine.bands.simulate_bands`) into a directory: one GeoTIFF per pixel grid and
+the RGB / false-colour previews (:func:`satchain.engine.bands.write_band_rasters`), all or none. Image inputs keep
+their band-by-band path (a GDAL raster needs one band per ``[[bands]]``: another count is refused naming both).
 
 Registered on the app by :mod:`satchain.cli.main`.
 """
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -23,11 +27,14 @@ from satchain.cli._common import (
     system_from_options,
 )
 from satchain.cli.options import BandsOpt, PresetOpt, SystemOpt
+from satchain.errors import ConfigError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
     from rich.progress import Progress
+
+    from satchain.config.system import ImagingSystem
 
 __all__ = ["simulate"]
 
@@ -98,10 +105,14 @@ def simulate(
         ),
     ] = None,
     *,
-    out: Annotated[Path, typer.Option("-o", "--out", help="output TIFF (a directory with several inputs or --sweep)")],
+    out: Annotated[
+        Path,
+        typer.Option("-o", "--out", help="output TIFF (a directory with several inputs, --sweep or a banded system)"),
+    ],
 ) -> None:
     """Simulate the satellite image of a scene or an image (exact, tiled, any size); with several inputs or
-    --sweep, one image per case into the -o directory, with manifest.json / manifest.csv."""
+    --sweep, one image per case into the -o directory, with manifest.json / manifest.csv; with a banded system
+    (e.g. --preset ankarasat3-pms) and a scene, every band into the -o directory (pan.tif, ms.tif, previews)."""
     from satchain.engine._malloc import keep_freed_memory
     from satchain.engine.files import simulate_file
 
@@ -116,6 +127,14 @@ def simulate(
         return simulate_cases(inputs, out, system_obj, sweep_texts=sweep or [], seed=seed,
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
+    if _is_banded_layout(system_obj, input_):  # every band from the spectral scene, one raster per pixel grid
+        unused = {"--focal-plane": focal_plane, "--scheduler": scheduler, "--input-scale": input_scale}
+        given = [f"{k} {v}" for k, v in unused.items() if v is not None]
+        if given:
+            raise ConfigError(f"{given[0]}: not used by a banded system's simulation of a scene (-o is a directory "
+                              "of one raster per pixel grid)")  # fmt: skip
+        return _simulate_bands(input_, out, system_obj, scene_pixel_m=scene_pixel_m, units=units_,
+                               noise=not no_noise, seed=seed, band=band)  # fmt: skip
     check_distinct_paths({"-o": out, "--focal-plane": focal_plane}, {"--system": system})
     from satchain.io._commit import CommitState, committed_together
 
@@ -181,3 +200,136 @@ def _interrupted_simulation(exc: KeyboardInterrupt, outputs: list[Path], committ
     err_console.print(Text(f"interrupted ({signal.Signals(signum).name}): ", style="bold red") + Text(what),
                       highlight=False, soft_wrap=True)  # fmt: skip
     return 128 + int(signum)
+
+
+# ---------------------------------------------------------------------------------------------- banded systems
+#: What a banded simulation writes into its -o directory: ``<band>.tif`` / ``ms*.tif`` and the two previews.
+_BAND_OUTPUTS = ("*.tif", "rgb.png", "false_colour.png")
+
+
+def _is_banded_layout(system: ImagingSystem, input_: str) -> bool:
+    """A system whose ``[[bands]]`` carry spectral responses, and a scene input (``paper`` or a layout file):
+    every band is formed from the scene (an image input keeps its band-by-band path)."""
+    from satchain.engine.files import IMAGE_SUFFIXES
+
+    responses = any(b.spectral_response is not None for b in system.bands)
+    return responses and Path(input_).suffix.lower() not in IMAGE_SUFFIXES
+
+
+def _check_band_dir(out: Path) -> list[Path]:
+    """``-o`` of a banded simulation: a directory that is missing, empty, or holds only the files of an earlier
+    banded simulation (its GeoTIFFs and previews, which satchain wrote); anything else is refused before any work.
+    Returns those earlier files (the ones this simulation does not replace are removed once it is written)."""
+    import fnmatch
+    import re
+
+    from satchain._safety import clean_stale_temp_files
+
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"-o {str(out)!r}: is a file; a banded system writes one raster per pixel grid into a "
+                          "directory: give a new or empty directory")  # fmt: skip
+    if out.suffix.lower() in (".tif", ".tiff", ".png") and not out.exists():
+        raise ConfigError(f"-o {str(out)!r}: a banded system writes one raster per pixel grid into a directory; "
+                          f"give a directory, e.g. -o {out.with_suffix('')}")  # fmt: skip
+    if not out.is_dir():
+        return []
+    for p in out.glob(".*.tmp"):  # a killed simulation's temporary files (.NAME.<pid>.*.tmp, their process gone)
+        m = re.fullmatch(r"\.(.+?\.(?:tif|png))\.\d+\..*\.tmp", p.name)
+        if m:
+            clean_stale_temp_files(out / m.group(1))
+    earlier = []
+    for p in sorted(out.iterdir()):
+        ours = p.is_file() and not p.is_symlink() and any(fnmatch.fnmatch(p.name, pat) for pat in _BAND_OUTPUTS)
+        if not (ours and _written_by_satchain(p)):
+            raise ConfigError(f"-o {str(out)!r}: holds {p.name!r}, which a banded simulation did not write; give a "
+                              "new or empty directory")  # fmt: skip
+        earlier.append(p)
+    return earlier
+
+
+def _written_by_satchain(path: Path) -> bool:
+    """A preview with satchain's PNG text, or a GeoTIFF of bands whose description is satchain's JSON."""
+    import json
+
+    from satchain._safety import _written_by_satchain as png_or_json
+
+    if path.suffix.lower() != ".tif":
+        return png_or_json(path)
+    try:
+        import tifffile
+
+        with tifffile.TiffFile(path) as tif:
+            meta = json.loads(str(tif.pages[0].description))["satchain"]
+        return isinstance(meta, dict) and "band_names" in meta
+    except Exception:  # unreadable: not ours
+        return False
+
+
+def _simulate_bands(input_: str, out: Path, system: ImagingSystem, *, scene_pixel_m: float | None, units: str,
+                    noise: bool, seed: int, band: int | None) -> None:  # fmt: skip
+    """Every band of ``system`` (or ``--band``'s) formed from the scene ``input_`` and written into ``out``."""
+    from satchain._validate import check_choice
+    from satchain.engine.bands import simulate_bands, write_band_rasters
+    from satchain.engine.files import ground_truth_source
+    from satchain.engine.sensor import OUTPUT_UNITS
+    from satchain.io._commit import committed_together
+    from satchain.scene.layout import check_scene_pixel
+
+    check_choice("--units", units, OUTPUT_UNITS)
+    if seed < 0:
+        raise ConfigError(f"--seed {seed}: must be an integer >= 0")
+    n = len(system.bands)
+    if band is not None and not 1 <= band <= n:
+        raise ConfigError(f"--band {band}: the system {system.name!r} has {n} bands ({', '.join(system.band_names)})"
+                          f"; give 1 to {n}")  # fmt: skip
+    earlier = _check_band_dir(out)
+    src, scene = ground_truth_source(input_, pixel_m=scene_pixel_m, names=_SIMULATE_OPTIONS)
+    assert scene is not None  # a layout input
+    check_scene_pixel(scene, src.pixel_m, name="the layout's pixel_m" if scene_pixel_m is None else "--scene-pixel-m")
+    _check_band_grids(system, src, band)
+    result = simulate_bands(scene, system, pixel_m=src.pixel_m, bands=None if band is None else [band - 1],
+                            units=units, noise=noise, seed=seed)  # fmt: skip
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        with terminate_as_interrupt() as received, committed_together(received.check):  # all files or none
+            paths = write_band_rasters(result, out)
+    except BaseException:
+        if created:
+            with contextlib.suppress(OSError):
+                out.rmdir()
+        raise
+    stale = [p for p in earlier if p not in paths.values()]
+    for p in stale:  # an earlier banded simulation's files not replaced: the folder holds this one's alone
+        p.unlink(missing_ok=True)
+    tifs = [p for p in paths.values() if p.suffix == ".tif"]  # in the order of result.grids()
+    for p, g in zip(tifs, result.grids(), strict=True):
+        b0 = g[0]
+        names = ", ".join(b.name for b in g)
+        say(f"wrote {p} ({b0.image.shape[0]} x {b0.image.shape[1]} px x {len(g)} band(s): {names}; "
+            f"{b0.gsd_m:g} m, {units})")  # fmt: skip
+    previews = [str(p) for p in paths.values() if p.suffix == ".png"]
+    if previews:
+        say(f"wrote {' and '.join(previews)} (previews)")
+    if stale:
+        say(f"removed {', '.join(str(p) for p in stale)} (an earlier banded simulation's files not written now)")
+
+
+def _check_band_grids(system: ImagingSystem, src, band: int | None) -> None:
+    """Before any work: the scene is at least MIN_INPUT_PX a side, and every band's simulation fits in memory
+    (the banded path is not streamed)."""
+    from satchain.engine.memory import check_simulation_memory
+    from satchain.engine.raster_input import MIN_INPUT_PX
+    from satchain.engine.simulate import Simulator
+    from satchain.engine.stream import choose_streamed
+
+    if min(src.shape_px) < MIN_INPUT_PX:
+        raise ConfigError(f"INPUT at {src.pixel_m:g} m per pixel is only {src.shape_px[0]} x {src.shape_px[1]} px; "
+                          f"a ground truth needs at least {MIN_INPUT_PX} px a side: check --scene-pixel-m")  # fmt: skip
+    for i in range(len(system.bands)) if band is None else [band - 1]:
+        sim = Simulator(system.for_band(i), input_pixel_m=src.pixel_m, input_shape=src.shape_px)
+        if choose_streamed(sim, focal_plane=None):
+            raise ConfigError(f"INPUT at --scene-pixel-m {src.pixel_m:g}: {src.shape_px[0]} x {src.shape_px[1]} px "
+                              "is too large for a banded simulation, which holds each band in memory; give a "
+                              "smaller scene or a coarser --scene-pixel-m")  # fmt: skip
+        check_simulation_memory(sim, focal_plane=None)
