@@ -128,3 +128,15 @@ def test_ms_far_margin_at_the_systems_ground_distance_changes_images_below_1e4(p
         assert band_params(SimParams(), pms, pms.for_band(i)).far_margin_px == 32
         ref = _engine_alone(scene, pms, i, 0.49, seed=0, margin_as_system=False, units="reflectance", noise=False)
         assert np.abs(got[name].image - ref).max() < 1e-4, name
+
+
+def test_shared_coarse_grid_changes_images_below_1e6(pms):
+    """At 0.07 m blue and green decimate by D = 1 (green reuses blue's coarse grid: the ground itself, exactly) and
+    red and NIR by D = 2 (NIR reuses red's, low-passed to red's higher cutoff): each equals the engine's band
+    formed alone from its own coarse grid, green exactly, NIR within 1e-6 (2e-7 measured)."""
+    items = (SlantedEdge("a", center_m=(9.8, 9.8), size_m=14.0, angle_deg=5.0, bright=0.98, dark=0.02),)
+    scene = Scene(19.6, 19.6, items, 0.5)
+    got = simulate_bands(scene, pms, pixel_m=0.07, noise=False, bands=["blue", "green", "red", "nir"])
+    for name, tol in (("green", 0.0), ("nir", 1e-6)):
+        ref = _engine_alone(scene, pms, pms.band_index(name), 0.07, seed=0, units="reflectance", noise=False)
+        assert np.abs(got[name].image - ref).max() <= tol, name

@@ -60,7 +60,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.config.system import ImagingSystem
-from satchain.engine.bands_shared import band_otf, band_params, shared_render
+from satchain.engine.bands_shared import band_otf, band_params, shared_coarse, shared_render
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import SceneSource
@@ -272,7 +272,8 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
         raise ConfigError(f"band {i}: output {sim.output_shape} differs from the window's {n_out} pixels")
     sensor = None if (not noise and units == "reflectance") else sensor_from_system(s)
     bs = band_seed(seed, i)
-    image = sim.run(src, sensor=sensor, units=units, noise=noise, seed=bs)
+    coarse = shared_coarse(reuse, sim, src_scene, src) if banded and reuse is not None else None
+    image = sim.run(src, sensor=sensor, units=units, noise=noise, seed=bs, coarse=coarse)
     x0, y0 = window.col0 * pixel_m, window.row0 * pixel_m
     lam = system.bands[i].center_wavelength_m if banded else _centre(s)
     name = system.band_names[i] if banded else (s.name or "band1")

@@ -21,7 +21,7 @@ import numpy as np
 
 from satchain.config.system import ImagingSystem
 
-__all__ = ["OTF_NODES_TRIED", "OTF_TOLERANCE", "band_otf", "band_params", "shared_render"]
+__all__ = ["OTF_NODES_TRIED", "OTF_TOLERANCE", "band_otf", "band_params", "shared_coarse", "shared_render"]
 
 
 #: The simulation's OTF of a band with a response: the fewest quadrature nodes (of these) whose diffraction MTF is
@@ -95,6 +95,24 @@ def band_params(params: Any, system: ImagingSystem, s: ImagingSystem) -> Any:
     if r <= 1.0:
         return params
     return dataclasses.replace(params, far_margin_px=max(1, int(math.ceil(params.far_margin_px / r - 1e-9))))
+
+
+def shared_coarse(reuse: dict, sim: Any, src_scene, source) -> np.ndarray:
+    """The engine's stage 1 (:meth:`~satchain.engine.simulate.Simulator.decimate`) of ``source`` (the ground truth
+    of ``src_scene``) for ``sim``, or the call's latest one when it decimated the same ground object onto the same
+    coarse grid (decimation factor, coarse extension, stop frequency, border) with a pass band reaching at least
+    ``sim``'s optical cutoff: the low-pass is exactly 1 up to its pass frequency and ``sim``'s OTF 0 beyond its
+    cutoff, so the image changes only by rounding and the kernel's tails (< 1e-6 of the scene's range:
+    tests/engine/test_bands_speed.py). At D = 1 the coarse grid is the ground itself. The latest one only is
+    held."""
+    p = sim.params
+    key = (sim.D, sim.n_coarse, sim.coarse_ext, sim.f_stop if sim.D > 1 else None, p.border, p.border_value)
+    held = reuse.get("coarse")
+    if held is not None and held[0] is src_scene and held[1] == key and (sim.D == 1 or held[2] >= sim.f_cut):
+        return held[3]
+    coarse = sim.decimate(source)
+    reuse["coarse"] = (src_scene, key, sim.f_cut, coarse)
+    return coarse
 
 
 class _RenderOnce:
