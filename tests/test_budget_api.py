@@ -12,21 +12,6 @@ import satchain
 from satchain.cli.main import app
 from satchain.errors import ParameterTypeError
 
-MINIMAL = """\
-name = "minimal"
-
-[orbit]
-altitude_m = 500000.0
-
-[optics]
-aperture_diameter_m = 0.5
-f_number = 10.0
-wavelengths_m = [6e-7]
-
-[detector]
-pitch_m = 5e-6
-"""
-
 
 def _minimal(aperture_m=0.5, f_number=10.0, pitch_m=5e-6, altitude_m=500e3):
     return satchain.ImagingSystem.from_dict(
@@ -50,9 +35,9 @@ def test_to_dict_is_what_budget_json_prints_for_the_preset():
     assert b.to_dict() == _cli_json("--preset", "ankarasat3")
 
 
-def test_to_dict_is_what_budget_json_prints_for_a_minimal_system_file_and_frequencies(tmp_path):
+def test_to_dict_is_what_budget_json_prints_for_a_minimal_system_file_and_frequencies(tmp_path, minimal_system_toml):
     path = tmp_path / "minimal.toml"
-    path.write_text(MINIMAL, encoding="utf-8")
+    path.write_text(minimal_system_toml, encoding="utf-8")
     s = satchain.load_system(path)
     assert satchain.budget(s).to_dict() == _cli_json("--system", str(path))
     freqs = [0.0, 10.0, 42.5, 100.0]
