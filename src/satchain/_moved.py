@@ -75,6 +75,7 @@ class _Alias(types.ModuleType):
     def __init__(self, name: str, target: types.ModuleType) -> None:
         super().__init__(name)
         object.__setattr__(self, "_target", target)
+        object.__setattr__(self, "_saved", {})  # the target's values that writes through this name replaced
 
     def __getattr__(self, name: str) -> Any:
         return getattr(object.__getattribute__(self, "_target"), name)
@@ -82,11 +83,22 @@ class _Alias(types.ModuleType):
     def __setattr__(self, name: str, value: Any) -> None:
         if name.startswith("__") and name.endswith("__"):
             object.__setattr__(self, name, value)
-        else:
-            setattr(object.__getattribute__(self, "_target"), name, value)
+            return
+        target, saved = object.__getattribute__(self, "_target"), object.__getattribute__(self, "_saved")
+        if name in saved and saved[name] is value:
+            del saved[name]  # the original put back
+        elif name not in saved and hasattr(target, name):
+            saved[name] = getattr(target, name)
+        setattr(target, name, value)
 
     def __delattr__(self, name: str) -> None:
-        delattr(object.__getattribute__(self, "_target"), name)
+        """Deleting a name written through this one puts the target's value back (a monkeypatch that finds no
+        such name in this module's own dict undoes its write by deleting it): the moved module keeps its names."""
+        target, saved = object.__getattribute__(self, "_target"), object.__getattribute__(self, "_saved")
+        if name in saved:
+            setattr(target, name, saved.pop(name))
+        else:
+            delattr(target, name)
 
     def __dir__(self) -> list[str]:
         return dir(object.__getattribute__(self, "_target"))

@@ -252,3 +252,14 @@ def test_a_sharp_neutral_edge_shows_false_colour_bilinear_most():
 def test_false_colour_refuses_an_empty_region():
     with pytest.raises(InputError, match="no pixel"):
         false_colour_amplitude(np.ones((4, 4, 3)), valid=np.zeros((4, 4), dtype=bool))
+
+
+def test_demosaicing_leaves_numpy_printing_as_it_was():
+    """colour-science switches numpy to its 1.13 print style when imported: demosaic puts the caller's back."""
+    from satchain.engine.cfa import demosaic, mosaic
+
+    before = np.get_printoptions()
+    planes = {c: np.full((8, 8), 0.5) for c in ("red", "green", "blue")}
+    demosaic(mosaic(planes, "RGGB"), "RGGB", method="bilinear")
+    assert np.get_printoptions() == before
+    assert repr(np.array([0.5, 0.0])) == "array([0.5, 0. ])"

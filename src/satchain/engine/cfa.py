@@ -155,9 +155,13 @@ def demosaic(raw, pattern: str, *, method: str = "bilinear") -> np.ndarray:
     data = as_float_array("raw", raw, ndim=2)
     if min(data.shape) < 2:
         raise InputError(f"raw has shape {data.shape}: a Bayer mosaic needs at least 2 x 2 photosites")
-    with warnings.catch_warnings():  # its modules import scipy.ndimage.filters (deprecated in SciPy 1.8)
-        warnings.simplefilter("ignore", DeprecationWarning)
-        import colour_demosaicing  # lazy: its import (colour-science) takes about a second
+    printing = np.get_printoptions()  # colour-science sets numpy's legacy (1.13) printing when imported
+    try:
+        with warnings.catch_warnings():  # its modules import scipy.ndimage.filters (deprecated in SciPy 1.8)
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import colour_demosaicing  # lazy: its import (colour-science) takes about a second
+    finally:
+        np.set_printoptions(**printing)  # the caller's, not a side effect of demosaicing
 
     # extend the mosaic by whole-sample mirror reflection about its edge photosites (an even width, so the
     # pattern's phase and each site's colour are kept): colour-demosaicing's convolutions reflect about the
