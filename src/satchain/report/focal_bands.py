@@ -1,0 +1,16 @@
+"""(being built: issue 32) The report's bands part (:mod:`satchain.report.focal_plane`)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from satchain.report.focal_parts import FocalParts
+
+__all__ = ["parts"]
+
+
+def parts(data: Mapping[str, Any], fig_dir: Path) -> FocalParts:
+    """The bands section's words, tables and figures (drawn into ``fig_dir``)."""
+    return FocalParts("focal-bands", str(data.get("title", "bands")))
