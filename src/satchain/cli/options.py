@@ -102,7 +102,11 @@ BandOpt = Annotated[
 ]
 BandsOpt = Annotated[
     int | None,
-    typer.Option("--band", help="only this band of a multiband raster, from 1 (default: every band, each simulated)"),
+    typer.Option(
+        "--band",
+        help="only band N, counted from 1: of the system's [[bands]] (in their order) with a banded "
+        "system, else of a multiband raster (default: every band, each simulated)",
+    ),
 ]
 NodataOpt = Annotated[
     float | None,
