@@ -26,11 +26,10 @@ oscillations are those of its own time, ``delay_s`` (:func:`band_delay_s`) later
 (each phase advanced by ``360 f delay_s``). A pixel sees the ground at ``x = j + LOS(t)``, so a band's content
 moves by minus its line of sight: the offset from PAN is minus the difference of their lines of sight (the
 budget's ``oscillations`` give that difference, line-of-sight signed; tests/engine/test_bands.py).
-Under ``orbit.earth_rotation`` (no yaw steering) each band's detector grid starts where the ground has moved by
-its own time (:func:`_earth_lead_px`), so its content lies where the budget's ``earth_rotation`` puts it.
+Under ``orbit.earth_rotation`` (with or without yaw steering) each band's detector grid starts where the ground has
+moved by its own time (:func:`_earth_lead_px`), so its content lies where the budget's ``earth_rotation`` puts it.
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
-on line-of-sight logs, the Earth's rotation with yaw steering, and the actual delay (``offset / pitch / a`` lines)
-in the oscillations' phases.
+on line-of-sight logs, and the actual delay (``offset / pitch / a`` lines) in the oscillations' phases.
 
 **Noise** per band from its own radiometry (:func:`~satchain.engine.sensor.sensor_from_system` of the band's
 system), its generator derived from ``(seed, band index)`` (:func:`band_seed`; band 0 uses ``seed`` itself, so a
@@ -302,8 +301,15 @@ def _earth_lead_px(system: ImagingSystem, index: int, s: ImagingSystem) -> tuple
     ``(eps, sigma)`` px a line: :mod:`satchain.engine.timepath`) when its row 0 starts, from the system's row 0
     start: ``n = [offset g / pitch + (g_b (1 - N_b) - g (1 - N)) / 2] / g_b`` of its lines later (``offset_alt_mm``
     places centre lines, crossed mid-TDI window; ``g``, ``N``: GSD ALT, TDI stages; ``_b``: the band's). On nominal
-    grids the TDI terms cancel: the budget's ``earth_rotation``. (0, 0) without it or with yaw steering."""
-    if not system.orbit.earth_rotation or system.orbit.yaw_steering:
+    grids the TDI terms cancel: the budget's ``earth_rotation``. (0, 0) without it.
+
+    With yaw steering the detector is turned by ``gamma`` so that its columns follow the ground's motion: the drift
+    is ``(0, eps')`` in the detector's frame (``eps' = |(x, y)| / g - 1``, the relative speed per line over the GSD),
+    so the lead is ``(eps' n, 0)`` there -- no ACT part. The engine shifts the band's ground window before it turns
+    the ground (:mod:`satchain.engine.yaw`: image pixel ``q`` sees ground ``P + M (q - P)``), so the lead is
+    returned on the ground's axes, ``M (0, eps' n)`` in ``(x, y)``: ``(eps' n cos gamma, eps' n sin gamma)``
+    (ALT, ACT), which the turned image shows as ``(eps' n, 0)``."""
+    if not system.orbit.earth_rotation:
         return (0.0, 0.0)
     from satchain.tf.pushbroom import PushbroomTerms
 
@@ -312,6 +318,9 @@ def _earth_lead_px(system: ImagingSystem, index: int, s: ImagingSystem) -> tuple
     g, n_st, g_b, n_b = system.gsd_alt_m, system.detector.tdi_stages, s.gsd_alt_m, s.detector.tdi_stages
     lead_m = system.bands[index].offset_alt_mm * 1e-3 * g / system.detector.pitch_y_m
     n = (lead_m + (g_b * (1 - n_b) - g * (1 - n_st)) / 2.0) / g_b
+    if system.orbit.yaw_steering:  # sigma = 0 in the detector's frame; the lead on the ground's axes
+        gamma = math.radians(float(earth.get("rotation_deg", 0.0)))
+        return (float(eps) * n * math.cos(gamma), float(eps) * n * math.sin(gamma))
     return (float(eps) * n, float(sigma) * n)
 
 

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from satchain.config.system import ImagingSystem
+    from satchain.prediction.cfa_budget import CFABudget
 
 __all__ = ["BandBudget", "DirectionalMTF", "SystemBudget", "band_budgets", "budget", "budget_results"]
 
@@ -98,6 +99,10 @@ def budget_results(system: ImagingSystem, f_cy_per_mm=None, *, otf: SystemOTF | 
         out["bands"] = band_budgets(system)
     if system.detector.layout == "staggered":
         out["staggered"] = staggered_budget(system, otf=otf)
+    if system.detector.cfa is not None:  # each colour plane on its own sampling grid
+        from satchain.prediction.cfa_budget import cfa_budget
+
+        out["cfa"] = cfa_budget(system)
     out["frequency_axis"] = (
         "the detector pixel's axis (cy/mm on the focal plane, cy/px of the detector pitch, cy/m at the design GSD); "
         "an image with a line-rate error or Earth rotation has its rows motion_geometry.alt_scale detector px "
@@ -256,7 +261,11 @@ def _earth_offset(earth: Mapping[str, Any], ref: ImagingSystem, band: ImagingSys
     Earth's rotation (:mod:`satchain.tf.pushbroom`: per reference line the ground moves ``(sigma, a)`` px, ACT and
     ALT): the image crosses the ``L = offset / pitch`` lines in ``L / a`` line times, not ``L``, and meanwhile
     drifts ``sigma L / a`` px across track -- ``act_px`` (+x columns) and ``alt_px`` (later rows), band pixels;
-    ``delay_s``: the actual delay."""
+    ``delay_s``: the actual delay. With ``orbit.yaw_steering`` the detector's columns follow the relative motion
+    ``(x, y)`` m a line: ``sigma = 0`` and ``a = |(x, y)| / g`` in the detector's frame (``earth``'s ``alt_scale``
+    and ``shear_act_px_per_line`` are those), so the ACT offset vanishes and the ALT one, ``L (1 / a - 1)``, stays
+    (the line rate is not matched to the relative speed: ``|a - 1| ~ 1e-2``, ``sigma^2 / 2`` more than without yaw
+    steering)."""
     lines = offset_m / ref.detector.pitch_y_m
     a, sigma = float(earth["alt_scale"]), float(earth["shear_act_px_per_line"])
     return {
@@ -380,6 +389,15 @@ class SystemBudget:
             system=system,
             results=copy.deepcopy(dict(results)),
         )
+
+    @property
+    def cfa(self) -> CFABudget | None:
+        """A colour filter array's planes, each on its own sampling grid, typed
+        (:func:`satchain.prediction.cfa_budget.cfa_budget`); None for a monochrome array."""
+        from satchain.prediction.cfa_budget import CFABudget
+
+        d = self.results.get("cfa")
+        return None if d is None else CFABudget.from_dict(d)
 
     @property
     def bands(self) -> tuple[BandBudget, ...]:
