@@ -23,6 +23,7 @@ from satchain.config._base import (  # noqa: F401  (re-exported: other modules i
 from satchain.config.sections_cfa import CFAPattern, CFAResponses
 from satchain.config.sections_light import Atmosphere, Band, Illumination, Radiometry
 from satchain.config.sections_motion import JitterPSD, LineOfSightLog, Oscillation, as_tables, check_earth_rotation
+from satchain.config.sections_staggered import STAGGER_SEPARATION_DOC, check_stagger_separation
 
 EARTH_RADIUS_M = 6_371_008.8  # IUGG mean radius
 EARTH_GM_M3_PER_S2 = 3.986004418e14  # WGS 84
@@ -432,6 +433,8 @@ class Detector(_Frozen):
         description="'single': one array; 'staggered': two arrays half a pixel apart along and across track, "
         "combined onto the grid of half the pitch (SPOT-5's supermode; quincunx bilinear fill)",
     )
+    stagger_separation_px: float | None = Field(default=None, gt=0, le=1e4,
+                                                description=STAGGER_SEPARATION_DOC)  # fmt: skip
     cfa_responses: CFAResponses | None = Field(
         default=None,
         description="[detector.cfa_responses.red|green|blue]: each colour's relative spectral response (center_m and "
@@ -525,6 +528,7 @@ class Detector(_Frozen):
             raise ValueError("detector.cfa_responses is given but detector.cfa is not: give cfa (e.g. 'RGGB')")
         if self.layout == "staggered" and (self.pitch_x_m != self.pitch_y_m or self.cfa is not None):
             raise ValueError("detector.layout = 'staggered': needs square pixels (pitch_x_m = pitch_y_m) and no cfa")
+        check_stagger_separation(self)  # a TDI count the arrays' separation cannot hold (sections_staggered)
         return self
 
     def qe_at(self, wavelength_m) -> np.ndarray:
