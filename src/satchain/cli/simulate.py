@@ -2,7 +2,9 @@
 optionally its focal-plane image, written together (all or none); with several inputs or ``--sweep``, one image per
 case into a directory (:mod:`satchain.cli.sweep`); with a banded system (``[[bands]]`` with spectral responses) and
 a scene, every band (:func:`satchain.engine.bands.simulate_bands`) into a directory: one GeoTIFF per pixel grid and
-the RGB / false-colour previews (:func:`satchain.engine.bands.write_band_rasters`), all or none. Image inputs keep
+the RGB / false-colour previews (:func:`satchain.engine.bands.write_band_rasters`), all or none. A GDAL raster
+whose bands state their centre wavelengths (or ``--wavelengths-nm``) is a reflectance cube: every band is formed
+from it alike (:func:`satchain.engine.cube.simulate_cube`), georeferenced as the cube. Other image inputs keep
 their band-by-band path (a GDAL raster needs one band per ``[[bands]]``: another count is refused naming both).
 
 Registered on the app by :mod:`satchain.cli.main`.
@@ -96,6 +98,14 @@ def simulate(
         ),
     ] = None,
     band: BandsOpt = None,
+    wavelengths_nm: Annotated[
+        str | None,
+        typer.Option(
+            "--wavelengths-nm",
+            help="centre wavelength of each band of a multiband INPUT, nm, comma-separated (e.g. 490,560,665,842): "
+            "a reflectance cube from which a banded system forms every band (default: the file's band metadata)",
+        ),
+    ] = None,
     sweep: Annotated[
         list[str] | None,
         typer.Option(
@@ -119,6 +129,8 @@ def simulate(
     keep_freed_memory()  # this process is ours: tile buffers reused, not faulted in anew
 
     system_obj = system_from_options(preset, system)
+    if wavelengths_nm is not None and (len(inputs) > 1 or sweep):
+        raise ConfigError(f"--wavelengths-nm {wavelengths_nm}: applies to one reflectance cube input, without --sweep")
     if len(inputs) > 1 or sweep:
         from satchain.cli.sweep import simulate_cases
 
@@ -127,6 +139,13 @@ def simulate(
         return simulate_cases(inputs, out, system_obj, sweep_texts=sweep or [], seed=seed,
                               focal_plane=focal_plane, options=options, names=_SIMULATE_OPTIONS)  # fmt: skip
     input_ = inputs[0]
+    if _is_cube(system_obj, input_, wavelengths_nm):  # every band from one reflectance cube, as from a scene
+        if focal_plane is not None or scheduler is not None:
+            what = f"--focal-plane {focal_plane}" if focal_plane is not None else f"--scheduler {scheduler}"
+            raise ConfigError(f"{what}: not used by a banded system's simulation of a reflectance cube")
+        return _simulate_cube(input_, out, system_obj, wavelengths=wavelengths_nm, scene_pixel_m=scene_pixel_m,
+                              input_scale=input_scale, units=units_, noise=not no_noise, seed=seed,
+                              band=band)  # fmt: skip
     if _is_banded_layout(system_obj, input_):  # every band from the spectral scene, one raster per pixel grid
         unused = {"--focal-plane": focal_plane, "--scheduler": scheduler, "--input-scale": input_scale}
         given = [f"{k} {v}" for k, v in unused.items() if v is not None]
@@ -178,6 +197,7 @@ _SIMULATE_OPTIONS = {
     "units": "--units",
     "seed": "--seed",
     "band": "--band",
+    "wavelengths_nm": "--wavelengths-nm",
 }
 
 
@@ -272,7 +292,6 @@ def _simulate_bands(input_: str, out: Path, system: ImagingSystem, *, scene_pixe
     from satchain.engine.bands import simulate_bands, write_band_rasters
     from satchain.engine.files import ground_truth_source
     from satchain.engine.sensor import OUTPUT_UNITS
-    from satchain.io._commit import committed_together
     from satchain.scene.layout import check_scene_pixel
 
     check_choice("--units", units, OUTPUT_UNITS)
@@ -289,11 +308,19 @@ def _simulate_bands(input_: str, out: Path, system: ImagingSystem, *, scene_pixe
     _check_band_grids(system, src, band)
     result = simulate_bands(scene, system, pixel_m=src.pixel_m, bands=None if band is None else [band - 1],
                             units=units, noise=noise, seed=seed)  # fmt: skip
+    _write_band_dir(result, out, earlier, units, write_band_rasters)
+
+
+def _write_band_dir(result, out: Path, earlier: list[Path], units: str, write: Callable) -> None:
+    """``write(result, out)`` (one raster per pixel grid and the previews) into the directory ``out``, all files or
+    none; the ``earlier`` banded simulation's files it does not replace are removed; what was written is said."""
+    from satchain.io._commit import committed_together
+
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     try:
         with terminate_as_interrupt() as received, committed_together(received.check):  # all files or none
-            paths = write_band_rasters(result, out)
+            paths = write(result, out)
     except BaseException:
         if created:
             with contextlib.suppress(OSError):
@@ -313,6 +340,56 @@ def _simulate_bands(input_: str, out: Path, system: ImagingSystem, *, scene_pixe
         say(f"wrote {' and '.join(previews)} (previews)")
     if stale:
         say(f"removed {', '.join(str(p) for p in stale)} (an earlier banded simulation's files not written now)")
+
+
+def _is_cube(system: ImagingSystem, input_: str, wavelengths_nm: str | None) -> bool:
+    """A GDAL raster with its bands' centre wavelengths (stated, or ``--wavelengths-nm``) and a system whose
+    ``[[bands]]`` carry spectral responses: a reflectance cube; ``--wavelengths-nm`` otherwise is refused."""
+    from satchain.engine.cube import states_wavelengths
+    from satchain.io.images import GDAL_SUFFIXES
+
+    responses = any(b.spectral_response is not None for b in system.bands)
+    raster = Path(input_).suffix.lower() in GDAL_SUFFIXES
+    if wavelengths_nm is not None and not (responses and raster):
+        why = "a GDAL raster input (a reflectance cube)" if responses else ("a banded system ([[bands]] with "
+                                                                           "spectral responses)")  # fmt: skip
+        raise ConfigError(f"--wavelengths-nm {wavelengths_nm}: applies to {why}")
+    return responses and raster and (wavelengths_nm is not None or (Path(input_).is_file()
+                                                                    and states_wavelengths(input_)))  # fmt: skip
+
+
+def _simulate_cube(input_: str, out: Path, system: ImagingSystem, *, wavelengths: str | None,
+                   scene_pixel_m: float | None, input_scale: float | None, units: str, noise: bool, seed: int,
+                   band: int | None) -> None:  # fmt: skip
+    """Every band of ``system`` (or ``--band``'s) formed from the reflectance cube ``input_`` into ``out``."""
+    from functools import partial
+
+    from satchain._validate import check_choice
+    from satchain.engine.cube import ReflectanceCube, simulate_cube, write_cube_rasters
+    from satchain.engine.sensor import OUTPUT_UNITS
+    from satchain.engine.sources import SceneSource
+
+    check_choice("--units", units, OUTPUT_UNITS)
+    if seed < 0:
+        raise ConfigError(f"--seed {seed}: must be an integer >= 0")
+    n = len(system.bands)
+    if band is not None and not 1 <= band <= n:
+        raise ConfigError(f"--band {band}: the system {system.name!r} has {n} bands ({', '.join(system.band_names)})"
+                          f"; give 1 to {n}")  # fmt: skip
+    lam = None
+    if wavelengths is not None:
+        try:
+            lam = [float(v) for v in wavelengths.split(",")]
+        except ValueError:
+            raise ConfigError(f"--wavelengths-nm {wavelengths}: give numbers in nm, comma-separated, e.g. "
+                              "490,560,665,842") from None  # fmt: skip
+    earlier = _check_band_dir(out)
+    with ReflectanceCube(input_, wavelengths_nm=lam, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
+                         names=_SIMULATE_OPTIONS) as cube:  # fmt: skip
+        which = list(range(n)) if band is None else [band - 1]
+        _check_band_grids(system, SceneSource(cube.band_scene(system, which[0])), band)
+        result = simulate_cube(cube, system, bands=which, units=units, noise=noise, seed=seed)
+        _write_band_dir(result, out, earlier, units, partial(write_cube_rasters, cube=cube))
 
 
 def _check_band_grids(system: ImagingSystem, src, band: int | None) -> None:
