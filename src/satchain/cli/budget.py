@@ -73,6 +73,8 @@ def _print_budget(res: dict[str, Any]) -> None:
             )
     if res.get("bands"):
         _print_bands(res["bands"])
+    if "cfa" in res:
+        _print_cfa(res["cfa"])
     if "staggered" in res:
         st = res["staggered"]
         ny_st, one, comb = st["nyquist_cy_per_mm"], st["mtf_at_single_nyquist"], st["mtf_at_combined_nyquist"]
@@ -117,6 +119,36 @@ def _print_bands(bands: list[dict[str, Any]]) -> None:
             osc or "-",
         )
     console.print(t)
+
+
+def _print_cfa(cfa: dict[str, Any]) -> None:
+    """A colour filter array's planes side by side (one column each): sampling, Nyquist, MTF there and where each
+    aliases."""
+    planes = cfa["planes"]
+    t = Table(title=f"colour filter array {cfa['pattern']}: each colour plane on its own grid (f in cy/px)")
+    t.add_column("quantity")
+    for colour in planes:
+        t.add_column(colour, justify="right")
+
+    def row(name: str, fmt: str, get) -> None:
+        t.add_row(name, *(format(get(p), fmt) for p in planes.values()))
+
+    t.add_row("sampling", *("2 px grid" if p["lattice_pitch_px"] == 2.0 else "quincunx" for p in planes.values()))
+    row("effective wavelength (nm)", ".1f", lambda p: p["effective_wavelength_m"] * 1e9)
+    for d, name in (("act", "ACT"), ("alt", "ALT"), ("diagonal", "diagonal")):
+        row(f"Nyquist {name}", ".4f", lambda p, d=d: p["nyquist_cy_per_px"][d])
+        row(f"MTF at Nyquist {name}", ".4f", lambda p, d=d: p["mtf_at_nyquist"][d])
+    row("grid Nyquist (edge on the plane's grid)", ".4f", lambda p: p["grid_nyquist_cy_per_px"])
+    row("MTF at grid Nyquist ACT", ".4f", lambda p: p["mtf_at_grid_nyquist"]["act"])
+    row("MTF at grid Nyquist ALT", ".4f", lambda p: p["mtf_at_grid_nyquist"]["alt"])
+    for d, name in (("act", "ACT"), ("alt", "ALT"), ("diagonal", "diagonal")):
+        row(f"aliases to 0 at, {name}", ".4f", lambda p, d=d: p["alias_cy_per_px"][d])
+    row("MTF volume beyond Nyquist", ".3f", lambda p: p["aliased_fraction"])
+    console.print(t)
+    sources = sorted(set(cfa["responses"].values()))
+    console.print("colour responses: " + "; ".join(
+        f"{', '.join(c for c, s in cfa['responses'].items() if s == src)}: {src}" for src in sources),
+        markup=False, highlight=False)  # fmt: skip
 
 
 def _print_motion_geometry(g: dict[str, Any]) -> None:
