@@ -185,3 +185,17 @@ def test_simulate_cube_api_matches_the_cli(cli_run, tmp_path):
     res = simulate_cube(cube, SYSTEM, wavelengths_nm=[400, 560, 665, 1000], noise=False, bands=["red"])
     assert res.names == ("red",)
     assert np.allclose(res["red"].image, m[2], atol=1e-6)
+
+
+def test_a_linear_float_spectrum_gives_the_band_weighted_mean_wavelength_exactly(tmp_path):
+    """float64 ``a + b (lam - 700 nm)`` per pixel: ``a + b (lam_b - 700 nm)`` to 1e-12 (linear interpolation of
+    a line is the line; measured 2e-16)."""
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(0.3, 0.6, (8, 9)), rng.uniform(-4e5, 4e5, (8, 9))
+    p = _write(tmp_path / "linf.tif", a + b * (LAM_NM[:, None, None] * 1e-9 - 700e-9), LAM_NM, dtype="float64")
+    for i, img in enumerate(_bands(p)):
+        lam, s = band_response(SYSTEM, i)
+        fine = np.linspace(lam[0], lam[-1], 200001)
+        sf = np.interp(fine, lam, s)
+        mean_lam = np.trapezoid(fine * sf, fine) / np.trapezoid(sf, fine)
+        assert np.abs(img - (a + b * (mean_lam - 700e-9))).max() < 1e-12
