@@ -222,7 +222,7 @@ def _curves(system, m) -> dict[str, Any]:
 
 def _methods(m, pred: Mapping[str, Any]) -> list[dict[str, Any]]:
     """The demosaicing methods side by side at this edge (and ``true``: the colour planes themselves)."""
-    label = {"true": "the colour planes themselves (a perfect interpolation)", **METHODS}
+    label = {"true": "the colour planes themselves, noise-free (a perfect interpolation)", **METHODS}
     return [
         {"method": k, "label": label[k], "luminance_mtf50_cy_per_px": v.mtf50_cy_per_px,
          "luminance_mtf50_predicted": pred["luminance_mtf50"], "false_colour_peak": v.false_colour_peak,

@@ -147,6 +147,6 @@ def plot_crops(crop: Mapping[str, Any], methods, path: Path) -> None:
             ax.set_xticks([])
             ax.set_yticks([])
             name = labels.get(k, k)
-            ax.set_title("colour planes (perfect)" if k == "true" else name)
+            ax.set_title("colour planes (noise-free)" if k == "true" else name)
         place_grid(fig, [axes], top=title_band_in(), bottom=0.1, left=0.1, hgap=0.15)
         save_figure(fig, path, dpi=100)
