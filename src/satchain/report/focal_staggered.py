@@ -71,6 +71,9 @@ def _bar_table(data: Mapping[str, Any]) -> FocalTable:
             rows.append((f"{b['id']} ({b['direction']}) group {g['group']}", _num(g.get("period_single_px"), ".2f"),
                          one, _num(g.get("ctf_measured")), _num(g.get("ctf_predicted")),
                          "yes" if g.get("resolved_measured") else "no", verdict))  # fmt: skip
+    for sk in data.get("skipped", []):  # groups (or targets) the combined grid could not measure
+        if str(sk.get("kind", "")).startswith("bar"):
+            rows.append((str(sk.get("id")), "", "", "n/a", "", "", f"not measured: {sk.get('reason')}"))
     thr = data.get("resolution_threshold")
     return FocalTable(
         "Bar groups on the combined grid: CTF against Coltman's of the combined MTF",
