@@ -2,7 +2,8 @@
 
 Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth record) -> simulation
 (the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
-of each measured figure and comparison -> report (``report.html``, ``results.json``, ``summary.csv``, images,
+of each measured figure and comparison -> the focal plane as flown (:mod:`satchain.focal`: bands, colour
+planes, staggered arrays; nothing for one monochrome array) -> report (``report.html``, ``results.json``, ``summary.csv``, images,
 ``manifest.json``).
 Each stage is a function of the typed results before it (:mod:`satchain.results`); only the report writes files.
 The truth record travels typed (:class:`satchain.scene.truth.Truth`); the JSON dict is made only where a
@@ -42,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["STAGES", "ReportInputs", "run_in_memory", "run_pipeline", "run_to_directory", "write_run_directory"]
 
 #: The stages, in order, as the progress display names them.
-STAGES = ("budget", "scene", "simulate", "measure", "compare", "report")
+STAGES = ("budget", "scene", "simulate", "measure", "compare", "focal", "report")
 Progress = Callable[[str, int, int], None]
 MANIFEST = "manifest.json"
 
@@ -254,7 +255,19 @@ def run_in_memory(
     )
     after("measure", budget=budget, scene=scene, sim=sim, measured=measured)
     predicted, comparison = timed("compare", _stage_compare, config, budget, scene, sim, measured)
-    return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings)
+    focal = timed("focal", _stage_focal, config, budget, scene)  # bands, colour planes, staggered arrays
+    if focal:  # their checks join the run's
+        comparison = dataclasses.replace(comparison, rows=comparison.rows + tuple(r for f in focal for r in f.rows))
+    return RunResult(config, budget, scene, sim, measured, predicted, comparison, timings, focal=focal)
+
+
+def _stage_focal(config: RunConfig, budget: BudgetResult, scene: SceneResult, progress: Progress) -> tuple:
+    """The focal plane as flown (:mod:`satchain.focal`): () for a single monochrome array."""
+    from satchain.focal import focal_sections
+
+    out = focal_sections(config, budget, scene, progress)
+    progress("focal", 1, 1)
+    return out
 
 
 @dataclass(frozen=True)
@@ -438,6 +451,9 @@ def write_run_directory(
         run_figures.write_run_figures(view, shown, jobs=jobs, measured_figures=not early.measured,
                                       edge_figures=early.edges is None)  # fmt: skip
         curves.write_curves(shown, out / "curves")
+        for f in result.focal:  # the bands' rasters, the raw mosaic, the combined grid
+            if f.write_files is not None:
+                f.write_files(out)
         write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False))
         write_summary_csv(results, out / "summary.csv")
         crops = thumbnail_crops(view, [box for _, box, _ in early.thumbnails])

@@ -28,7 +28,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from satchain.comparison import Comparison
+    from collections.abc import Callable
+    from pathlib import Path
+
+    from satchain.comparison import Comparison, CheckRow
     from satchain.config.run import RunConfig
     from satchain.config.system import ImagingSystem
     from satchain.engine.sensor import SensorModel
@@ -44,6 +47,7 @@ __all__ = [
     "NULL_MEANING",
     "RESULTS_FORMAT_VERSION",
     "BudgetResult",
+    "FocalSection",
     "Measurements",
     "RunResult",
     "SceneResult",
@@ -160,6 +164,25 @@ def strict_json(value: Any) -> Any:
 
 
 @dataclass(frozen=True)
+class FocalSection:
+    """One part of the focal plane as flown that a run formed, measured and compared beside its main image
+    (:mod:`satchain.focal`: the bands of a ``[[bands]]`` system, the colour planes of a ``[detector] cfa``, the
+    combined grid of a staggered layout).
+
+    ``key``: its results.json key and the report's sub-section (``bands``, ``cfa``, ``staggered``); ``title``:
+    its heading; ``rows``: its checks, which join the run's (the summary table, ``pass``, the exit status);
+    ``data``: results.json's ``key`` entry (plain JSON: what the report's tables and figures are drawn from,
+    :mod:`satchain.report.focal_plane`); ``write_files(out_dir)``: writes its rasters into the run folder (paths
+    relative to it, under ``images/``) and returns them, or None when it writes none."""
+
+    key: str
+    title: str
+    rows: tuple[CheckRow, ...]
+    data: Mapping[str, Any]
+    write_files: Callable[[Path], list[str]] | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
 class RunResult:
     """Everything one run produced, in memory. ``passed``: False if any check failed, None if none could be
     evaluated, True otherwise. ``to_json_dict()`` is the content of results.json. ``kept_files``: the files (and
@@ -174,6 +197,9 @@ class RunResult:
     comparison: Comparison
     timings_s: Mapping[str, float] = field(default_factory=dict)
     kept_files: tuple[str, ...] = ()
+    #: the focal plane as flown (bands, colour planes, staggered arrays), formed and compared beside the image;
+    #: their rows are already in ``comparison``
+    focal: tuple[FocalSection, ...] = ()
 
     def __repr__(self) -> str:  # short: the full objects are a click away in a notebook
         c, img = self.comparison, self.simulation.image
@@ -228,6 +254,8 @@ class RunResult:
         geometry = geometry_table(self.simulation.system or s)  # pushbroom motion: its inputs and geometry
         if geometry:
             out["image_geometry"] = geometry
+        for sec in self.focal:
+            out[sec.key] = dict(sec.data)
         return strict_json(out)
 
 
@@ -335,8 +363,15 @@ def results_schema() -> dict[str, Any]:
         "skipped": {"type": "array"},
         "tolerances": {"$ref": "#/$defs/Tolerances"},
         "image_geometry": {"type": "object", "description": "pushbroom image geometry (a time-varying motion)"},
+        "bands": {"type": "object", "description": "every band of a [[bands]] system: per-band edge MTF at its "
+                  "Nyquist, SNR and registration to the PAN band against the budget (satchain.focal.bands)"},
+        "cfa": {"type": "object", "description": "a colour filter array: each raw colour plane's MTF against its "
+                "prediction, and each demosaicing method's luminance MTF50 and false colour (satchain.focal.cfa)"},
+        "staggered": {"type": "object", "description": "a staggered layout: the combined grid's edges and bars "
+                      "against the prediction (satchain.focal.staggered)"},
     }
-    required = [k for k in props if k not in ("image_geometry",)]
+    optional = ("image_geometry", "bands", "cfa", "staggered")
+    required = [k for k in props if k not in optional]
     return {
         "$schema": DRAFT,
         "title": "satchain results.json",

@@ -144,6 +144,18 @@ class Tolerances(_Frozen):
         gt=0,
         description="largest |measured - predicted| NIIRS (GIQE 5) that passes, in NIIRS levels (dimensionless)",
     )
+    band_snr_rel: float = Field(
+        default=0.05,
+        gt=0,
+        description="largest |measured / predicted - 1| SNR of a band of a [[bands]] system that passes (a ratio, "
+        "dimensionless: 0.05 is 5 %)",
+    )
+    registration_px: float = Field(
+        default=0.05,
+        gt=0,
+        description="largest |measured - predicted| offset of a band from the PAN band that passes, per axis, in "
+        "the band's own pixels",
+    )
 
 
 class RunConfig(_Frozen):
@@ -374,6 +386,8 @@ star_mtf = 0.05
 bar_ctf = 0.06
 wedge_resolution_rel = 0.15    # relative
 niirs = 0.2
+band_snr_rel = 0.05            # relative; a [[bands]] system's SNR per band
+registration_px = 0.05         # a band's offset from the PAN band, per axis, in its own pixels
 """
 
 

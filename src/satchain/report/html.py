@@ -20,6 +20,7 @@ import satchain
 from satchain.report import tables
 from satchain.report._save import write_text
 from satchain.report.budget import DirectionalMTF
+from satchain.report.focal_plane import focal_parts
 from satchain.report.kinds import BARS, WEDGES, measured_entries
 from satchain.tf import ctf as _ctf
 
@@ -33,6 +34,7 @@ SECTIONS = (
     ("bars", "Bar targets: CTF"),
     ("wedges", "Hyperbolic wedges: resolution (Figure 4)"),
     ("niirs", "SNR and NIIRS"),
+    ("focal-plane", "The focal plane as flown: bands, colour planes, staggered arrays"),
     ("image", "The simulated image and every target"),
     ("paper", "The reference paper and where the prediction comes from"),
     ("camera", "Camera, geometry and radiometry (Figure 2)"),
@@ -250,12 +252,14 @@ def write_report(
     if curve_files is None:
         curve_files = sorted(p.name for p in (out / "curves").glob("*.csv"))
     timings = getattr(ctx, "timings_s", None) or {}
+    focal = focal_parts(res, figs)  # bands, colour planes, staggered arrays (their figures drawn here)
     html = env.get_template("report.html.j2").render(
         system=ctx.system,
         version=satchain.__version__,
         seed=ctx.config.simulation.seed,
         total_s=sum(timings.values()),
-        sections=SECTIONS,
+        sections=[s for s in SECTIONS if s[0] != "focal-plane" or focal],
+        focal=focal,
         verdict=tables.verdict(res),
         failed=tables.failed_checks(res),
         snr_rel_sigma=_snr_rel_sigma(),

@@ -352,7 +352,26 @@ def summary_rows(res: dict) -> list[dict]:
     rows = _mtf_rows(res, tol) + _angle_rows(res) + _resolution_rows(res, tol)
     summary = {(s.get("kind"), s.get("id")): s for s in res.get("summary", [])}
     flags = measurement_flags(res)
-    return [_with_sigma(r, summary.get(r.pop("_key")), flags) for r in rows] + _not_measured_rows(res)
+    rows = [_with_sigma(r, summary.get(r.pop("_key")), flags) for r in rows] + _not_measured_rows(res)
+    return rows + _focal_rows(res, flags)
+
+
+#: Summary-row kinds of the focal plane as flown (satchain.focal: bands, colour planes, staggered arrays)
+FOCAL_KIND_PREFIXES = ("band_", "cfa_", "staggered_")
+
+
+def _focal_rows(res: dict, flags: dict) -> list[dict]:
+    """The focal-plane sections' checks (their figure in words, as the terminal prints it), in their order."""
+    out = []
+    for r in res.get("summary", []):
+        if not str(r.get("kind", "")).startswith(FOCAL_KIND_PREFIXES):
+            continue
+        m, p, e = _num(r.get("measured")), _num(r.get("predicted")), _num(r.get("error"))
+        row = _row(r.get("figure"), r.get("id") or "", m, p, e, r.get("tolerance"), r.get("pass"), 4)
+        row = _with_sigma(row, r, flags)
+        row["anchor"] = "focal-plane"
+        out.append(row)
+    return out
 
 
 def measurement_flags(res: dict) -> dict[str | None, list[str]]:
