@@ -14,7 +14,7 @@ against its budget, with sigma and z.
   (:func:`satchain.comparison.compare`: noise floor and rows' displacements included). An edge the band's image
   cannot support (too small at its GSD, clipped) is an n/a row with the measurement's reason.
 - **SNR** (kind ``band_snr``, relative): the signal SNR of the scene's clear background measured on the band image
-  (:mod:`satchain.focal.bands_snr`: mean signal over the noise of adjacent-pixel differences, with its 1-sigma)
+  (:mod:`satchain.focal.bands_snr`: mean signal over the noise about a fitted plane, with its 1-sigma)
   against the band's budget at the background's reflectance in the band (its ``snr`` for a grey 0.2 background);
   n/a on a noise-free run. (The GIQE contrast SNR of :func:`satchain.measure.snr.measure_snr` reads 1-5 % below
   the budget's contrast SNR on the MS bands and ~3 % on PAN, with a 1-2 % sigma on a small scene: too close to the
@@ -97,7 +97,7 @@ def section(config: RunConfig, budget: BudgetResult, scene: SceneResult, progres
         "predictions": "the design's budget per band (satchain.prediction.budget.band_budgets); edges through "
         "satchain.prediction.core.predict of each band's system at its own time",
         "snr_definition": "signal SNR of the clear background: its mean signal (electrons, dark level and offset "
-        "removed) over its noise (adjacent-pixel differences / sqrt 2), against the band's radiometric budget at "
+        "removed) over its noise (the pixels' scatter about a fitted plane), against the band's radiometric budget at "
         "the background's reflectance in the band",
         "registration_convention": "the band's content relative to the reference band's, (ALT, ACT) band px: "
         "image(y, x) = reference(y - dy, x - dx)",
@@ -263,10 +263,10 @@ def _snr(config: RunConfig, s_pred: ImagingSystem, b: BandImage, truth: dict, en
     sig = None if r["sigma"] is None else float(r["sigma"]) / pred
     row = check_row(label, KIND_SNR, b.name, r["snr"], pred, tolerance=tol, tolerance_text=text, sigma=sig,
                     relative=True, reason=r["reason"],
-                    note="signal SNR of the clear background (mean signal / noise of adjacent-pixel differences) "
+                    note="signal SNR of the clear background (mean signal / noise about a plane fitted to it) "
                     "against the band's radiometric budget at the background's reflectance")  # fmt: skip
     return row, {"measured": r["snr"], "predicted": pred, "sigma": r["sigma"], "reason": r["reason"],
-                 "background_reflectance": rho, "n_pairs": r["n_pairs"]}  # fmt: skip
+                 "background_reflectance": rho, "n_pixels": r["n_pixels"]}  # fmt: skip
 
 
 def _curve(s: ImagingSystem) -> dict[str, Any]:
