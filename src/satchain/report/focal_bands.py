@@ -46,7 +46,8 @@ def parts(data: Mapping[str, Any], fig_dir: Path) -> FocalParts:
         mag = _registration_figure(bands, fig_dir / REGISTRATION_FIGURE)
         figures.append((REGISTRATION_FIGURE, f"Registration vector of each band from the {ref} position (band "
                         f"px; ALT down): measured (arrow) and predicted (cross), 1-sigma ellipse x{mag:g}; per "
-                        "row strip (thin arrows, predicted path dotted) where the line of sight moves in "
+                        "row strip (thin arrows, predicted path dotted; below: each strip's offset against its row, "
+                        "measured +- 1-sigma as points, predicted as lines) where the line of sight moves in "
                         "time."))  # fmt: skip
     return FocalParts("focal-bands", str(data.get("title", "bands")), text, (_table(bands, ref),), tuple(figures))
 
@@ -168,63 +169,94 @@ def _magnification(regs: list[Mapping[str, Any]], span: float) -> float:
     return float(max(1.0, 10.0 ** math.floor(math.log10(span / 20.0 / sig[len(sig) // 2]))))
 
 
+def _extent(shown: list[Mapping[str, Any]]) -> float:
+    """Half the side of the vector panels (band px): every offset shown fits, at least 0.1 px."""
+    pts = [0.0]
+    for b in shown:
+        r = b["registration"]
+        for item in (r, *(r.get("strips") or ())):
+            for key in ("measured_px", "predicted_px"):
+                if item.get(key):
+                    pts += [abs(item[key]["act"]), abs(item[key]["alt"])]
+    return max(max(pts) * 1.25, 0.1)
+
+
+def _vector_panel(ax, b: Mapping[str, Any], half: float, mag: float) -> None:
+    """Band ``b``'s registration vector: measured arrow from the reference position, its 1-sigma ellipse (x ``mag``),
+    the predicted offset (cross), each strip's measured arrow and the strips' predicted path."""
+    from matplotlib.patches import Ellipse
+
+    r, col = b["registration"], _colour(b)
+    ax.axhline(0, color="0.8", lw=0.6)
+    ax.axvline(0, color="0.8", lw=0.6)
+    strips = [s for s in r.get("strips") or () if s.get("predicted_px")]
+    if strips:
+        ax.plot([s["predicted_px"]["act"] for s in strips], [s["predicted_px"]["alt"] for s in strips], color=col,
+                ls=":", lw=0.9)  # fmt: skip
+        for s in strips:
+            if s.get("measured_px"):
+                ax.annotate("", xy=(s["measured_px"]["act"], s["measured_px"]["alt"]), xytext=(0, 0),
+                            arrowprops={"arrowstyle": "->", "color": col, "lw": 0.6, "alpha": 0.6})  # fmt: skip
+    p, m = r.get("predicted_px"), r.get("measured_px")
+    if p:
+        ax.plot([p["act"]], [p["alt"]], marker="x", ms=7, color="k", ls="none")
+    if m:
+        ax.annotate("", xy=(m["act"], m["alt"]), xytext=(0, 0), arrowprops={"arrowstyle": "-|>", "color": col,
+                                                                          "lw": 1.6})  # fmt: skip
+        sg = r["sigma_px"]
+        ax.add_patch(Ellipse((m["act"], m["alt"]), 2 * mag * sg["act"], 2 * mag * sg["alt"], fill=False, color=col,
+                             lw=1.0))  # fmt: skip
+    else:
+        ax.text(0.5, 0.08, "not measured (n/a)", transform=ax.transAxes, ha="center", fontsize=8, color="0.4")
+    ax.set_xlim(-half, half)
+    ax.set_ylim(half, -half)  # ALT down, as the image's rows
+    ax.set_aspect("equal")
+    ax.set_title(str(b["name"]), fontsize=9, color=col)
+    ax.set_xlabel("ACT offset (band px)", fontsize=8)
+    ax.tick_params(labelsize=7)
+
+
+def _strip_panel(ax, b: Mapping[str, Any]) -> None:
+    """Band ``b``'s offset per row strip: measured (ACT filled, ALT open, +- 1-sigma) and predicted (lines)."""
+    col = _colour(b)
+    strips = [s for s in b["registration"].get("strips") or () if s.get("predicted_px")]
+    mid = [(s["rows"][0] + s["rows"][1]) / 2.0 for s in strips]
+    for d, face, ls in (("act", col, "-"), ("alt", "white", "--")):
+        ax.plot(mid, [s["predicted_px"][d] for s in strips], color=col, ls=ls, lw=1.0)
+        got = [(x, s["measured_px"][d], s["sigma_px"][d]) for x, s in zip(mid, strips, strict=True)
+               if s.get("measured_px")]  # fmt: skip
+        if got:
+            x, y, e = zip(*got, strict=True)
+            ax.errorbar(x, y, yerr=e, ls="none", marker="o", ms=3.5, mfc=face, mec=col, ecolor=col, lw=0.8)
+    ax.set_xlabel("band row (strip centre)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.grid(alpha=0.3)
+
+
 def _registration_figure(bands: list[Mapping[str, Any]], path: Path) -> float:
     from matplotlib.figure import Figure
-    from matplotlib.patches import Ellipse
 
     from satchain.report._save import save_figure
 
     shown = [b for b in bands if b.get("registration")]
-    pts = [0.0]
-    for b in shown:
-        r = b["registration"]
-        for key in ("measured_px", "predicted_px"):
-            if r.get(key):
-                pts += [abs(r[key]["act"]), abs(r[key]["alt"])]
-        for s in r.get("strips") or ():
-            for key in ("measured_px", "predicted_px"):
-                if s.get(key):
-                    pts += [abs(s[key]["act"]), abs(s[key]["alt"])]
-    half = max(max(pts) * 1.25, 0.1)
+    half = _extent(shown)
     mag = _magnification([b["registration"] for b in shown], 2 * half)
     n = len(shown)
     cols = min(n, 4)
     nrows = math.ceil(n / cols)
-    fig = Figure(figsize=(2.6 * cols + 0.4, 2.6 * nrows + 0.5))
+    with_strips = any(b["registration"].get("strips") for b in shown)
+    total = 2 * nrows if with_strips else nrows
+    fig = Figure(figsize=(2.6 * cols + 0.4, 2.6 * total + 0.5))
     for k, b in enumerate(shown):
-        r, col = b["registration"], _colour(b)
-        ax = fig.add_subplot(nrows, cols, k + 1)
-        ax.axhline(0, color="0.8", lw=0.6)
-        ax.axvline(0, color="0.8", lw=0.6)
-        strips = [s for s in r.get("strips") or () if s.get("predicted_px")]
-        if strips:
-            ax.plot([s["predicted_px"]["act"] for s in strips], [s["predicted_px"]["alt"] for s in strips],
-                    color=col, ls=":", lw=0.9)  # fmt: skip
-            for s in strips:
-                if s.get("measured_px"):
-                    ax.annotate("", xy=(s["measured_px"]["act"], s["measured_px"]["alt"]), xytext=(0, 0),
-                                arrowprops={"arrowstyle": "->", "color": col, "lw": 0.6, "alpha": 0.6})  # fmt: skip
-        p = r.get("predicted_px")
-        if p:
-            ax.plot([p["act"]], [p["alt"]], marker="x", ms=7, color="k", ls="none")
-        m = r.get("measured_px")
-        if m:
-            ax.annotate("", xy=(m["act"], m["alt"]), xytext=(0, 0),
-                        arrowprops={"arrowstyle": "-|>", "color": col, "lw": 1.6})  # fmt: skip
-            s = r["sigma_px"]
-            ax.add_patch(Ellipse((m["act"], m["alt"]), 2 * mag * s["act"], 2 * mag * s["alt"], fill=False,
-                                 color=col, lw=1.0))  # fmt: skip
-        else:
-            ax.text(0.5, 0.08, "not measured (n/a)", transform=ax.transAxes, ha="center", fontsize=8, color="0.4")
-        ax.set_xlim(-half, half)
-        ax.set_ylim(half, -half)  # ALT down, as the image's rows
-        ax.set_aspect("equal")
-        ax.set_title(str(b["name"]), fontsize=9, color=col)
-        ax.tick_params(labelsize=7)
+        ax = fig.add_subplot(total, cols, k + 1)
+        _vector_panel(ax, b, half, mag)
         if k % cols == 0:
             ax.set_ylabel("ALT offset (band px)", fontsize=8)
-        if k >= n - cols:
-            ax.set_xlabel("ACT offset (band px)", fontsize=8)
-    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.14, top=0.9, wspace=0.35, hspace=0.4)
+        if with_strips and b["registration"].get("strips"):
+            sx = fig.add_subplot(total, cols, nrows * cols + k + 1)
+            _strip_panel(sx, b)
+            if k % cols == 0:
+                sx.set_ylabel("offset per strip (band px)\nACT filled, ALT open", fontsize=8)
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.1, top=0.93, wspace=0.35, hspace=0.45)
     save_figure(fig, path)
     return mag
