@@ -12,6 +12,7 @@ import numpy as np
 from satchain.comparison._common import NOISE_FLOOR_SIGMAS, finite, rice_mean
 from satchain.comparison.bars import BAR_COMPARE_MAX_CY_PER_PX
 from satchain.focal._rows import check_row, na_row
+from satchain.measure._keys import AT_NOISE_FLOOR
 from satchain.prediction.core import DIRECTIONS, AxisMTF, system_mtf_cy_per_px
 from satchain.tf import ctf as _ctf
 from satchain.tf.staggered import combination_otf
@@ -127,12 +128,22 @@ def _group(b: dict, k: int, f: float, meas: float, std: float, pred: float, thr:
     groups = b.get("groups") or []
     g = groups[k] if k < len(groups) else {}
     f_single = 2 * f  # cycles per array pixel
-    compared = bool(math.isfinite(meas) and math.isfinite(pred) and f <= BAR_COMPARE_MAX_CY_PER_PX)
+    index = int(g.get("group", k))
+    floor = any(str(x).startswith(f"group {index}: {AT_NOISE_FLOOR}") for x in b.get("flags") or ())
+    compared = bool(math.isfinite(meas) and math.isfinite(pred) and f <= BAR_COMPARE_MAX_CY_PER_PX and not floor)
     err = float(meas - pred) if compared else None
-    res_m, res_p = bool(math.isfinite(meas) and meas >= thr), bool(pred >= thr)
+    res_m, res_p = bool(math.isfinite(meas) and meas >= thr and not floor), bool(pred >= thr)
     alias = abs(1.0 - f_single) if f_single > 0.5 else None
+    why = None if compared else (
+        "at the measurement's noise floor: its modulation is not above 5 sigma of the noise (on the combined grid "
+        "also the quincunx fill's own pattern)" if floor
+        else f"finer than {1 / BAR_COMPARE_MAX_CY_PER_PX:g} combined px per period" if f > BAR_COMPARE_MAX_CY_PER_PX
+        else "no CTF measured"
+    )  # fmt: skip
     return {
-        "group": int(g.get("group", k)),
+        "group": index,
+        "not_compared": why,
+        "at_noise_floor": floor,
         "period_m": finite(g.get("period_m")),
         "period_single_px": 1 / f_single,
         "period_combined_px": 1 / f,

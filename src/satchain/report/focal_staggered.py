@@ -63,7 +63,7 @@ def _bar_table(data: Mapping[str, Any]) -> FocalTable:
     for b in data.get("bars", []):
         for g in b.get("groups", []):
             if not g.get("compared"):
-                verdict = "not compared (< 2.5 combined px per period)"
+                verdict = f"not compared: {g.get('not_compared') or 'no CTF measured'}"
             else:
                 verdict = "as predicted" if g.get("resolved_as_predicted") else "NOT as predicted"
             alias = g.get("single_alias_period_px")
