@@ -210,3 +210,26 @@ def test_a_tdi_count_the_separation_cannot_hold_is_refused(minimal_system_toml, 
     with pytest.raises(ConfigError, match="needs detector.layout = 'staggered'"):
         satchain.ImagingSystem.from_dict(tomllib.loads(
             minimal_system_toml.replace("[detector]\n", "[detector]\nstagger_separation_px = 1.5\n")))  # fmt: skip
+
+
+def test_a_group_at_the_noise_floor_is_listed_not_compared(run):
+    """A group the bar measurement reads at its noise floor (its modulation not above 5 sigma of the noise: on
+    the combined grid also the fill's own pattern) is neither compared nor counted resolved."""
+    from satchain.focal._staggered_checks import bar_section, combined_mtf2d
+
+    mtf2d = combined_mtf2d(SystemOTF(run.system), PITCH_M)
+    cfg = RunConfig.from_dict({})
+    entry = {
+        "id": "b",
+        "direction": "ALT",
+        "f_cy_per_px": [0.2, 0.3],
+        "ctf": [0.2, 0.4],
+        "ctf_std": [0.01, 0.03],
+        "groups": [{"group": 0}, {"group": 1}],
+        "flags": ["group 1: at_noise_floor: modulation 0.1 +- 0.03"],
+    }
+    (row,), (b,) = bar_section([entry], mtf2d, cfg, pitch_m=PITCH_M)
+    g0, g1 = b["groups"]
+    assert g0["compared"] and not g1["compared"] and g1["at_noise_floor"] and "noise floor" in g1["not_compared"]
+    assert not g1["resolved_measured"] and g1["beyond_single_nyquist"] and not g0["beyond_single_nyquist"]
+    assert row.measured == pytest.approx(abs(0.2 - g0["ctf_predicted"]))  # group 1 (0.4 read) left out
