@@ -136,8 +136,11 @@ def test_the_seams_table_schema_csv_report_and_rasters(spectral_run):
     errors = [e.message for e in jsonschema.Draft202012Validator(results_schema()).iter_errors(res)]
     assert errors == []
     with open(out / "summary.csv", newline="") as fh:
-        kinds = [row.get("kind") for row in csv.DictReader(line for line in fh if not line.startswith("#"))]
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    kinds = [row.get("kind") for row in rows]
     assert {"band_edge_mtf_at_nyquist", "band_snr", "band_registration"} <= set(kinds)
+    assert all(r["unit"] and r["error_unit"] for r in rows)  # every check's units stated
+    assert {r["error_unit"] for r in rows if r["kind"] == "band_snr"} == {"1 (relative: measured / predicted - 1)"}
     html = (out / "report.html").read_text()
     assert 'id="focal-bands"' in html and "Per band: measured vs predicted" in html
     assert html.count("bands_mtf.png") + html.count("Registration vector") >= 2

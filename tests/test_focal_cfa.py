@@ -152,6 +152,7 @@ def test_results_json_summary_csv_and_the_budget_block(run):
     with (out / "summary.csv").open() as fh:
         rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
     assert {r["id"] for r in rows if r["kind"] == "cfa_plane_mtf"} >= {"edge_neutral:red", "edge_small:blue"}
+    assert all(r["unit"] and r["error_unit"] for r in rows)  # every check's units stated
     planes = results["cfa"]["planes_predicted"]
     assert planes["red"]["nyquist_cy_per_px"]["act"] == 0.25 and planes["green"]["alias_cy_per_px"]["act"] == 1.0
     assert results["cfa"]["pattern"] == "RGGB" and results["cfa"]["units"] == "reflectance"

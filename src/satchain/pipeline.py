@@ -3,8 +3,8 @@
 Stages: budget (MTF, CTF, radiometry, SNR, GIQE) -> scene (ground truth and its truth record) -> simulation
 (the satellite image and the focal-plane image) -> measurement of every target and of the SNR -> prediction
 of each measured figure and comparison -> the focal plane as flown (:mod:`satchain.focal`: bands, colour
-planes, staggered arrays; nothing for one monochrome array) -> report (``report.html``, ``results.json``, ``summary.csv``, images,
-``manifest.json``).
+planes, staggered arrays; nothing for one monochrome array) -> report (``report.html``, ``results.json``,
+``summary.csv``, images, ``manifest.json``).
 Each stage is a function of the typed results before it (:mod:`satchain.results`); only the report writes files.
 The truth record travels typed (:class:`satchain.scene.truth.Truth`); the JSON dict is made only where a
 function still reads that form (measure_auto, the report figures) and where it is written.

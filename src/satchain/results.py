@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from pathlib import Path
 
-    from satchain.comparison import Comparison, CheckRow
+    from satchain.comparison import CheckRow, Comparison
     from satchain.config.run import RunConfig
     from satchain.config.system import ImagingSystem
     from satchain.engine.sensor import SensorModel

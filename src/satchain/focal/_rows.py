@@ -15,7 +15,8 @@ def _finite(v: float | None) -> float | None:
 
 def check_row(figure: str, kind: str, id_: str | None, measured: float | None, predicted: float | None, *,
               tolerance: float, tolerance_text: str, sigma: float | None, relative: bool = False,
-              reason: str | None = None, sigma_null_means: str | None = None, note: str | None = None) -> CheckRow:  # fmt: skip
+              reason: str | None = None, sigma_null_means: str | None = None,
+              note: str | None = None) -> CheckRow:  # fmt: skip
     """A check of ``measured`` against ``predicted``: ``error = measured - predicted`` (``measured / predicted - 1``
     when ``relative``; ``sigma`` in that error's unit), passing when ``|error| <= tolerance``; n/a (``passed``
     None) with ``reason`` when either is missing or not finite."""

@@ -197,6 +197,7 @@ def _edges(config: RunConfig, s_pred: ImagingSystem, b: BandImage, truth: dict, 
     """Every slanted edge of the band: its check rows (the main run's edge check, relabelled) and entries."""
     from satchain.comparison import compare
     from satchain.engine.sensor import sensor_from_system
+    from satchain.measure._keys import RESULT_KEY
     from satchain.measure.auto import measure_auto
     from satchain.prediction.core import predict
     from satchain.scene.targets import SlantedEdge
@@ -214,7 +215,7 @@ def _edges(config: RunConfig, s_pred: ImagingSystem, b: BandImage, truth: dict, 
     if geo is not None:
         pred = dataclasses.replace(pred, geometry=geo)
     comp = compare(auto, pred, config.tolerances)
-    measured = {e["id"]: e for e in auto.to_dict().get("slanted_edges", [])}
+    measured = {e["id"]: e for e in auto.to_dict().get(RESULT_KEY[SlantedEdge.kind], [])}
     rows, out = [], []
     for row in comp.rows:
         if row.kind != "edge_mtf_at_nyquist":

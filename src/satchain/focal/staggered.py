@@ -25,6 +25,10 @@ import numpy as np
 from satchain.config.sections_staggered import stagger_separation_px
 from satchain.focal._rows import na_row
 from satchain.focal._staggered_checks import bar_section, combined_mtf2d, edge_section, prediction_curves
+from satchain.measure._keys import RESULT_KEY
+from satchain.scene.targets import BarTarget, SlantedEdge
+
+EDGES, BARS = RESULT_KEY[SlantedEdge.kind], RESULT_KEY[BarTarget.kind]
 
 if TYPE_CHECKING:
     from satchain.config.run import RunConfig
@@ -71,8 +75,8 @@ def section(config: RunConfig, budget: BudgetResult, scene: SceneResult, progres
     measured = _measure(config, simulated, scene, images)
     progress("focal", 2, 3)
     mtf2d = combined_mtf2d(budget.otf, system.detector.pitch_x_m)
-    edge_rows, edges = edge_section(measured["slanted_edges"], scene.truth_dict, mtf2d, config.tolerances)
-    bar_rows, bars = bar_section(measured["bar_targets"], mtf2d, config, pitch_m=system.detector.pitch_x_m)
+    edge_rows, edges = edge_section(measured[EDGES], scene.truth_dict, mtf2d, config.tolerances)
+    bar_rows, bars = bar_section(measured[BARS], mtf2d, config, pitch_m=system.detector.pitch_x_m)
     skipped = list(measured["skipped"])
     na = _skipped_rows(skipped, config, {e["id"] for e in edges}, {b["id"] for b in bars})
     data = _data(system, simulated is not system, budget, config, images, edges, bars, skipped, mtf2d)
@@ -120,9 +124,9 @@ def _measure(config: RunConfig, system, scene: SceneResult, images: StaggeredIma
     from satchain.measure.auto import measure_auto
 
     truth = scene.truth_dict
-    ids = [str(it["id"]) for it in truth.get("items", []) if it.get("kind") in ("slanted_edge", "bar_target")]
+    ids = [str(it["id"]) for it in truth.get("items", []) if it.get("kind") in (SlantedEdge.kind, BarTarget.kind)]
     if not ids:
-        return {"slanted_edges": [], "bar_targets": [], "skipped": []}
+        return {EDGES: [], BARS: [], "skipped": []}
     c = config.simulation
     t = images.transform
     auto = measure_auto(images.combined, truth, pixel_m=images.combined_gsd_m[0], origin_m=(t.c, t.f), ids=ids,
@@ -136,7 +140,7 @@ def _skipped_rows(skipped: list[dict], config: RunConfig, edge_ids: set, bar_ids
     rows = []
     for s in skipped:
         ident, kind = str(s.get("id")), str(s.get("kind", ""))
-        if kind == "slanted_edge" and ident not in edge_ids:
+        if kind == SlantedEdge.kind and ident not in edge_ids:
             tol = config.tolerances.edge_mtf_at_nyquist
             rows.append(
                 na_row(
@@ -148,7 +152,7 @@ def _skipped_rows(skipped: list[dict], config: RunConfig, edge_ids: set, bar_ids
                     reason=f"not measured: {s.get('reason')}",
                 )
             )
-        elif kind == "bar_target" and ident not in bar_ids:
+        elif kind == BarTarget.kind and ident not in bar_ids:
             tol = config.tolerances.bar_ctf
             rows.append(
                 na_row(

@@ -32,6 +32,14 @@ UNITS = {
     "bar_ctf": ("1 (CTF)", "1 (CTF)"),
     "wedge_resolution": ("m (ground line width)", "1 (relative: measured / predicted - 1)"),
     "niirs": ("NIIRS levels", "NIIRS levels"),
+    # the focal plane as flown (satchain.focal)
+    "band_edge_mtf_at_nyquist": ("1 (MTF)", "1 (MTF)"),
+    "band_snr": ("1 (SNR)", "1 (relative: measured / predicted - 1)"),
+    "band_registration": ("px (the band's own pixels)", "px (the band's own pixels)"),
+    "cfa_plane_mtf": ("1 (MTF)", "1 (MTF)"),
+    "staggered_edge_mtf_at_nyquist": ("1 (MTF)", "1 (MTF)"),
+    "staggered_edge_mtf_at_single_nyquist": ("1 (MTF)", "1 (MTF)"),
+    "staggered_bar_ctf": ("1 (CTF)", "1 (CTF)"),
 }
 
 
