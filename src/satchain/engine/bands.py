@@ -12,20 +12,23 @@ truth on its own pixel grid.
 co-registered by their transforms (:attr:`BandImage.transform`; the MS grid's pixel is 4 PAN pixels).
 
 **Time and registration.** A band ``offset_alt_mm`` from the reference sees the ground ``offset / image speed``
-later; registered by that nominal delay (and ``offset_act_mm`` / pitch columns), its static offset is its
-injected ``registration_offset_px = (dy_alt, dx_act)`` in its own pixels -- what
+later; registered by that nominal delay (and ``offset_act_mm`` / pitch columns), its static offset is its injected
+``registration_offset_px = (dy_alt, dx_act)`` in its own pixels -- what
 :func:`satchain.prediction.budget.band_budgets` predicts as ``static_px`` (band minus PAN). It is applied where it
 arises, on the ground: the band's detector grid starts ``(-dy g_alt, -dx g_act)`` metres from the window's corner
 (its integer part a shifted scene window, its fraction the detector grid's phase on the ground-truth grid,
-:class:`~satchain.engine.simulate.SimParams` ``phase_px``), so the band's content lies ``(+dy, +dx)`` px from
-where its transform puts it, in the sign convention of
-:func:`satchain.measure.registration.measure_registration` (``image(y, x) = reference(y - dy, x - dx)``). The
-transforms stay nominal: the offset is a misregistration, which measuring two bands recovers. Line-of-sight motion
-in time is formed per band along its own time path (:mod:`satchain.engine.timepath`); a band's sinusoidal
-oscillations are those of its own time, ``delay_s`` (:func:`band_delay_s`) later than the system's detector line
-(each phase advanced by ``360 f delay_s``). A pixel sees the ground at ``x = j + LOS(t)``, so a band's content
-moves by minus its line of sight: the offset from PAN is minus the difference of their lines of sight (the
-budget's ``oscillations`` give that difference, line-of-sight signed; tests/engine/test_bands.py).
+:class:`~satchain.engine.simulate.SimParams` ``phase_px``), so the band's content lies ``(+dy, +dx)`` px from where
+its transform puts it, in the sign convention of :func:`satchain.measure.registration.measure_registration`
+(``image(y, x) = reference(y - dy, x - dx)``). Where the image is a sheared, scaled or turned map of the ground (a
+drift a line: Earth rotation, ``motion.line_rate_error``; yaw steering) the ground is displaced by that map of the
+offset (:func:`_offset_on_ground_px`), so that the image still shows it as given (within 0.0001 px on band-limited
+ground: tests/engine/test_bands_yaw.py). The transforms stay nominal: the offset is a misregistration, which
+measuring two bands recovers. Line-of-sight motion in time is formed per band along its own time path
+(:mod:`satchain.engine.timepath`); a band's sinusoidal oscillations are those of its own time, ``delay_s``
+(:func:`band_delay_s`) later than the system's detector line (each phase advanced by ``360 f delay_s``). A pixel
+sees the ground at ``x = j + LOS(t)``, so a band's content moves by minus its line of sight: the offset from PAN is
+minus the difference of their lines of sight (the budget's ``oscillations`` give that difference, line-of-sight
+signed; tests/engine/test_bands.py).
 Under ``orbit.earth_rotation`` (with or without yaw steering) each band's detector grid starts where the ground has
 moved by its own time (:func:`_earth_lead_px`), so its content lies where the budget's ``earth_rotation`` puts it.
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
@@ -257,11 +260,12 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     banded = bool(system.bands)
     s = _at_own_time(system.for_band(i), band_delay_s(system, i)) if banded else system
     scene = layout_for_band(layout, *band_response(system, i)) if banded else layout
-    offset = tuple(float(v) for v in system.bands[i].registration_offset_px) if banded else (0.0, 0.0)
+    o = system.bands[i].registration_offset_px if banded else (0.0, 0.0)
+    offset = (float(o[0]), float(o[1]))
     if reuse is not None and banded:  # one render per distinct grey layout (reuse["ground"]); the band's lighter OTF
         scene = shared_render(reuse, scene, pixel_m, params.max_tile_bytes)
-    earth = _earth_lead_px(system, i, s) if banded else (0.0, 0.0)  # the ground moved by the band's own time
-    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, (offset[0] - earth[0], offset[1] - earth[1]))
+    shift = _ground_shift_px(system, i, s, offset) if banded else (0.0, 0.0)  # its offset and its own time's lead
+    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, shift)
     src = SceneSource(src_scene, pixel_m=pixel_m)
     p = params if phase == params.phase_px else dataclasses.replace(params, phase_px=phase)
     p = band_params(p, system, s) if banded and reuse is not None else p  # its far margin: the system's metres
@@ -322,6 +326,44 @@ def _earth_lead_px(system: ImagingSystem, index: int, s: ImagingSystem) -> tuple
         gamma = math.radians(float(earth.get("rotation_deg", 0.0)))
         return (float(eps) * n * math.cos(gamma), float(eps) * n * math.sin(gamma))
     return (float(eps) * n, float(sigma) * n)
+
+
+def _ground_shift_px(system: ImagingSystem, index: int, s: ImagingSystem, offset: tuple[float, float]) -> tuple:
+    """(ALT, ACT) band px by which band ``index`` (system ``s``) samples the ground displaced: its
+    ``registration_offset_px`` carried onto the ground (:func:`_offset_on_ground_px`, so that the image shows it as
+    given) less the Earth's lead (:func:`_earth_lead_px`, already on the ground's axes)."""
+    earth = _earth_lead_px(system, index, s)
+    a, c = _offset_on_ground_px(s, offset)
+    return (a - earth[0], c - earth[1])
+
+
+def _offset_on_ground_px(s: ImagingSystem, offset: tuple[float, float]) -> tuple[float, float]:
+    """The ground displacement (ALT, ACT; band px, the ground's axes) that moves band ``s``'s image content by
+    ``offset = (a, c)`` of its pixels: the linear part of the image's map onto the ground
+    (:meth:`satchain.tf.pushbroom.PushbroomTerms.image_affine`, which the engine forms) applied to the offset.
+    Row ``i``, column ``j`` see the ground at ``x = j + sigma i``, ``y = (1 + eps) i`` (px; ``(sigma, eps)`` the
+    drift a line: Earth rotation and ``motion.line_rate_error``), turned about a pivot that moves with the grid by
+    ``M = [[cos g, sin g], [-sin g, cos g]]`` (``g`` the yaw, steered; :mod:`satchain.engine.yaw`), so a ground
+    shift ``d`` moves the content by ``D^-1 M^-1 d`` and the offset needs ``d = M D (c, a)``, in metres
+    (``x``: ACT, ``y``: ALT; ``G_x``, ``G_y`` the GSDs)::
+
+        x = G_x (c + sigma a),   y = G_y (1 + eps) a
+        ACT = (x cos g + y sin g) / G_x,   ALT = (-x sin g + y cos g) / G_y
+
+    Unsteered, ``sigma`` shears an ALT offset across track (-0.05 px a line at 40 deg: 0.3 px ALT showed 0.015
+    px ACT) and ``1 + eps`` scales it (0.3 showed 0.297); steered, ``g`` turns it (-2.9 deg: the same 0.015 px).
+    Without either the offset is the displacement itself (the identity, exactly)."""
+    from satchain.tf.pushbroom import PushbroomTerms
+
+    terms = PushbroomTerms(s)
+    sigma, eps = terms.drift_px if terms.drift_px is not None else (0.0, 0.0)
+    g = math.radians(float(terms.earth.get("rotation_deg", 0.0))) if terms.earth is not None else 0.0
+    a, c = (float(v) for v in offset)
+    if not (sigma or eps or g) or not (a or c):
+        return (a, c)
+    x_m, y_m = s.gsd_act_m * (c + sigma * a), s.gsd_alt_m * (1.0 + eps) * a
+    cos_g, sin_g = math.cos(g), math.sin(g)
+    return ((y_m * cos_g - x_m * sin_g) / s.gsd_alt_m, (x_m * cos_g + y_m * sin_g) / s.gsd_act_m)
 
 
 def _at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
