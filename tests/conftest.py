@@ -13,6 +13,11 @@ settings.register_profile("ci", derandomize=True, deadline=None, print_blob=True
 if os.environ.get("CI"):
     settings.load_profile("ci")
 
+# Runs draw their figures in their own process: the suite's xdist workers already keep every core busy, and a
+# figure helper process per run (satchain.report._jobs) costs more CPU to start than it saves. The helpers' path is
+# tested on its own (tests/report/test_jobs.py) and end to end by the module fixture of tests/test_pipeline.py.
+os.environ.setdefault("SATCHAIN_FIGURE_PROCESSES", "0")
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED_TABLE1 = REPO.parent / "shared" / "reference" / "table1.csv"
 

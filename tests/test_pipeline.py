@@ -25,6 +25,16 @@ def strict_loads(text: str):
 
 @pytest.fixture(scope="module")
 def reduced_run(tmp_path_factory, reduced_scene_toml):
+    """A run of the reduced scene into a folder, its figures drawn by a helper process as outside the tests."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("SATCHAIN_FIGURE_PROCESSES", "1")
+    try:
+        return _reduced_run(tmp_path_factory, reduced_scene_toml)
+    finally:
+        mp.undo()
+
+
+def _reduced_run(tmp_path_factory, reduced_scene_toml):
     d = tmp_path_factory.mktemp("run")
     (d / "scene.toml").write_text(reduced_scene_toml)
     (d / "run.toml").write_text('[scene]\nlayout = "scene.toml"\npixel_m = 0.07\n[simulation]\nseed = 11\n')

@@ -16,8 +16,8 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
 * measurement: :func:`measure_edge`, :func:`measure_star`, :func:`measure_bars`, :func:`measure_wedge`,
   :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`,
   :func:`measure_registration` (band-to-band offset);
-* the focal plane as flown (first pieces): :func:`simulate_bands` / :func:`write_band_rasters` (every band of a
-  ``[[bands]]`` camera from a spectral scene), :func:`simulate_cfa` / :func:`measure_cfa` / :func:`predict_cfa`
+* the focal plane as flown: :func:`simulate_bands` / :func:`write_band_rasters` (every band of a
+  ``[[bands]]`` camera from a spectral scene), :func:`simulate_cube` (from a reflectance cube), :func:`simulate_cfa` / :func:`measure_cfa` / :func:`predict_cfa`
   (a Bayer camera's raw mosaic, demosaicing, per-plane MTF and false colour), :func:`simulate_staggered` (two
   staggered arrays combined onto the half-pitch grid);
 * design studies: :func:`study` (a study file's cases through the budget or the whole chain, on local processes
@@ -96,6 +96,8 @@ _LAZY = {
     "simulate_bands": "satchain.engine.bands",
     "write_band_rasters": "satchain.engine.bands",
     "BandImages": "satchain.engine.bands",
+    "simulate_cube": "satchain.engine.cube",
+    "ReflectanceCube": "satchain.engine.cube",
     "simulate_cfa": "satchain.engine.cfa_sim",
     "CFAImages": "satchain.engine.cfa_sim",
     "measure_cfa": "satchain.prediction.cfa",
@@ -149,6 +151,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the lazy names, statically
     from satchain.config.system import ImagingSystem, load_preset, load_system  # noqa: F401
     from satchain.engine.bands import BandImages, simulate_bands, write_band_rasters  # noqa: F401
     from satchain.engine.cfa_sim import CFAImages, simulate_cfa  # noqa: F401
+    from satchain.engine.cube import ReflectanceCube, simulate_cube  # noqa: F401
     from satchain.engine.simulate import simulate  # noqa: F401
     from satchain.engine.staggered import StaggeredImages, simulate_staggered  # noqa: F401
     from satchain.geometry import Rect  # noqa: F401
