@@ -41,7 +41,18 @@ def _oneill(v: np.ndarray, eps: float) -> np.ndarray:
     obscuration's terms are evaluated only inside their regions (``B`` is 0 for ``v >= eps``; ``C`` is
     constant where its ``arccos`` argument is clipped) and take those constants elsewhere.
     """
-    v = np.clip(np.abs(v), 0.0, 1.0)
+    v = np.abs(np.asarray(v, dtype=float))
+    support = ~(v >= 1.0)  # the MTF is 0 beyond the cutoff: evaluated only inside it (NaN stays NaN)
+    if support.all():
+        return _oneill_inside(v, eps)
+    out = np.zeros(v.shape)
+    out[support] = _oneill_inside(v[support], eps)
+    return out
+
+
+def _oneill_inside(v: np.ndarray, eps: float) -> np.ndarray:
+    """:func:`_oneill` at ``v = |f| / cutoff`` (>= 0; values at or beyond 1 give 0)."""
+    v = np.clip(v, 0.0, 1.0)
     a = (2.0 / np.pi) * (np.arccos(v) - v * np.sqrt(1.0 - v * v))
     if eps == 0.0:
         return np.where(v >= 1.0, 0.0, np.clip(a, 0.0, 1.0))
