@@ -17,7 +17,8 @@ The public API (imported lazily, so ``import satchain`` stays fast and never tou
   :func:`measure_auto`, :func:`measure_snr`, :func:`find_edges`, :func:`measure_found_edges`,
   :func:`measure_registration` (band-to-band offset);
 * the focal plane as flown: :func:`simulate_bands` / :func:`write_band_rasters` (every band of a
-  ``[[bands]]`` camera from a spectral scene), :func:`simulate_cube` (from a reflectance cube), :func:`simulate_cfa` / :func:`measure_cfa` / :func:`predict_cfa`
+  ``[[bands]]`` camera from a spectral scene), :func:`simulate_cube` (from a reflectance cube),
+  :func:`simulate_cfa` / :func:`measure_cfa` / :func:`predict_cfa`
   (a Bayer camera's raw mosaic, demosaicing, per-plane MTF and false colour), :func:`simulate_staggered` (two
   staggered arrays combined onto the half-pitch grid);
 * design studies: :func:`study` (a study file's cases through the budget or the whole chain, on local processes

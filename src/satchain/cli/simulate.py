@@ -288,19 +288,11 @@ def _written_by_satchain(path: Path) -> bool:
 def _simulate_bands(input_: str, out: Path, system: ImagingSystem, *, scene_pixel_m: float | None, units: str,
                     noise: bool, seed: int, band: int | None) -> None:  # fmt: skip
     """Every band of ``system`` (or ``--band``'s) formed from the scene ``input_`` and written into ``out``."""
-    from satchain._validate import check_choice
     from satchain.engine.bands import simulate_bands, write_band_rasters
     from satchain.engine.files import ground_truth_source
-    from satchain.engine.sensor import OUTPUT_UNITS
     from satchain.scene.layout import check_scene_pixel
 
-    check_choice("--units", units, OUTPUT_UNITS)
-    if seed < 0:
-        raise ConfigError(f"--seed {seed}: must be an integer >= 0")
-    n = len(system.bands)
-    if band is not None and not 1 <= band <= n:
-        raise ConfigError(f"--band {band}: the system {system.name!r} has {n} bands ({', '.join(system.band_names)})"
-                          f"; give 1 to {n}")  # fmt: skip
+    _check_band_options(system, units=units, seed=seed, band=band)
     earlier = _check_band_dir(out)
     src, scene = ground_truth_source(input_, pixel_m=scene_pixel_m, names=_SIMULATE_OPTIONS)
     assert scene is not None  # a layout input
@@ -364,18 +356,10 @@ def _simulate_cube(input_: str, out: Path, system: ImagingSystem, *, wavelengths
     """Every band of ``system`` (or ``--band``'s) formed from the reflectance cube ``input_`` into ``out``."""
     from functools import partial
 
-    from satchain._validate import check_choice
     from satchain.engine.cube import ReflectanceCube, simulate_cube, write_cube_rasters
-    from satchain.engine.sensor import OUTPUT_UNITS
     from satchain.engine.sources import SceneSource
 
-    check_choice("--units", units, OUTPUT_UNITS)
-    if seed < 0:
-        raise ConfigError(f"--seed {seed}: must be an integer >= 0")
-    n = len(system.bands)
-    if band is not None and not 1 <= band <= n:
-        raise ConfigError(f"--band {band}: the system {system.name!r} has {n} bands ({', '.join(system.band_names)})"
-                          f"; give 1 to {n}")  # fmt: skip
+    _check_band_options(system, units=units, seed=seed, band=band)
     lam = None
     if wavelengths is not None:
         try:
@@ -386,7 +370,7 @@ def _simulate_cube(input_: str, out: Path, system: ImagingSystem, *, wavelengths
     earlier = _check_band_dir(out)
     with ReflectanceCube(input_, wavelengths_nm=lam, scene_pixel_m=scene_pixel_m, input_scale=input_scale,
                          names=_SIMULATE_OPTIONS) as cube:  # fmt: skip
-        which = list(range(n)) if band is None else [band - 1]
+        which = list(range(len(system.bands))) if band is None else [band - 1]
         _check_band_grids(system, SceneSource(cube.band_scene(system, which[0])), band)
         result = simulate_cube(cube, system, bands=which, units=units, noise=noise, seed=seed)
         _write_band_dir(result, out, earlier, units, partial(write_cube_rasters, cube=cube))
@@ -410,3 +394,17 @@ def _check_band_grids(system: ImagingSystem, src, band: int | None) -> None:
                               "is too large for a banded simulation, which holds each band in memory; give a "
                               "smaller scene or a coarser --scene-pixel-m")  # fmt: skip
         check_simulation_memory(sim, focal_plane=None)
+
+
+def _check_band_options(system: ImagingSystem, *, units: str, seed: int, band: int | None) -> None:
+    """``--units``, ``--seed`` and ``--band`` (1-based, within the system's ``[[bands]]``) of a banded simulation."""
+    from satchain._validate import check_choice
+    from satchain.engine.sensor import OUTPUT_UNITS
+
+    check_choice("--units", units, OUTPUT_UNITS)
+    if seed < 0:
+        raise ConfigError(f"--seed {seed}: must be an integer >= 0")
+    n = len(system.bands)
+    if band is not None and not 1 <= band <= n:
+        raise ConfigError(f"--band {band}: the system {system.name!r} has {n} bands ({', '.join(system.band_names)})"
+                          f"; give 1 to {n}")  # fmt: skip

@@ -74,6 +74,7 @@ __all__ = [
     "PREVIEW_STRETCH_PCT",
     "BandImage",
     "BandImages",
+    "at_own_time",
     "band_delay_s",
     "band_response",
     "band_seed",
@@ -258,7 +259,7 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     from satchain.scene.spectral import layout_for_band
 
     banded = bool(system.bands)
-    s = _at_own_time(system.for_band(i), band_delay_s(system, i)) if banded else system
+    s = at_own_time(system.for_band(i), band_delay_s(system, i)) if banded else system
     scene = layout_for_band(layout, *band_response(system, i)) if banded else layout
     o = system.bands[i].registration_offset_px if banded else (0.0, 0.0)
     offset = (float(o[0]), float(o[1]))
@@ -366,9 +367,18 @@ def _offset_on_ground_px(s: ImagingSystem, offset: tuple[float, float]) -> tuple
     return ((y_m * cos_g - x_m * sin_g) / s.gsd_alt_m, (x_m * cos_g + y_m * sin_g) / s.gsd_act_m)
 
 
-def _at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
+def at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
     """``s`` with its sinusoidal line-of-sight oscillations seen ``delay_s`` later (each phase advanced by ``360 f
-    delay_s`` degrees): the rows of a band behind the reference line see the motion of a later instant."""
+    delay_s`` degrees): the rows of a band behind the reference line see the motion of a later instant.
+
+    Examples
+    --------
+    >>> from satchain import load_preset
+    >>> s = load_preset("ankarasat3").replace(
+    ...     {"motion.oscillation": [{"axis": "act", "amplitude_px": 1.0, "frequency_hz": 20.0}]})
+    >>> at_own_time(s, 0.0125).motion.oscillation[0].phase_deg  # a quarter period later
+    90.0
+    """
     m = s.motion
     if not delay_s or not m.oscillation:
         return s

@@ -28,7 +28,6 @@ A system without bands (or whose bands have no spectral response) has no bands s
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
@@ -117,13 +116,13 @@ def _write(images: BandImages, out_dir: Path) -> list[str]:
 def _band(config: RunConfig, design: ImagingSystem, images: BandImages, b: BandImage, entries: list, ref: int,
           scene: SceneResult) -> tuple[list, dict[str, Any]]:  # fmt: skip
     """Band ``b``'s check rows and its results.json entry."""
-    from satchain.engine.bands import band_delay_s, band_response
+    from satchain.engine.bands import at_own_time, band_delay_s, band_response
     from satchain.scene.spectral import layout_for_band
 
     i, entry = b.index, entries[b.index]
     layout = layout_for_band(scene.scene, *band_response(design, i))
     truth = scene.truth_dict if layout is scene.scene else layout.truth(pixel_m=scene.pixel_m)
-    s_pred = _at_own_time(design.for_band(i), band_delay_s(design, i))
+    s_pred = at_own_time(design.for_band(i), band_delay_s(design, i))
     content = _content_offset_px(design, i, entry)
     geo, affine, origin = _geometry(b, truth, content, images.seed)
     edge_rows, edges = _edges(config, s_pred, b, truth, geo, affine, origin)
@@ -149,17 +148,6 @@ def _band(config: RunConfig, design: ImagingSystem, images: BandImages, b: BandI
         reg_rows, out["registration"] = _registration(config, design, images, b, entries, ref, scene)
         rows += reg_rows
     return rows, out
-
-
-def _at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
-    """``s`` with its oscillations seen ``delay_s`` later (each phase advanced by ``360 f delay_s`` degrees), as
-    :mod:`satchain.engine.bands` forms a band behind the system's line."""
-    m = s.motion
-    if not delay_s or not m.oscillation:
-        return s
-    osc = tuple(o.model_copy(update={"phase_deg": math.remainder(o.phase_deg + 360.0 * o.frequency_hz * delay_s,
-                                                                  360.0)}) for o in m.oscillation)  # fmt: skip
-    return s.model_copy(update={"motion": m.model_copy(update={"oscillation": osc})})
 
 
 def _content_offset_px(design: ImagingSystem, i: int, entry: dict) -> tuple[float, float]:
