@@ -13,20 +13,18 @@ import math
 
 import numpy as np
 import pytest
+from _band_offsets import content_offset, earth_px, squares_scene
 
 from satchain import load_preset
 from satchain.engine.bands import simulate_bands
-from satchain.measure.registration import measure_registration
 from satchain.prediction.budget import band_budgets
 from satchain.scene.layout import Scene
-from satchain.scene.targets import SlantedEdge
 
 P = 0.1225  # m: 4 scene px per PAN pixel, 16 per MS pixel
 K = 16
 #: The ground simulated (scene px: row0, col0, height, width): 48 x 64 MS px, the scene around it for the bands'
 #: displaced grids (up to ~17 MS px ACT without yaw steering, ~5 ALT).
 WINDOW = (16 * K, 36 * K, 48 * K, 64 * K)
-H, W = 40, 30  # the MS region measured (rows, cols)
 
 
 def _system(latitude_deg: float, yaw: bool):
@@ -36,27 +34,7 @@ def _system(latitude_deg: float, yaw: bool):
 
 @pytest.fixture(scope="module")
 def scene() -> Scene:
-    """4 m squares at random angles every 7 m: features of every orientation in every part of the window."""
-    rng = np.random.default_rng(1)
-    corners = [(x, y) for y in np.arange(2.0, 126.0, 7.0) for x in np.arange(2.0, 196.0, 7.0)]
-    items = tuple(SlantedEdge(f"s{k}", center_m=(x + rng.uniform(0, 2), y + rng.uniform(0, 2)), size_m=4.0,
-                              angle_deg=float(rng.uniform(-30, 30))) for k, (x, y) in enumerate(corners))  # fmt: skip
-    return Scene(200.0, 130.0, items, 0.2)
-
-
-def _earth_px(system, name: str) -> tuple[float, float]:
-    e = [b for b in band_budgets(system) if b["name"] == name][0]["registration"]["earth_rotation"]
-    return e["alt_px"], e["act_px"]
-
-
-def _offset(reference: np.ndarray, image: np.ndarray, whole: tuple[int, int], scale: int) -> tuple[float, float]:
-    """``image``'s content offset from ``reference``'s (MS px): the region of ``image`` at (4, 32) against the
-    reference's region ``whole`` MS px before it, plus ``whole``."""
-    kr, kc = whole
-    r0, c0 = 4, 32
-    ref = reference[scale * (r0 - kr) : scale * (r0 - kr + H), scale * (c0 - kc) : scale * (c0 - kc + W)]
-    got = measure_registration(ref, image[r0 : r0 + H, c0 : c0 + W], scale=scale).offset_px
-    return got[0] + kr, got[1] + kc
+    return squares_scene()
 
 
 def test_the_budget_with_yaw_steering_has_no_act_offset_and_the_relative_speed_alt():
@@ -81,13 +59,13 @@ def test_ms_band_offset_from_pan_matches_budget_with_and_without_yaw_steering(sc
     for (-2.261, 12.729); 0 deg steered (-2.793, 0.001) for (-2.803, 0)). Steered, the ACT offset is gone (and the
     yaw's turn of the lead is needed: leaving it out puts 0.13 px ACT, turning it the wrong way 0.26)."""
     system = _system(latitude_deg, yaw)
-    want = _earth_px(system, "blue")
+    want = earth_px(system, "blue")
     if yaw:
         assert want[1] == 0.0 and want[0] < -2.0
     else:
         assert abs(want[1]) > 10.0
     r = simulate_bands(scene, system, pixel_m=P, noise=False, bands=["pan", "blue"], window=WINDOW)
-    got = _offset(r["pan"].image, r["blue"].image, (round(want[0]), round(want[1])), 4)
+    got = content_offset(r["pan"].image, r["blue"].image, (round(want[0]), round(want[1])), 4)
     assert got == pytest.approx(want, abs=0.05), (got, want)
 
 
@@ -95,10 +73,10 @@ def test_two_ms_bands_with_yaw_steering_differ_by_the_difference_of_their_predic
     """NIR (10.5 mm) against green (7.5 mm), steered, at 40 deg: within 0.05 px of the difference of their
     predictions."""
     system = _system(40.0, True)
-    g, n = _earth_px(system, "green"), _earth_px(system, "nir")
+    g, n = earth_px(system, "green"), earth_px(system, "nir")
     want = (n[0] - g[0], n[1] - g[1])
     r = simulate_bands(scene, system, pixel_m=P, noise=False, bands=["green", "nir"], window=WINDOW)
-    got = _offset(r["green"].image, r["nir"].image, (round(want[0]), round(want[1])), 1)
+    got = content_offset(r["green"].image, r["nir"].image, (round(want[0]), round(want[1])), 1)
     assert got == pytest.approx(want, abs=0.05), (got, want)
 
 
@@ -140,5 +118,5 @@ def test_an_injected_offset_shows_as_given_under_yaw_steering(texture, earth, of
     if earth not in plain:
         plain[earth] = simulate_bands(scene, system, pixel_m=P, noise=False, bands=["red"], window=WINDOW)["red"].image
     shifted = simulate_bands(scene, moved, pixel_m=P, noise=False, bands=["red"], window=WINDOW)["red"].image
-    got = _offset(plain[earth], shifted, (round(offset_px[0]), round(offset_px[1])), 1)
+    got = content_offset(plain[earth], shifted, (round(offset_px[0]), round(offset_px[1])), 1)
     assert got == pytest.approx(offset_px, abs=0.005), got
