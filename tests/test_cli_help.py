@@ -80,6 +80,8 @@ def test_help_has_no_hard_breaks_nor_escaped_percent(path, width, monkeypatch):
     text = _render(path, width, monkeypatch)
     assert "%%" not in text, f"satchain {' '.join(path)} --help shows a literal %%"
     assert "``" not in text, f"satchain {' '.join(path)} --help shows reST literals (``x``)"
+    # rich reads [name] as markup: an unescaped "[[bands]]" showed as "[]"
+    assert "[]" not in text, f"satchain {' '.join(path)} --help lost a [bracketed] word to rich markup"
     assert _hard_breaks(_description(text), width - 2) == [], f"satchain {' '.join(path)} --help (COLUMNS={width})"
     rows = _command_rows(text)
     breaks = [

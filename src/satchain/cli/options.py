@@ -104,7 +104,7 @@ BandsOpt = Annotated[
     int | None,
     typer.Option(
         "--band",
-        help="only band N, counted from 1: of the system's [[bands]] (in their order) with a banded "
+        help="only band N, counted from 1: of the system's \\[\\[bands]] (in their order) with a banded "
         "system, else of a multiband raster (default: every band, each simulated)",
     ),
 ]

@@ -5,7 +5,9 @@ Each band is the unchanged image chain (:class:`~satchain.engine.simulate.Simula
 (:meth:`~satchain.config.system.ImagingSystem.for_band`: its optics wavelengths, radiometric band, QE, pixel, TDI)
 on the grey scene that band sees (:func:`~satchain.scene.spectral.layout_for_band`: every material replaced by its
 reflectance integrated over the band's response). Nothing is resampled: every band is sampled from the ground
-truth on its own pixel grid.
+truth on its own pixel grid. Within one call the bands share what they can (:mod:`~satchain.engine.bands_shared`):
+the ground's render, and on each pixel grid the engine's stage 1 and the coarse frame's transform, made for the
+grid's widest optical band; each band's image is the one it gets alone within 1e-6 of the scene's range.
 
 **Grids.** All bands share the ground window's top-left corner: band ``i``'s pixel ``(r, c)`` nominally covers
 ``[x0 + c g, x0 + (c + 1) g) x [y0 + r g, y0 + (r + 1) g)`` (``g`` its GSD), so the PAN and MS grids are
@@ -21,16 +23,17 @@ arises, on the ground: the band's detector grid starts ``(-dy g_alt, -dx g_act)`
 its transform puts it, in the sign convention of :func:`satchain.measure.registration.measure_registration`
 (``image(y, x) = reference(y - dy, x - dx)``). Where the image is a sheared, scaled or turned map of the ground (a
 drift a line: Earth rotation, ``motion.line_rate_error``; yaw steering) the ground is displaced by that map of the
-offset (:func:`_offset_on_ground_px`), so that the image still shows it as given (within 0.0001 px on band-limited
-ground: tests/engine/test_bands_yaw.py). The transforms stay nominal: the offset is a misregistration, which
-measuring two bands recovers. Line-of-sight motion in time is formed per band along its own time path
+offset (:mod:`~satchain.engine.band_ground`), so that the image still shows it as given (within 0.0001 px on
+band-limited ground: tests/engine/test_bands_yaw.py). The transforms stay nominal: the offset is a misregistration,
+which measuring two bands recovers. Line-of-sight motion in time is formed per band along its own time path
 (:mod:`satchain.engine.timepath`); a band's sinusoidal oscillations are those of its own time, ``delay_s``
 (:func:`band_delay_s`) later than the system's detector line (each phase advanced by ``360 f delay_s``). A pixel
 sees the ground at ``x = j + LOS(t)``, so a band's content moves by minus its line of sight: the offset from PAN is
 minus the difference of their lines of sight (the budget's ``oscillations`` give that difference, line-of-sight
 signed; tests/engine/test_bands.py).
 Under ``orbit.earth_rotation`` (with or without yaw steering) each band's detector grid starts where the ground has
-moved by its own time (:func:`_earth_lead_px`), so its content lies where the budget's ``earth_rotation`` puts it.
+moved by its own time (:mod:`~satchain.engine.band_ground`), so its content lies where the budget's
+``earth_rotation`` puts it.
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
 on line-of-sight logs, and the actual delay (``offset / pitch / a`` lines) in the oscillations' phases.
 
@@ -62,7 +65,15 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.config.system import ImagingSystem
-from satchain.engine.bands_shared import band_otf, band_params, shared_coarse, shared_render
+from satchain.engine.band_ground import _ground_shift_px
+from satchain.engine.bands_shared import (
+    band_otf,
+    band_params,
+    group_decimation,
+    shared_coarse,
+    shared_render,
+    shared_spectrum,
+)
 from satchain.engine.sensor import OUTPUT_UNITS, sensor_from_system
 from satchain.engine.simulate import SimParams, Simulator
 from satchain.engine.sources import SceneSource
@@ -253,13 +264,13 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
                units: str, noise: bool, seed: int, reuse: dict | None = None) -> BandImage:  # fmt: skip
     """Band ``i`` (of a system without bands: the system itself) formed through the unchanged engine; ``reuse``
     (one call's store, :func:`simulate_bands`): the ground rendered once per grey layout, the OTF of
-    :func:`band_otf`."""
+    :func:`band_otf`, stage 1 and the frame's transform once per pixel grid (:func:`_plan_stage1`)."""
     from affine import Affine
 
     from satchain.scene.spectral import layout_for_band
 
     banded = bool(system.bands)
-    s = at_own_time(system.for_band(i), band_delay_s(system, i)) if banded else system
+    s = _band_system(system, i, reuse) if banded else system
     scene = layout_for_band(layout, *band_response(system, i)) if banded else layout
     o = system.bands[i].registration_offset_px if banded else (0.0, 0.0)
     offset = (float(o[0]), float(o[1]))
@@ -270,19 +281,59 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     src = SceneSource(src_scene, pixel_m=pixel_m)
     p = params if phase == params.phase_px else dataclasses.replace(params, phase_px=phase)
     p = band_params(p, system, s) if banded and reuse is not None else p  # its far margin: the system's metres
-    otf = band_otf(s, system.bands[i]) if banded and reuse is not None else None
+    otf = _band_otf(reuse, s, system, i) if banded and reuse is not None else None
+    stage1 = reuse.get("stage1", {}).get(i) if banded and reuse is not None else None
+    if stage1 is not None and stage1[0] > 0.0:  # its grid's shared stage 1 (bands_shared.group_decimation)
+        p = dataclasses.replace(p, pass_cy_per_px=stage1[0], stopband_ratio=stage1[1])
     sim = Simulator(s, input_pixel_m=pixel_m, input_shape=src.shape_px, params=p, motion_seed=seed, otf=otf)
     if sim.output_shape != n_out:  # _band_source sized the input for exactly these pixels
         raise ConfigError(f"band {i}: output {sim.output_shape} differs from the window's {n_out} pixels")
     sensor = None if (not noise and units == "reflectance") else sensor_from_system(s)
     bs = band_seed(seed, i)
     coarse = shared_coarse(reuse, sim, src_scene, src) if banded and reuse is not None else None
-    image = sim.run(src, sensor=sensor, units=units, noise=noise, seed=bs, coarse=coarse)
+    spectrum = None  # its grid's frame transform, shared (bands_shared.shared_spectrum)
+    if reuse is not None and coarse is not None and stage1 is not None and stage1[0] > 0.0:
+        spectrum = shared_spectrum(reuse, sim, coarse)
+    image = sim.run(src, sensor=sensor, units=units, noise=noise, seed=bs, coarse=coarse, spectrum=spectrum)
     x0, y0 = window.col0 * pixel_m, window.row0 * pixel_m
     lam = system.bands[i].center_wavelength_m if banded else _centre(s)
     name = system.band_names[i] if banded else (s.name or "band1")
     return BandImage(i, name, image, s.gsd_alt_m, s.gsd_act_m, float(lam),
                      Affine(s.gsd_act_m, 0.0, x0, 0.0, -s.gsd_alt_m, -y0), s, (offset[0], offset[1]), bs)  # fmt: skip
+
+
+def _band_system(system: ImagingSystem, i: int, reuse: dict | None) -> ImagingSystem:
+    """Band ``i``'s system at its own time (made once per call when ``reuse`` holds them)."""
+    held = None if reuse is None else reuse.setdefault("systems", {})
+    if held is not None and i in held:
+        return held[i]
+    s = at_own_time(system.for_band(i), band_delay_s(system, i))
+    if held is not None:
+        held[i] = s
+    return s
+
+
+def _band_otf(reuse: dict, s: ImagingSystem, system: ImagingSystem, i: int):
+    held = reuse.setdefault("otfs", {})
+    if i not in held:
+        held[i] = band_otf(s, system.bands[i])
+    return held[i]
+
+
+def _plan_stage1(reuse: dict, system: ImagingSystem, which: list[int], pixel_m: float, params: SimParams) -> None:
+    """``reuse["stage1"]``: each band's stage-1 pass band and stopband ratio (:func:`group_decimation`), the bands
+    grouped by pixel grid (GSD, active width) and their optics' cutoffs on the ground truth's pixel."""
+    from satchain.engine.simulate import cutoff_cy_per_px
+
+    if not system.bands:
+        return
+    bands = {}
+    for i in which:
+        s = _band_system(system, i, reuse)
+        det = s.detector
+        grid = (round(s.gsd_alt_m, 12), round(s.gsd_act_m, 12), det.active_width_y_m, det.active_width_x_m)
+        bands[i] = (grid, cutoff_cy_per_px(s, _band_otf(reuse, s, system, i), pixel_m))
+    reuse["stage1"] = group_decimation(bands, params.stopband_ratio)
 
 
 def band_delay_s(system: ImagingSystem, index: int) -> float:
@@ -299,72 +350,6 @@ def band_delay_s(system: ImagingSystem, index: int) -> float:
     if not system.bands:
         return 0.0
     return system.bands[index].offset_alt_mm * 1e-3 * system.line_time_s / system.detector.pitch_y_m
-
-
-def _earth_lead_px(system: ImagingSystem, index: int, s: ImagingSystem) -> tuple[float, float]:
-    """(ALT, ACT) band px the ground under band ``index`` (system ``s``) has moved under the Earth's rotation (drift
-    ``(eps, sigma)`` px a line: :mod:`satchain.engine.timepath`) when its row 0 starts, from the system's row 0
-    start: ``n = [offset g / pitch + (g_b (1 - N_b) - g (1 - N)) / 2] / g_b`` of its lines later (``offset_alt_mm``
-    places centre lines, crossed mid-TDI window; ``g``, ``N``: GSD ALT, TDI stages; ``_b``: the band's). On nominal
-    grids the TDI terms cancel: the budget's ``earth_rotation``. (0, 0) without it.
-
-    With yaw steering the detector is turned by ``gamma`` so that its columns follow the ground's motion: the drift
-    is ``(0, eps')`` in the detector's frame (``eps' = |(x, y)| / g - 1``, the relative speed per line over the GSD),
-    so the lead is ``(eps' n, 0)`` there -- no ACT part. The engine shifts the band's ground window before it turns
-    the ground (:mod:`satchain.engine.yaw`: image pixel ``q`` sees ground ``P + M (q - P)``), so the lead is
-    returned on the ground's axes, ``M (0, eps' n)`` in ``(x, y)``: ``(eps' n cos gamma, eps' n sin gamma)``
-    (ALT, ACT), which the turned image shows as ``(eps' n, 0)``."""
-    if not system.orbit.earth_rotation:
-        return (0.0, 0.0)
-    from satchain.tf.pushbroom import PushbroomTerms
-
-    earth = PushbroomTerms(s).earth or {"tdi_drift_px_per_stage": (0.0, 0.0)}
-    sigma, eps = earth["tdi_drift_px_per_stage"]
-    g, n_st, g_b, n_b = system.gsd_alt_m, system.detector.tdi_stages, s.gsd_alt_m, s.detector.tdi_stages
-    lead_m = system.bands[index].offset_alt_mm * 1e-3 * g / system.detector.pitch_y_m
-    n = (lead_m + (g_b * (1 - n_b) - g * (1 - n_st)) / 2.0) / g_b
-    if system.orbit.yaw_steering:  # sigma = 0 in the detector's frame; the lead on the ground's axes
-        gamma = math.radians(float(earth.get("rotation_deg", 0.0)))
-        return (float(eps) * n * math.cos(gamma), float(eps) * n * math.sin(gamma))
-    return (float(eps) * n, float(sigma) * n)
-
-
-def _ground_shift_px(system: ImagingSystem, index: int, s: ImagingSystem, offset: tuple[float, float]) -> tuple:
-    """(ALT, ACT) band px by which band ``index`` (system ``s``) samples the ground displaced: its
-    ``registration_offset_px`` carried onto the ground (:func:`_offset_on_ground_px`, so that the image shows it as
-    given) less the Earth's lead (:func:`_earth_lead_px`, already on the ground's axes)."""
-    earth = _earth_lead_px(system, index, s)
-    a, c = _offset_on_ground_px(s, offset)
-    return (a - earth[0], c - earth[1])
-
-
-def _offset_on_ground_px(s: ImagingSystem, offset: tuple[float, float]) -> tuple[float, float]:
-    """The ground displacement (ALT, ACT; band px, the ground's axes) that moves band ``s``'s image content by
-    ``offset = (a, c)`` of its pixels: the linear part of the image's map onto the ground
-    (:meth:`satchain.tf.pushbroom.PushbroomTerms.image_affine`, which the engine forms) applied to the offset.
-    Row ``i``, column ``j`` see the ground at ``x = j + sigma i``, ``y = (1 + eps) i`` (px; ``(sigma, eps)`` the
-    drift a line: Earth rotation and ``motion.line_rate_error``), turned about a pivot that moves with the grid by
-    ``M = [[cos g, sin g], [-sin g, cos g]]`` (``g`` the yaw, steered; :mod:`satchain.engine.yaw`), so a ground
-    shift ``d`` moves the content by ``D^-1 M^-1 d`` and the offset needs ``d = M D (c, a)``, in metres
-    (``x``: ACT, ``y``: ALT; ``G_x``, ``G_y`` the GSDs)::
-
-        x = G_x (c + sigma a),   y = G_y (1 + eps) a
-        ACT = (x cos g + y sin g) / G_x,   ALT = (-x sin g + y cos g) / G_y
-
-    Unsteered, ``sigma`` shears an ALT offset across track (-0.05 px a line at 40 deg: 0.3 px ALT showed 0.015
-    px ACT) and ``1 + eps`` scales it (0.3 showed 0.297); steered, ``g`` turns it (-2.9 deg: the same 0.015 px).
-    Without either the offset is the displacement itself (the identity, exactly)."""
-    from satchain.tf.pushbroom import PushbroomTerms
-
-    terms = PushbroomTerms(s)
-    sigma, eps = terms.drift_px if terms.drift_px is not None else (0.0, 0.0)
-    g = math.radians(float(terms.earth.get("rotation_deg", 0.0))) if terms.earth is not None else 0.0
-    a, c = (float(v) for v in offset)
-    if not (sigma or eps or g) or not (a or c):
-        return (a, c)
-    x_m, y_m = s.gsd_act_m * (c + sigma * a), s.gsd_alt_m * (1.0 + eps) * a
-    cos_g, sin_g = math.cos(g), math.sin(g)
-    return ((y_m * cos_g - x_m * sin_g) / s.gsd_alt_m, (x_m * cos_g + y_m * sin_g) / s.gsd_act_m)
 
 
 def at_own_time(s: ImagingSystem, delay_s: float) -> ImagingSystem:
@@ -454,7 +439,8 @@ def simulate_bands(
         bad = [b for b in which if not 0 <= b < n]
         if bad or not which:
             raise ConfigError(f"bands = {bands!r}: give band names or indices 0 to {n - 1}")
-    reuse: dict = {}  # this call's shared render (no state outlives the call)
+    reuse: dict = {}  # this call's shared render, stage 1 and transform (no state outlives the call)
+    _plan_stage1(reuse, system, which, p, params)
     out = tuple(_form_band(layout, system, i, win, p, params=params, units=units, noise=noise, seed=seed,
                            reuse=reuse) for i in which)  # fmt: skip
     return BandImages(out, units, bool(noise), int(seed), p, win)

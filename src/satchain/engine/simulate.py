@@ -20,99 +20,26 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from satchain._validate import check_choice, check_range
 from satchain.config.system import ImagingSystem
 from satchain.engine import spectral
+from satchain.engine.params import SimParams
 from satchain.engine.sensor import OUTPUT_UNITS, SensorModel
-from satchain.engine.sources import BORDER_RULES, BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
+from satchain.engine.sources import BorderedWindow, GroundTruth, as_ground_truth, release_pages, take
 from satchain.engine.tiling import AxisSampling, Tile, plan_tiles
 from satchain.engine.timepath import TimePath, form_rows, time_path
 from satchain.errors import ConfigError, ResourceLimitError
 from satchain.tf.budget import SystemOTF
 
-__all__ = ["SimParams", "Simulator", "has_pushbroom_motion", "simulate"]
+__all__ = ["SimParams", "Simulator", "cutoff_cy_per_px", "decimation_factor", "has_pushbroom_motion", "simulate"]
 
 Progress = Callable[[int, int], None]
 Weight = Callable[[np.ndarray, np.ndarray], np.ndarray]
 _TILE_BYTES_PER_PX = 20  # a float64 render + row chunks + band spectra (generous: an array source needs ~4)
 _FRAME_BYTES_PER_PX = 20  # coarse float32 + complex64 half spectrum + band products
-
-
-@dataclass(frozen=True)
-class SimParams:
-    """Accuracy and performance knobs of the engine (explicit and frozen; there are no global settings).
-
-    Parameters
-    ----------
-    far_margin_px : int
-        Output pixels by which the coarse frame extends beyond the ground truth (by the border rule); the
-        PSF tails are exact within the frame.
-    exact_border_px : int
-        Output pixels beyond the ground truth's edge that stage 1 decimates from the input continued by the
-        border rule itself (exact); farther out the coarse frame is continued by the same rule on the coarse
-        grid, an approximation that reaches the image only through the PSF's far tails.
-    border : {"symmetric", "periodic", "constant"}
-        How the ground truth is continued beyond its edge; ``border_value`` for "constant". "periodic" is
-        exact when the input size is a multiple of the decimation factor ``Simulator.D``.
-    phase_px : (float, float)
-        Offset (rows, cols) of the detector grid's origin on the input grid, input pixels, >= 0.
-    stopband_ratio : float
-        Decimation low-pass stop frequency / optical cutoff (> 1). Larger: shorter tile margins, less
-        decimation.
-    max_tile_bytes : int
-        Memory for one decimation tile; sets the tile size.
-    max_frame_bytes : int
-        Memory allowed for the coarse frame; larger work is refused up front with the amount it needs.
-    noise_block_px : int
-        Side of the fixed noise-block grid (output pixels).
-    workers : int
-        Threads for the FFTs.
-    stream_tile_px : int
-        Streamed stage 2 (:mod:`satchain.engine.stream`, for inputs whose coarse frame does not fit): output
-        tile side, output pixels (rounded up to a multiple of ``noise_block_px`` and of the output period
-        that keeps tiles on the coarse grid).
-    stream_margin_px : int
-        Streamed stage 2: output pixels of coarse frame read beyond each side of a tile; the PSF tail beyond
-        it is wrapped around the tile's window instead of taken from the scene (the error it leaves is
-        measured in ``benchmarks/bench_stream.py``).
-    """
-
-    far_margin_px: int = 128
-    exact_border_px: int = 16
-    border: str = "symmetric"
-    border_value: float = 0.0
-    phase_px: tuple[float, float] = (0.0, 0.0)
-    stopband_ratio: float = 1.8
-    max_tile_bytes: int = 640 * 2**20
-    max_frame_bytes: int = 3 * 2**30
-    noise_block_px: int = 64
-    workers: int = 2
-    stream_tile_px: int = 2048
-    stream_margin_px: int = 128
-
-    def __post_init__(self) -> None:
-        check_choice("border", self.border, BORDER_RULES)
-        if not 0 <= int(self.far_margin_px) <= 100_000:
-            raise ConfigError(f"far_margin_px = {self.far_margin_px!r}: must be in [0, 100000]")
-        if not 0 <= int(self.exact_border_px) <= 100_000:
-            raise ConfigError(f"exact_border_px = {self.exact_border_px!r}: must be in [0, 100000]")
-        for v in self.phase_px:
-            check_range("phase_px", v, 0, None)
-        check_range("stopband_ratio", self.stopband_ratio, 1.05, 10)
-        check_range("max_tile_bytes", self.max_tile_bytes, 1 << 20, None)
-        check_range("max_frame_bytes", self.max_frame_bytes, 1 << 20, None)
-        if not 1 <= int(self.noise_block_px) <= 4096:
-            raise ConfigError(f"noise_block_px = {self.noise_block_px!r}: must be in [1, 4096]")
-        if not 1 <= int(self.workers) <= 256:
-            raise ConfigError(f"workers = {self.workers!r}: must be in [1, 256]")
-        if not 64 <= int(self.stream_tile_px) <= 65536:
-            raise ConfigError(f"stream_tile_px = {self.stream_tile_px!r}: must be in [64, 65536]")
-        if not 0 <= int(self.stream_margin_px) <= 100_000:
-            raise ConfigError(f"stream_margin_px = {self.stream_margin_px!r}: must be in [0, 100000]")
 
 
 def _int_ratio(k: float) -> int | None:
@@ -162,7 +89,7 @@ class Simulator:
         self._exclude: tuple[str, ...] = ("detector",)
         # focal-plane cy/mm per cycle per input pixel, along y (ALT) and x (ACT): differ off nadir
         self.to_cy_per_mm = tuple(system.focal_cy_per_mm_per_ground_cy_per_m(ax) / a for ax in ("alt", "act"))
-        self.f_cut = self.otf.cutoff_cy_per_mm / min(self.to_cy_per_mm)  # cycles per input pixel, the wider axis
+        self.f_cut = cutoff_cy_per_px(system, self.otf, a)  # cycles per input pixel, the wider axis
         from satchain.engine.yaw import yaw_rotation_deg
 
         self.yaw_deg = yaw_rotation_deg(system)  # the detector turned: the ground truth rotated (engine.yaw)
@@ -184,14 +111,15 @@ class Simulator:
     # ------------------------------------------------------------------ planning
     def _plan_decimation(self) -> None:
         p = self.params
-        f_stop = p.stopband_ratio * self.f_cut
-        self.D = max(1, int(math.floor(0.5 / f_stop - 1e-9))) if f_stop < 0.25 else 1
+        self.f_pass = max(self.f_cut, float(p.pass_cy_per_px))  # stage 1's pass band (cycles per input pixel)
+        f_stop = p.stopband_ratio * self.f_pass
+        self.D = decimation_factor(self.f_pass, p.stopband_ratio)
         # use all the room decimation leaves: the wider the transition, the shorter the low-pass kernel
         self.f_stop = 0.5 / self.D * (1 - 1e-3) if self.D > 1 else f_stop
         if self.D == 1:
             self.margin_fine = 0
         else:
-            m = spectral.LOWPASS_SUPPORT / (self.f_stop - self.f_cut)
+            m = spectral.LOWPASS_SUPPORT / (self.f_stop - self.f_pass)
             self.margin_fine = int(math.ceil(m / self.D)) * self.D
         periodic = p.border == "periodic"
         self.coarse_ext = tuple(
@@ -275,7 +203,7 @@ class Simulator:
         """The coarse samples of one tile (its margins read through the border rule)."""
         p = self.params  # the tile is assembled chunk by chunk as it is transformed; NaN/inf shows in the result
         data = BorderedWindow(source, tile.input, rule=p.border, value=p.border_value, dtype=np.float32, check=False)
-        out = spectral.decimate_tile(data, D=self.D, f_pass=self.f_cut, f_stop=self.f_stop, workers=p.workers)
+        out = spectral.decimate_tile(data, D=self.D, f_pass=self.f_pass, f_stop=self.f_stop, workers=p.workers)
         m = self.margin_fine // self.D
         return data.require_finite(out)[m : m + tile.coarse.height, m : m + tile.coarse.width]
 
@@ -295,16 +223,42 @@ class Simulator:
         return coarse
 
     # ------------------------------------------------------------------ stage 2
-    def form_image(self, coarse: np.ndarray) -> np.ndarray:
+    def form_image(self, coarse: np.ndarray | None, *, spectrum: spectral.BandSpectrum | None = None) -> np.ndarray:
         """Stage 2: OTF, detector footprints and sampling, from the coarse grid to the output image (input
-        units, no noise), on the whole coarse frame at once (exact; see :meth:`form_tile` for a window)."""
+        units, no noise), on the whole coarse frame at once (exact; see :meth:`form_tile` for a window).
+        ``spectrum``: the coarse frame's band already transformed (:meth:`frame_spectrum`, at least this system's
+        band), e.g. one transform shared by systems that differ only in their OTF; ``coarse`` is then unused."""
+        if spectrum is not None:
+            spectrum = self.own_band(spectrum)
+        elif coarse is not None:
+            spectrum = self.frame_spectrum(coarse)
+        else:
+            raise ConfigError("form_image: give coarse or spectrum")
+        (ey, ex) = self.frame_ext
+        return self.form_spectrum(spectrum, (-ey, -ex), (0, self.output_shape[0]), (0, self.output_shape[1]))
+
+    def frame_spectrum(self, coarse: np.ndarray, *, f_band: float | None = None) -> spectral.BandSpectrum:
+        """The band of the whole coarse frame's DFT (:meth:`form_image`'s transform) up to ``f_band`` cycles per
+        input pixel (default the optics' cutoff; up to the coarse grid's Nyquist)."""
         if coarse.shape != self.n_coarse:
             raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
         self.check_frame()
         (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
         frame = self._frame_window(coarse, (-ey, -ex), (ly, lx))
         self._yaw_cache = None  # the rotated frame is not kept beyond this call (its copy is ``frame``)
-        return self._form_block(frame, (-ey, -ex), (0, self.output_shape[0]), (0, self.output_shape[1]))
+        f = (self.f_cut if f_band is None else max(float(f_band), self.f_cut)) * self.D  # cycles per coarse sample
+        return spectral.tile_band_spectrum(
+            frame, by=spectral.band_index(ly, f), bx=spectral.band_index(lx, f), workers=self.params.workers
+        )
+
+    def own_band(self, spec: spectral.BandSpectrum) -> spectral.BandSpectrum:
+        """``spec`` (a :meth:`frame_spectrum` of this frame, of at least this system's band) restricted to the
+        optics' band: exactly the spectrum :meth:`frame_spectrum` gives."""
+        ly, lx = self.frame_shape
+        if tuple(spec.shape) != (ly, lx):
+            raise ConfigError(f"spectrum: frame {tuple(spec.shape)} must be {self.frame_shape}")
+        f = self.f_cut * self.D
+        return spec.restrict(by=spectral.band_index(ly, f), bx=spectral.band_index(lx, f))
 
     def frame_map(self, axis: int) -> np.ndarray:
         """Coarse-grid index of every sample of the coarse frame along ``axis`` (frame sample 0 is the
@@ -529,21 +483,47 @@ class Simulator:
         seed: int = 0,
         progress: Progress | None = None,
         coarse: np.ndarray | None = None,
+        spectrum: spectral.BandSpectrum | None = None,
     ) -> np.ndarray:
         """Both stages and the sensor: the simulated image in ``units``. ``coarse``: a stage-1 result
-        already computed by :meth:`decimate` (e.g. to also form :meth:`focal_plane` from it)."""
+        already computed by :meth:`decimate` (e.g. to also form :meth:`focal_plane` from it); ``spectrum``: its
+        frame's transform already computed (:meth:`form_image`)."""
         check_choice("units", units, OUTPUT_UNITS)
         if sensor is None and (noise or units in ("dn", "electrons", "radiance")):
             raise ConfigError(f"units = {units!r}, noise = {noise!r}: need a SensorModel (radiometry) for that")
         if tuple(source.shape_px) != self.input_shape:
             raise ConfigError(f"source shape {tuple(source.shape_px)} differs from the planned {self.input_shape}")
         self.check_frame()  # before stage 1, not after it
-        img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
+        if spectrum is not None:
+            img = self.form_image(None, spectrum=spectrum)
+        else:
+            img = self.form_image(self.decimate(source, progress=progress) if coarse is None else coarse)
         if sensor is not None:
             img = sensor.convert(
                 img, origin=(0, 0), units=units, noise=noise, seed=seed, block_px=self.params.noise_block_px
             )
         return img
+
+
+def decimation_factor(f_pass: float, stopband_ratio: float) -> int:
+    """Stage 1's decimation ``D`` for a pass band ``f_pass`` (cycles per input pixel): the largest whose coarse
+    grid's Nyquist ``1 / (2 D)`` leaves the stop band at least ``stopband_ratio`` times the pass band (1 when none
+    does).
+
+    Examples
+    --------
+    >>> decimation_factor(0.133, 1.8), decimation_factor(0.188, 1.8), decimation_factor(0.188, 1.25)
+    (2, 1, 2)
+    """
+    f_stop = stopband_ratio * f_pass
+    return max(1, int(math.floor(0.5 / f_stop - 1e-9))) if f_stop < 0.25 else 1
+
+
+def cutoff_cy_per_px(system: ImagingSystem, otf: SystemOTF, input_pixel_m: float) -> float:
+    """The optics' cutoff of ``otf`` (``system``'s) in cycles per input pixel of ``input_pixel_m``, along the axis
+    where it is widest (:attr:`Simulator.f_cut`)."""
+    to = (system.focal_cy_per_mm_per_ground_cy_per_m(ax) / input_pixel_m for ax in ("alt", "act"))
+    return float(otf.cutoff_cy_per_mm / min(to))
 
 
 def has_pushbroom_motion(system: ImagingSystem) -> bool:

@@ -73,6 +73,28 @@ class BandSpectrum:
         nx = shape[1]
         self.cx = np.where((mx == 0) | ((nx % 2 == 0) & (mx == nx // 2)), 1.0, 2.0)
 
+    def restrict(self, *, by: int, bx: int) -> BandSpectrum:
+        """The block ``|my| <= by``, ``0 <= mx <= bx`` of this one (which must hold it): exactly what
+        :func:`tile_band_spectrum` gives for that band (the same values, row order and ``my``; a view when it is
+        the whole of this one, else a copy)."""
+        ny = self.shape[0]
+        whole_rows = 2 * by + 1 >= ny
+        have_by = int(np.max(np.abs(self.my))) if self.my.size else 0
+        if bx > int(self.mx[-1]) or (not whole_rows and by > have_by) or (whole_rows and self.my.size < ny):
+            raise ValueError(f"restrict(by={by}, bx={bx}): outside this spectrum's band (by {have_by}, "
+                             f"bx {int(self.mx[-1])})")  # fmt: skip
+        if whole_rows:
+            rows = np.argsort(np.mod(self.my, ny), kind="stable")  # tile_band_spectrum's order: 0..ny-1 as fftfreq
+            if np.array_equal(rows, np.arange(ny)) and bx == int(self.mx[-1]):
+                return self
+            return BandSpectrum(self.values[rows, : bx + 1], self.my[rows], self.mx[: bx + 1], self.shape)
+        keep = np.concatenate([np.flatnonzero((self.my >= 0) & (self.my <= by)),
+                               np.flatnonzero((self.my < 0) & (self.my >= -by))])  # fmt: skip
+        keep = keep[np.argsort(np.where(self.my[keep] >= 0, self.my[keep], 2 * ny + self.my[keep]), kind="stable")]
+        if keep.size == self.my.size and bx == int(self.mx[-1]):
+            return self
+        return BandSpectrum(self.values[keep, : bx + 1], self.my[keep], self.mx[: bx + 1], self.shape)
+
 
 def tile_band_spectrum(tile: np.ndarray | BorderedWindow, *, by: int, bx: int, workers: int = 1) -> BandSpectrum:
     """DFT of ``tile`` restricted to ``|my| <= by``, ``0 <= mx <= bx``."""

@@ -132,7 +132,7 @@ def rotated_frame(sim, coarse: np.ndarray) -> np.ndarray:
     array beside the coarse grid, :func:`satchain.engine.stream.coarse_store`)."""
     if sim._yaw_cache is not None and sim._yaw_cache[0] is coarse:
         return sim._yaw_cache[1]
-    check_band(sim.f_cut * sim.D, sim.f_stop * sim.D, sim.yaw_deg)
+    check_band(sim.f_pass * sim.D, sim.f_stop * sim.D, sim.yaw_deg)  # the whole pass band (bands share it)
     from satchain.tf.pushbroom import yaw_pivot_m
 
     (ey, ex), (ly, lx) = sim.frame_ext, sim.frame_shape

@@ -51,12 +51,25 @@ __all__ = [
 ]
 
 
+#: :class:`DiffractionOTF` evaluates the closed form on its radial table for calls on at least this many points.
+RADIAL_TABLE_MIN_POINTS = 1 << 19
+#: Steps of :class:`DiffractionOTF`'s radial table between 0 and the highest cutoff.
+RADIAL_TABLE_INTERVALS = 1 << 17
+
+
 class DiffractionOTF:
     """Polychromatic optics OTF of a :class:`satchain.config.system.Optics`, precomputed and callable at (fx, fy).
 
     ``OTF(f) = sum_i w_i OTF_i(f) ATF_i(f)`` over the optics' wavelengths with normalised weights ``w_i``.
     ``OTF_i`` is the closed form :func:`annular_mtf` when ``optics.needs_pupil_fft`` is False, else a
     :class:`PupilOTF`; ``ATF_i`` is :func:`shannon_atf` for ``optics.wfe_rms_waves`` (1 when 0).
+
+    The closed form depends on ``|f|`` alone, so a call on at least :data:`RADIAL_TABLE_MIN_POINTS` frequencies
+    (the engine's whole spectra) interpolates the polychromatic sum linearly on a table of
+    :data:`RADIAL_TABLE_INTERVALS` equal steps of ``|f|`` up to the highest cutoff, computed once: one lookup per
+    frequency instead of the closed form per wavelength. Within 5e-8 of the closed form for obscurations up to 0.5
+    and 2e-6 up to 0.95 (the error is that of linear interpolation of ``(1 - v)^(3/2)`` at the cutoff and of the
+    obscuration's ``B`` term at ``v = eps``: tests/tf/test_optics_table.py); exactly 0 beyond the cutoff.
 
     Wavefront errors (``zernike_rms_waves``, ``wfe_rms_waves``) are optical path differences expressed in
     waves at the effective (weight-averaged) wavelength; at wavelength ``lambda_i`` they are scaled by
@@ -78,6 +91,7 @@ class DiffractionOTF:
         lam_eff = float(optics.effective_wavelength_m)
         self.wfe_rms_waves = tuple(float(optics.wfe_rms_waves) * lam_eff / lam for lam in self.wavelengths_m)
         self.pupils: tuple[PupilOTF, ...] | None = None
+        self._table: tuple[float, np.ndarray] | None = None  # (highest cutoff, radial table): _radial_lookup
         if optics.needs_pupil_fft:
             self.pupils = tuple(
                 PupilOTF(
@@ -103,6 +117,13 @@ class DiffractionOTF:
         rows = _radial_rows(fx, fy) if self.pupils is None else None
         # a clear (or obscured) pupil's OTF depends on |f| only: on an outer grid, once per distinct |fy| row
         fr = np.hypot(fx, fy) if rows is None else np.hypot(rows[0][None, :], rows[1][:, None])
+        out = self._radial_lookup(fr) if self.pupils is None and fr.size >= RADIAL_TABLE_MIN_POINTS else None
+        if out is None:
+            out = self._sum(fr, fx, fy)
+        return out if rows is None else out[rows[2]]
+
+    def _sum(self, fr: np.ndarray, fx=None, fy=None) -> np.ndarray:
+        """The polychromatic sum at radial frequencies ``fr`` (a pupil's OTF at ``fx``, ``fy``)."""
         out = np.zeros(fr.shape, dtype=np.float64 if self.is_real else np.complex128)
         for i, (w, lam) in enumerate(zip(self.weights, self.wavelengths_m, strict=True)):
             if w == 0:
@@ -116,7 +137,28 @@ class DiffractionOTF:
             if self.wfe_rms_waves[i] > 0:
                 mono = mono * shannon_atf(fr / cutoff, self.wfe_rms_waves[i])
             out += w * mono
-        return out if rows is None else out[rows[2]]
+        return out
+
+    def _radial_lookup(self, fr: np.ndarray) -> np.ndarray | None:
+        """The closed-form sum at ``fr`` interpolated on the radial table (class docstring); None when ``fr``
+        holds a non-finite value (the closed form then says what it gives)."""
+        if self._table is None:
+            lams = [lam for w, lam in zip(self.weights, self.wavelengths_m, strict=True) if w != 0]
+            top = max((optical_cutoff_cy_per_mm(lam, self.f_number) for lam in lams), default=0.0)
+            if top <= 0.0:
+                return None
+            grid = np.linspace(0.0, top, RADIAL_TABLE_INTERVALS + 1)
+            self._table = (top, np.append(self._sum(grid), 0.0))  # the extra 0: beyond the cutoff
+        top, table = self._table
+        n = RADIAL_TABLE_INTERVALS
+        x = fr * (n / top)
+        if not np.isfinite(x).all():
+            return None
+        np.minimum(x, n + 0.5, out=x)  # beyond the cutoff: between the two zeros
+        i = x.astype(np.intp)
+        x -= i
+        lo = table[i]
+        return lo + (table[i + 1] - lo) * x
 
 
 def _radial_rows(fx: np.ndarray, fy: np.ndarray):
