@@ -7,7 +7,8 @@ on the grey scene that band sees (:func:`~satchain.scene.spectral.layout_for_ban
 reflectance integrated over the band's response). Nothing is resampled: every band is sampled from the ground
 truth on its own pixel grid. Within one call the bands share what they can (:mod:`~satchain.engine.bands_shared`):
 the ground's render, and on each pixel grid the engine's stage 1 and the coarse frame's transform, made for the
-grid's widest optical band; each band's image is the one it gets alone within 1e-6 of the scene's range.
+grid's widest optical band; each band's image is the one it gets alone within 1e-6 of the scene's range (next to
+the ground's edge: at the engine's accuracy there, :data:`~satchain.engine.bands_shared.GROUP_STOPBAND_RATIO`).
 
 **Grids.** All bands share the ground window's top-left corner: band ``i``'s pixel ``(r, c)`` nominally covers
 ``[x0 + c g, x0 + (c + 1) g) x [y0 + r g, y0 + (r + 1) g)`` (``g`` its GSD), so the PAN and MS grids are
