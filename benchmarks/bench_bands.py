@@ -8,7 +8,9 @@ each (best of ``--repeat``, default 2), their ratio (issue 32's target: <= 2.5),
 threads; steadier where other work shares the CPUs), and, for the all-band run, where
 each band's time goes -- the system OTF's evaluations (the engine's transfer and the node check of
 :func:`satchain.engine.bands_shared.band_otf`), the scene's rendering, and the rest of forming it (decimation, frame,
-spectrum, fold, noise) -- with the number of optics wavelengths each band's OTF used (and the system's own).
+spectrum, fold, noise) -- with the number of optics wavelengths each band's OTF used (and the system's own). The
+first MS band's "form" holds its grid's shared stage 1 and frame transform (:mod:`satchain.engine.bands_shared`);
+the others' only their own OTF, fold and noise.
 
 Run:  PYTHONPATH=src python benchmarks/bench_bands.py [--repeat N] [--pixel M]
 """
