@@ -81,7 +81,7 @@ def _engine_grid(top, ny=1024, nx=2046):
 def _table_error(optics) -> float:
     """Max |table - closed form| over an engine-like outer grid and over the boundary radii (tiled up to
     RADIAL_TABLE_MIN_POINTS), each call >= RADIAL_TABLE_MIN_POINTS frequencies."""
-    otf = DiffractionOTF(optics)
+    otf = DiffractionOTF(optics, radial_table=True)
     fx, fy = _engine_grid(max(_cutoffs(optics)))
     got = otf(fx[None, :], fy[:, None])
     assert got.shape == (fy.size, fx.size) and got.dtype == np.float64
@@ -137,7 +137,7 @@ def test_zero_beyond_the_highest_cutoff_and_one_at_zero(eps):
     f = np.zeros(M)  # the rest: f = 0
     f[: beyond.size] = beyond
     theta = rng.uniform(0.0, 2.0 * np.pi, M)
-    out = DiffractionOTF(optics)(f * np.cos(theta), f * np.sin(theta))
+    out = DiffractionOTF(optics, radial_table=True)(f * np.cos(theta), f * np.sin(theta))
     assert np.count_nonzero(out[: beyond.size]) == 0  # exactly 0, at every angle
     assert np.max(np.abs(out[beyond.size :] - 1.0)) <= 1e-12
 
@@ -153,12 +153,12 @@ def test_zero_at_the_highest_cutoff(lam_m, f_number, eps):
     f = np.zeros(M)
     f[0] = cutoff
     assert float(annular_mtf(cutoff, wavelength_m=lam_m, f_number=f_number, obscuration_ratio=eps)) == 0.0
-    assert DiffractionOTF(optics)(f, 0.0)[0] == 0.0
+    assert DiffractionOTF(optics, radial_table=True)(f, 0.0)[0] == 0.0
 
 
 def test_fewer_points_give_the_closed_form_exactly():
     optics = _optics(0.3323, ((480e-9, 0.5), (620e-9, 1.0), (910e-9, 0.7)), 9.72)
-    otf = DiffractionOTF(optics)
+    otf = DiffractionOTF(optics, radial_table=True)
     top = max(_cutoffs(optics))
     pts = _boundary_freqs(optics)
     f = np.concatenate([pts, np.linspace(0.0, 1.2 * top, M - 1 - pts.size)])  # one short of the threshold
@@ -177,7 +177,7 @@ def test_fewer_points_give_the_closed_form_exactly():
 
 def test_non_finite_frequencies():
     optics = _optics(0.3323, ((649.61e-9, 1.0),), 9.72)
-    otf = DiffractionOTF(optics)
+    otf = DiffractionOTF(optics, radial_table=True)
     top = max(_cutoffs(optics))
     f = np.linspace(0.0, 1.1 * top, M)
     # NaN or inf: refused with the same message on either path (small: closed form; large: the table's size)
@@ -210,7 +210,7 @@ def _chunked(fn, fx, fy, rows_per_chunk):
 def _exact_chunks_error(optics) -> float:
     """Max |table - exact| on >= RADIAL_TABLE_MIN_POINTS radii (the boundary radii and a sweep to 1.1 x the top),
     the exact values from the same DiffractionOTF called on chunks below the threshold (its closed-form path)."""
-    otf = DiffractionOTF(optics)
+    otf = DiffractionOTF(optics, radial_table=True)
     pts = _boundary_freqs(optics, per_step=64)
     f = np.concatenate([pts, np.linspace(0.0, 1.1 * max(_cutoffs(optics)), max(M - pts.size, 0))])
     got = otf(f, 0.0)
@@ -252,7 +252,7 @@ def test_system_otf_table_matches_exact_chunks(preset, band):
     system = load_preset(preset)
     system = system if band is None else system.for_band(band)
     assert not system.optics.needs_pupil_fft
-    otf = SystemOTF(system)
+    otf = SystemOTF(system, radial_table=True)
     fx, fy = _engine_grid(otf.cutoff_cy_per_mm)  # as the engine's band spectra: fx >= 0, fy = -f..f
     got = otf(fx[None, :], fy[:, None], exclude=("detector",))
     exact = _chunked(lambda x, y: otf(x, y, exclude=("detector",)), fx, fy, 256)
@@ -264,3 +264,18 @@ def test_system_otf_table_matches_exact_chunks(preset, band):
     ref = _closed_form(np.hypot(fx[None, :], afy[:, None]), system.optics)[inverse]
     err = float(np.max(np.abs(table - ref)))
     assert 0.0 < err <= 2e-8, f"{preset} band {band}: max |diffraction table - closed form| = {err:.3e}"
+
+
+@pytest.mark.parametrize("preset", ["ankarasat3", "ankarasat3-pms"])
+def test_without_radial_table_every_value_is_the_closed_form(preset):
+    """The default (a single-band system, satchain run's main image): no table, even on a whole spectrum -- the
+    values are bit for bit those of the closed form evaluated in chunks below the threshold."""
+    system = load_preset(preset)
+    otf = SystemOTF(system)
+    top = max(_cutoffs(system.optics))
+    fx = np.linspace(0.0, top, 1024)[None, :]
+    fy = np.linspace(-top, top, 1024)[:, None]
+    whole = otf(fx, fy, exclude=("detector",))
+    chunks = np.concatenate([otf(fx, c, exclude=("detector",)) for c in np.array_split(fy, 8)])
+    assert np.array_equal(whole, chunks)
+    assert not otf._diffraction.radial_table and otf._diffraction._table is None

@@ -68,6 +68,8 @@ def band_otf(s: ImagingSystem, band) -> Any:
     quadrature, :func:`~satchain.config.response.response_quadrature`) whose MTF differs from that over the system's
     nodes by less than :data:`OTF_TOLERANCE` at every frequency up to the optics' cutoff (along x, y and the
     diagonal); every other component unchanged. Else (no response, or no fewer nodes that close) ``s``'s own OTF.
+    Either with its diffraction interpolated on a radial table on whole spectra (``radial_table``: within 2e-8 of
+    the closed form, :class:`~satchain.tf.optics.DiffractionOTF`).
 
     Examples
     --------
@@ -81,7 +83,7 @@ def band_otf(s: ImagingSystem, band) -> Any:
     from satchain.config.response import response_quadrature
     from satchain.tf.budget import SystemOTF
 
-    full = SystemOTF(s)
+    full = SystemOTF(s, radial_table=True)  # whole spectra: the closed form on a radial table (within 2e-8)
     curve = band.spectral_response
     n_full = len(s.optics.wavelengths_m)
     if curve is None or "diffraction" not in full.component_names:
@@ -91,7 +93,8 @@ def band_otf(s: ImagingSystem, band) -> Any:
     for n in (k for k in OTF_NODES_TRIED if k < n_full):
         lam, w = response_quadrature(curve, n)
         lighter = SystemOTF(s.replace({"optics.wavelengths_m": tuple(float(x) for x in lam),
-                                       "optics.wavelength_weights": tuple(float(x) for x in w / w.sum())}))  # fmt: skip
+                                       "optics.wavelength_weights": tuple(float(x) for x in w / w.sum())}),
+                            radial_table=True)  # fmt: skip
         if float(np.max(np.abs(_diffraction_mtf(lighter, f) - ref))) < OTF_TOLERANCE:
             return lighter
     return full

@@ -65,6 +65,9 @@ class SystemOTF:
     system : ImagingSystem
     params : satchain.tf.optics.PupilParams, optional
         Accuracy knobs of the pupil FFT.
+    radial_table : bool
+        The diffraction's closed form interpolated on a radial table on calls of many frequencies
+        (:class:`satchain.tf.optics.DiffractionOTF`: within 2e-8 of it); default False: the closed form itself.
 
     Examples
     --------
@@ -76,15 +79,15 @@ class SystemOTF:
     1.0
     """
 
-    def __init__(self, system: ImagingSystem, *, params: Any = None):
+    def __init__(self, system: ImagingSystem, *, params: Any = None, radial_table: bool = False):
         from satchain._argcheck import check_argument
 
         check_argument("SystemOTF", "system", system)  # None or a file name: one line naming it
         self.system = system
         self._diffraction = (
-            _opt.make_diffraction_otf(system.optics)
+            _opt.make_diffraction_otf(system.optics, radial_table=radial_table)
             if params is None
-            else _opt.make_diffraction_otf(system.optics, params=params)
+            else _opt.make_diffraction_otf(system.optics, params=params, radial_table=radial_table)
         )
         self._components = self._build()
 

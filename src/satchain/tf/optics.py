@@ -66,7 +66,9 @@ class DiffractionOTF:
     ``OTF_i`` is the closed form :func:`annular_mtf` when ``optics.needs_pupil_fft`` is False, else a
     :class:`PupilOTF`; ``ATF_i`` is :func:`shannon_atf` for ``optics.wfe_rms_waves`` (1 when 0).
 
-    The closed form depends on ``|f|`` alone, so a call on at least :data:`RADIAL_TABLE_MIN_POINTS` distinct radii
+    With ``radial_table`` (the bands' engine asks for it: :func:`satchain.engine.bands_shared.band_otf`; by default
+    every value is the closed form itself): the closed form depends on ``|f|`` alone, so a call on at least
+    :data:`RADIAL_TABLE_MIN_POINTS` distinct radii
     (the engine's whole spectra; an outer grid's ``-fy`` and ``+fy`` rows count once) interpolates the
     polychromatic sum linearly on a table of :data:`RADIAL_TABLE_INTERVALS` equal steps of ``|f|`` up to the
     highest cutoff, made once per instance from a table of the one-wavelength closed form
@@ -89,7 +91,8 @@ class DiffractionOTF:
     (1.0, 0.0)
     """
 
-    def __init__(self, optics, *, params: PupilParams = PupilParams()) -> None:  # noqa: B008
+    def __init__(self, optics, *, params: PupilParams = PupilParams(), radial_table: bool = False) -> None:  # noqa: B008
+        self.radial_table = bool(radial_table)
         self.weights = np.asarray(optics.weights, dtype=float)
         self.wavelengths_m = tuple(float(w) for w in optics.wavelengths_m)
         self.f_number = float(optics.f_number)
@@ -123,7 +126,8 @@ class DiffractionOTF:
         rows = _radial_rows(fx, fy) if self.pupils is None else None
         # a clear (or obscured) pupil's OTF depends on |f| only: on an outer grid, once per distinct |fy| row
         fr = np.hypot(fx, fy) if rows is None else np.hypot(rows[0][None, :], rows[1][:, None])
-        out = self._radial_lookup(fr) if self.pupils is None and fr.size >= RADIAL_TABLE_MIN_POINTS else None
+        big = self.radial_table and self.pupils is None and fr.size >= RADIAL_TABLE_MIN_POINTS
+        out = self._radial_lookup(fr) if big else None
         if out is None:
             out = self._sum(fr, fx, fy)
         return out if rows is None else out[rows[2]]
@@ -212,8 +216,14 @@ def _radial_rows(fx: np.ndarray, fy: np.ndarray):
     return fx[0], distinct, index
 
 
-def make_diffraction_otf(optics, *, params: PupilParams = PupilParams()) -> DiffractionOTF:  # noqa: B008
-    """Precompute the polychromatic optics OTF of ``optics`` (a :class:`satchain.config.system.Optics`).
+def make_diffraction_otf(
+    optics,
+    *,
+    params: PupilParams = PupilParams(),  # noqa: B008
+    radial_table: bool = False,
+) -> DiffractionOTF:
+    """Precompute the polychromatic optics OTF of ``optics`` (a :class:`satchain.config.system.Optics`);
+    ``radial_table``: see :class:`DiffractionOTF`.
 
     Examples
     --------
@@ -222,7 +232,7 @@ def make_diffraction_otf(optics, *, params: PupilParams = PupilParams()) -> Diff
     >>> otf(np.zeros(3), np.array([0.0, 50.0, 100.0])).shape
     (3,)
     """
-    return DiffractionOTF(optics, params=params)
+    return DiffractionOTF(optics, params=params, radial_table=radial_table)
 
 
 def diffraction_otf(fx_cy_per_mm, fy_cy_per_mm, optics, *, params: PupilParams = PupilParams()):  # noqa: B008
