@@ -243,12 +243,17 @@ class Simulator:
         if coarse.shape != self.n_coarse:
             raise ConfigError(f"coarse: shape {coarse.shape} must be {self.n_coarse}")
         self.check_frame()
-        (ey, ex), (ly, lx) = self.frame_ext, self.frame_shape
-        frame = self._frame_window(coarse, (-ey, -ex), (ly, lx))
+        (ey, ex) = self.frame_ext
+        frame = self._frame_window(coarse, (-ey, -ex), self.frame_shape)
         self._yaw_cache = None  # the rotated frame is not kept beyond this call (its copy is ``frame``)
-        f = (self.f_cut if f_band is None else max(float(f_band), self.f_cut)) * self.D  # cycles per coarse sample
+        return self._block_spectrum(frame, self.f_cut if f_band is None else max(float(f_band), self.f_cut))
+
+    def _block_spectrum(self, block: np.ndarray, f_band: float) -> spectral.BandSpectrum:
+        """The band ``|f| <= f_band`` (cycles per input pixel) of a coarse block's DFT."""
+        f = f_band * self.D  # cycles per coarse sample
+        ly, lx = block.shape
         return spectral.tile_band_spectrum(
-            frame, by=spectral.band_index(ly, f), bx=spectral.band_index(lx, f), workers=self.params.workers
+            block, by=spectral.band_index(ly, f), bx=spectral.band_index(lx, f), workers=self.params.workers
         )
 
     def own_band(self, spec: spectral.BandSpectrum) -> spectral.BandSpectrum:
@@ -349,11 +354,7 @@ class Simulator:
     ) -> np.ndarray:
         """Output pixels ``rows x cols`` of the periodic extension of ``block``, whose sample 0 is the ground
         truth's coarse sample ``start``: OTF, footprints and sampling in frequency."""
-        f_band = self.f_cut * self.D  # cycles per coarse sample
-        ly, lx = block.shape
-        spec = spectral.tile_band_spectrum(
-            block, by=spectral.band_index(ly, f_band), bx=spectral.band_index(lx, f_band), workers=self.params.workers
-        )
+        spec = self._block_spectrum(block, self.f_cut)
         del block
         return self.form_spectrum(spec, start, rows, cols, weight=weight)
 
