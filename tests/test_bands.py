@@ -429,6 +429,35 @@ def test_the_earths_rotation_over_the_delay_misregisters_the_bands_as_its_ground
     assert budget_results(load_preset("ankarasat3-pms"))["bands"][1]["registration"]["earth_rotation"] is None
 
 
+@pytest.mark.parametrize("error", [2e-3, -5e-3])
+def test_a_line_rate_error_misregisters_the_bands_by_the_lines_it_gains(error):
+    """motion.line_rate_error e: the ground advances (1 + e) lines a line time, so it crosses a band's L lines of
+    focal-plane offset in L / (1 + e) line times; registered by the nominal L, the band's content lies L (1 / (1 +
+    e) - 1) of its lines away (ALT only; 0.2 MS px for blue at e = 1e-3). Alone it is the whole offset; with the
+    Earth's rotation the two add to the offset of the whole drift (alt_scale a + e), exactly."""
+    s = load_preset("ankarasat3-pms").replace({"motion.line_rate_error": error})
+    for b in budget_results(s)["bands"][1:]:
+        reg = b["registration"]
+        band = s.for_band(b["index"])
+        lines = reg["offset_alt_mm"] * 1e-3 / band.detector.pitch_y_m  # the band's own lines
+        r = reg["line_rate"]
+        assert r["alt_px"] == pytest.approx(lines * (1.0 / (1.0 + error) - 1.0), rel=1e-9)
+        assert r["act_px"] == 0.0 and r["line_rate_error"] == error
+        assert r["delay_s"] == pytest.approx(lines / (1.0 + error) * band.line_time_s, rel=1e-9)
+        assert abs(r["alt_px"]) > 0.4  # blue's 255 lines and more
+    earth = {"orbit.earth_rotation": True, "orbit.latitude_deg": 40.0, "orbit.inclination_deg": 97.7}
+    both = s.replace(earth)
+    alone = budget_results(load_preset("ankarasat3-pms").replace(earth))["bands"]
+    for b, e in zip(budget_results(both)["bands"][1:], alone[1:], strict=True):
+        reg, band = b["registration"], both.for_band(b["index"])
+        lines = reg["offset_alt_mm"] * 1e-3 / band.detector.pitch_y_m
+        a = lines * band.line_time_s / e["registration"]["earth_rotation"]["delay_s"]  # the Earth's alt_scale
+        assert reg["earth_rotation"] == e["registration"]["earth_rotation"]  # the Earth's part: unchanged
+        total = reg["earth_rotation"]["alt_px"] + reg["line_rate"]["alt_px"]
+        assert total == pytest.approx(lines * (1.0 / (a + error) - 1.0), rel=1e-9)
+    assert budget_results(load_preset("ankarasat3-pms"))["bands"][1]["registration"]["line_rate"] is None
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     values=st.lists(st.floats(0.0, 1.0), min_size=3, max_size=12).filter(lambda v: max(v[1:-1], default=0) > 0.05),

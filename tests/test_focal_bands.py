@@ -232,6 +232,7 @@ def earth_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("earth")
     system = _pms_dict()
     system["orbit"].update({"earth_rotation": True, "latitude_deg": 40.0, "inclination_deg": 97.7})
+    system.setdefault("motion", {})["line_rate_error"] = 2e-3  # and a line-rate error: ~0.5-0.8 px more ALT
     rng = np.random.default_rng(1)
     scene = {"scene": {"width_m": 156.8, "height_m": 125.44, "background": 0.2},
              "items": _houses(rng, (5.0, 156.0), (5.0, 124.0), 11.0)}  # fmt: skip
@@ -239,16 +240,20 @@ def earth_run(tmp_path_factory):
 
 
 def test_earth_rotation_offsets_within_005_px_of_the_budget(earth_run):
-    """No yaw steering, 40 deg latitude: every MS band lies ~13-22 px ACT and ~2-4 px ALT from PAN; measured
-    within 0.05 px of the budget's earth_rotation offsets (each band from PAN)."""
+    """No yaw steering, 40 deg latitude, a line-rate error of 2e-3: every MS band lies ~13-22 px ACT and ~3-5 px
+    ALT from PAN; measured within 0.05 px of the budget's earth_rotation + line_rate offsets (each band from PAN),
+    and the run's predicted offset is that sum."""
     result, system = earth_run
     (sec,) = result.focal
-    budget = {b["name"]: b["registration"]["earth_rotation"] for b in band_budgets(system)}
+    regs = {b["name"]: b["registration"] for b in band_budgets(system)}
     for band in sec.data["bands"][1:]:
-        want = budget[band["name"]]
-        assert abs(want["act_px"]) > 10
+        reg = regs[band["name"]]
+        earth, rate = reg["earth_rotation"], reg["line_rate"]
+        assert abs(earth["act_px"]) > 10 and abs(rate["alt_px"]) > 0.4
         for d in AXES:
-            assert band["registration"]["measured_px"][d] == pytest.approx(want[f"{d}_px"], abs=0.05), band["name"]
+            want = earth[f"{d}_px"] + rate[f"{d}_px"]
+            assert band["registration"]["measured_px"][d] == pytest.approx(want, abs=0.05), band["name"]
+            assert band["registration"]["predicted_px"][d] == pytest.approx(want, abs=1e-9), band["name"]
 
 
 # ------------------------------------------------------------------------------------------- a single band

@@ -13,6 +13,7 @@ with the cube's CRS and origin.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -199,3 +200,54 @@ def test_a_linear_float_spectrum_gives_the_band_weighted_mean_wavelength_exactly
         sf = np.interp(fine, lam, s)
         mean_lam = np.trapezoid(fine * sf, fine) / np.trapezoid(sf, fine)
         assert np.abs(img - (a + b * (mean_lam - 700e-9))).max() < 1e-12
+
+
+@pytest.fixture(scope="module")
+def texture_cube(tmp_path_factory) -> Path:
+    """A smooth random texture (0.1-0.7, features ~2 px), flat in wavelength: 160 x 160 PAN px, 40 x 40 MS px."""
+    from scipy import ndimage
+
+    img = ndimage.gaussian_filter(np.random.default_rng(3).random((160, 160)), 2.0)
+    img = 0.1 + 0.6 * (img - img.min()) / (img.max() - img.min())
+    return _write(tmp_path_factory.mktemp("tex") / "tex.tif", np.broadcast_to(img, (4, 160, 160)),
+                  [400, 560, 665, 1000], how="none")  # fmt: skip
+
+
+def _blue_from_pan(cube: Path, system) -> tuple[float, float]:
+    from satchain.measure.registration import measure_registration
+
+    r = simulate_cube(cube, system, wavelengths_nm=[400, 560, 665, 1000], noise=False, bands=["pan", "blue"])
+    return measure_registration(r["pan"].image[16:144, 16:144], r["blue"].image[4:36, 4:36], scale=4).offset_px
+
+
+@pytest.mark.parametrize("error", [2e-3, -3e-3])
+def test_a_cube_under_a_line_rate_error_misregisters_its_bands_as_budgeted(texture_cube, error):
+    """motion.line_rate_error with a cube (its bands' grids displaced up to a pixel beyond it, where the engine
+    continues it by its border rule, without a warning below a whole pixel): blue's offset from PAN moves by the
+    budget's line_rate offset (-0.51 / +0.77 px) within 0.02 px (measured: within 0.0005)."""
+    from satchain.prediction.budget import band_budgets
+
+    base = _blue_from_pan(texture_cube, SYSTEM)
+    system = SYSTEM.replace({"motion.line_rate_error": error})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = _blue_from_pan(texture_cube, system)
+    want = [b for b in band_budgets(system) if b["name"] == "blue"][0]["registration"]["line_rate"]
+    assert got[0] - base[0] == pytest.approx(want["alt_px"], abs=0.02)
+    assert got[1] - base[1] == pytest.approx(want["act_px"], abs=0.02)
+
+
+def test_a_cube_under_the_earths_rotation_warns_where_its_bands_see_beyond_it(texture_cube):
+    """The Earth's rotation moves the MS grids 13-23 px across track over their delays: beyond a 40-pixel cube for
+    every MS band, which the engine continues by its border rule (it was refused with 'outside the cube') and says
+    so, band by band."""
+    from satchain.errors import SatchainWarning
+
+    system = SYSTEM.replace({"orbit.earth_rotation": True, "orbit.latitude_deg": 40.0, "orbit.inclination_deg": 97.7})
+    with pytest.warns(SatchainWarning) as caught:
+        r = simulate_cube(texture_cube, system, wavelengths_nm=[400, 560, 665, 1000], noise=False)
+    said = " ".join(str(w.message) for w in caught)
+    for name in ("blue", "green", "red", "nir"):
+        assert f"band {name!r}" in said
+        assert np.isfinite(r[name].image).all() and r[name].image.shape == (40, 40)
+    assert "band 'pan'" not in said and "border = 'symmetric'" in said

@@ -1,7 +1,9 @@
 """Bands under the Earth's rotation (satchain.engine.bands; issue 32 point 7): with ``orbit.earth_rotation`` and no
 yaw steering, each band sees the ground at its own time, so an MS band lies, from the PAN band (or from another MS
 band), where the ground moved over the arrays' distance -- measured within 0.05 px of the budget's
-``earth_rotation`` offset (:func:`satchain.prediction.budget.band_budgets`), noise-free, on a textured scene."""
+``earth_rotation`` offset (:func:`satchain.prediction.budget.band_budgets`), noise-free, on a textured scene. A
+line-rate error (``motion.line_rate_error``) misregisters them the same way, along track: its ``line_rate``
+offset."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ from _band_offsets import content_offset, earth_px, squares_scene
 
 from satchain import load_preset
 from satchain.engine.bands import simulate_bands
+from satchain.prediction.budget import band_budgets
 from satchain.scene.layout import Scene
 
 P = 0.245  # m: 2 scene px per PAN pixel, 8 per MS pixel (the engine's exact integer ratios)
@@ -52,4 +55,19 @@ def test_two_ms_bands_differ_by_the_difference_of_their_predictions(scene):
     want = (n[0] - g[0], n[1] - g[1])
     r = simulate_bands(scene, system, pixel_m=P, noise=False, bands=["green", "nir"], window=WINDOW)
     got = content_offset(r["green"].image, r["nir"].image, (round(want[0]), round(want[1])), 1)
+    assert got == pytest.approx(want, abs=0.05), (got, want)
+
+
+@pytest.mark.parametrize(("error", "earth"), [(2e-3, False), (-3e-3, False), (2e-3, True)])
+def test_line_rate_error_misregisters_a_band_as_budgeted(scene, error, earth):
+    """motion.line_rate_error: blue's offset from PAN within 0.05 px of the budget's line_rate (-0.51 px at 2e-3,
+    +0.77 at -3e-3; measured within 0.004), and with the Earth's rotation at 40 deg of earth_rotation + line_rate
+    (before the band's lead took the line rate in, blue lay 0.51 px from where the budget put it)."""
+    system = (_earth(40.0) if earth else load_preset("ankarasat3-pms")).replace({"motion.line_rate_error": error})
+    b = [x for x in band_budgets(system) if x["name"] == "blue"][0]["registration"]
+    parts = [b["line_rate"], *([b["earth_rotation"]] if earth else [])]
+    want = (sum(p["alt_px"] for p in parts), sum(p["act_px"] for p in parts))
+    assert abs(b["line_rate"]["alt_px"]) > 0.5
+    r = simulate_bands(scene, system, pixel_m=P, noise=False, bands=["pan", "blue"], window=WINDOW)
+    got = content_offset(r["pan"].image, r["blue"].image, (round(want[0]), round(want[1])), 4)
     assert got == pytest.approx(want, abs=0.05), (got, want)

@@ -94,7 +94,8 @@ def _print_bands(bands: list[dict[str, Any]]) -> None:
     ref = bands[0]["registration"]["reference_band"]
     t = Table(title=f"bands: each at its own pixel, Nyquist and radiometry; offsets from {ref!r} in the band's px")
     heads = ["band", "centre nm", "GSD m", "Nyquist cy/mm", "MTF@Ny ACT", "MTF@Ny ALT", "signal e-", "SNR", "NIIRS",
-             "delay ms", "offset ALT px", "offset ACT px", "motion px (oscillation amplitude; Earth)"]  # fmt: skip
+             "delay ms", "offset ALT px", "offset ACT px",
+             "motion px (oscillation amplitude; Earth; line rate)"]  # fmt: skip
     for c in heads:
         t.add_column(c, justify="left" if c == "band" else "right")
     for b in bands:
@@ -103,6 +104,9 @@ def _print_bands(bands: list[dict[str, Any]]) -> None:
         if reg.get("earth_rotation"):
             e = reg["earth_rotation"]
             osc += f"{', ' if osc else ''}Earth ALT {e['alt_px']:+.3f} ACT {e['act_px']:+.3f}"
+        if reg.get("line_rate"):
+            e = reg["line_rate"]
+            osc += f"{', ' if osc else ''}line rate ALT {e['alt_px']:+.3f} ACT {e['act_px']:+.3f}"
         t.add_row(
             b["name"],
             f"{b['center_wavelength_m'] * 1e9:.1f}",

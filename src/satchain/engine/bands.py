@@ -32,9 +32,9 @@ which measuring two bands recovers. Line-of-sight motion in time is formed per b
 sees the ground at ``x = j + LOS(t)``, so a band's content moves by minus its line of sight: the offset from PAN is
 minus the difference of their lines of sight (the budget's ``oscillations`` give that difference, line-of-sight
 signed; tests/engine/test_bands.py).
-Under ``orbit.earth_rotation`` (with or without yaw steering) each band's detector grid starts where the ground has
-moved by its own time (:mod:`~satchain.engine.band_ground`), so its content lies where the budget's
-``earth_rotation`` puts it.
+Under ``orbit.earth_rotation`` (with or without yaw steering) and ``motion.line_rate_error`` each band's detector
+grid starts where the ground has moved by its own time (:mod:`~satchain.engine.band_ground`), so its content lies
+where the budget's ``earth_rotation`` and ``line_rate`` put it.
 Not applied yet: the delay's effect on jitter PSD realisations (each band draws its own on its own line times),
 on line-of-sight logs, and the actual delay (``offset / pitch / a`` lines) in the oscillations' phases.
 
@@ -66,7 +66,7 @@ import numpy as np
 
 from satchain._validate import check_choice, check_positive
 from satchain.config.system import ImagingSystem
-from satchain.engine.band_ground import _ground_shift_px
+from satchain.engine.band_ground import _band_source, _ground_shift_px, _warn_beyond
 from satchain.engine.bands_shared import (
     band_otf,
     band_params,
@@ -211,44 +211,6 @@ def band_response(system: ImagingSystem, index: int) -> tuple[np.ndarray, np.nda
     return lam, np.ones_like(lam)
 
 
-class _ShiftedScene:
-    """``scene`` seen from ``start`` (scene pixels at ``pixel_m``), ``shape`` pixels: renders windows of it."""
-
-    def __init__(self, scene, start: tuple[int, int], shape: tuple[int, int], pixel_m: float):
-        self.scene, self.start, self.shape, self.pixel_m = scene, start, shape, pixel_m
-
-    def shape_px(self, pixel_m: float | None = None) -> tuple[int, int]:
-        return self.shape
-
-    def render(self, window, *, pixel_m: float | None = None) -> np.ndarray:
-        r0, c0, h, w = (int(v) for v in window)
-        return self.scene.render((r0 + self.start[0], c0 + self.start[1], h, w), pixel_m=self.pixel_m)
-
-
-def _band_source(scene, window: Window, pixel_m: float, s: ImagingSystem, offset_px) -> tuple[Any, tuple, tuple]:
-    """The ground truth band ``s`` samples (a scene, or a window of it), the detector grid's phase on it (scene
-    pixels) and the output shape: the grid starts at the window's corner moved by ``-offset_px`` band pixels."""
-    start, phase, shape, n_out = [], [], [], []
-    for ax, (lo, n, g) in enumerate(((window.row0, window.height, s.gsd_alt_m), (window.col0, window.width,
-                                                                                  s.gsd_act_m))):  # fmt: skip
-        k = g / pixel_m
-        m = int(math.floor(n / k + 1e-9))
-        if m < 1:
-            raise ConfigError(f"window = {tuple(window)!r} at pixel_m = {pixel_m!r}: smaller than one pixel of "
-                              f"band {s.name!r} ({g:.4g} m)")  # fmt: skip
-        o = lo - float(offset_px[ax]) * k
-        o_int = int(math.floor(o + 1e-9))
-        f = max(o - o_int, 0.0)
-        start.append(o_int)
-        phase.append(f)
-        shape.append(max(n, int(math.ceil(f + m * k - 1e-9))))
-        n_out.append(m)
-    if tuple(start) == (0, 0) and tuple(shape) == tuple(scene.shape_px(pixel_m)):
-        return scene, (phase[0], phase[1]), (n_out[0], n_out[1])  # the scene itself: today's path exactly
-    view = _ShiftedScene(scene, (start[0], start[1]), (shape[0], shape[1]), pixel_m)
-    return view, (phase[0], phase[1]), (n_out[0], n_out[1])
-
-
 def _check_window(window, full: tuple[int, int]) -> Window:
     if window is None:
         return Window(0, 0, *full)
@@ -278,7 +240,9 @@ def _form_band(layout, system: ImagingSystem, i: int, window: Window, pixel_m: f
     if reuse is not None and banded:  # one render per distinct grey layout (reuse["ground"]); the band's lighter OTF
         scene = shared_render(reuse, scene, pixel_m, params.max_tile_bytes)
     shift = _ground_shift_px(system, i, s, offset) if banded else (0.0, 0.0)  # its offset and its own time's lead
-    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, shift)
+    src_scene, phase, n_out = _band_source(scene, window, pixel_m, s, shift, params)
+    if banded:
+        _warn_beyond(scene, src_scene, pixel_m, s, system.band_names[i], params)
     src = SceneSource(src_scene, pixel_m=pixel_m)
     p = params if phase == params.phase_px else dataclasses.replace(params, phase_px=phase)
     p = band_params(p, system, s) if banded and reuse is not None else p  # its far margin: the system's metres

@@ -196,6 +196,7 @@ class _RenderOnce:
 
     def __init__(self, scene, pixel_m: float):
         self.scene, self.pixel_m = scene, pixel_m
+        self.bounded = bool(getattr(scene, "bounded", False))  # no ground beyond its extent (a cube)
         self.full: np.ndarray | None = None
 
     def shape_px(self, pixel_m: float | None = None) -> tuple[int, int]:

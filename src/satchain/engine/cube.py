@@ -216,7 +216,12 @@ def cube_weights(cube_wavelengths_m: Sequence[float] | np.ndarray, wavelengths_m
 class CubeBandScene:
     """One system band's ground truth from a cube: ``render(window) = sum_k w_k R_k(window)`` (the cube bands
     whose weight is not zero, read window by window through :class:`satchain.engine.raster_input.RasterBandSource`),
-    at the cube's ``pixel_m`` only; the scene interface of :class:`satchain.engine.sources.SceneSource`."""
+    at the cube's ``pixel_m`` only; the scene interface of :class:`satchain.engine.sources.SceneSource`. It has no
+    ground beyond the cube (``bounded``): a band whose grid is displaced beyond it (the Earth's rotation or a
+    line-rate error over its delay) sees the cube continued by the engine's border rule there."""
+
+    #: Windows outside the cube are refused: the bands' engine continues it by the border rule instead.
+    bounded = True
 
     def __init__(self, sources: Sequence[Any], weights: np.ndarray, pixel_m: float, shape: tuple[int, int],
                  name: str = "cube"):  # fmt: skip

@@ -152,10 +152,14 @@ def _band(config: RunConfig, design: ImagingSystem, images: BandImages, b: BandI
 
 def _content_offset_px(design: ImagingSystem, i: int, entry: dict) -> tuple[float, float]:
     """Where band ``i``'s content lies from its nominal grid (ALT, ACT band px): its own injected offset and what
-    the Earth's rotation adds over its delay (the budget's); where the measurements look for the targets."""
+    the Earth's rotation and the line-rate error add over its delay (the budget's); where the measurements look for
+    the targets."""
     own = design.bands[i].registration_offset_px
-    earth = entry["registration"].get("earth_rotation") or {"alt_px": 0.0, "act_px": 0.0}
-    return float(own[0]) + float(earth["alt_px"]), float(own[1]) + float(earth["act_px"])
+    zero = {"alt_px": 0.0, "act_px": 0.0}
+    earth = entry["registration"].get("earth_rotation") or zero
+    rate = entry["registration"].get("line_rate") or zero
+    return (float(own[0]) + float(earth["alt_px"]) + float(rate["alt_px"]),
+            float(own[1]) + float(earth["act_px"]) + float(rate["act_px"]))  # fmt: skip
 
 
 def _geometry(b: BandImage, truth: dict, content: tuple[float, float], seed: int):
@@ -328,5 +332,6 @@ def _registration(config: RunConfig, design: ImagingSystem, images: BandImages, 
 
 def _parts_note(parts: dict, d: str) -> str:
     p = {k: v[d] for k, v in parts.items()}
-    return (f"predicted = static {p['static']:+.4f} + Earth rotation {p['earth_rotation']:+.4f} + oscillations "
+    rate = f" + line rate {p['line_rate']:+.4f}" if p.get("line_rate") else ""
+    return (f"predicted = static {p['static']:+.4f} + Earth rotation {p['earth_rotation']:+.4f}{rate} + oscillations "
             f"{p['oscillations']:+.4f} px (averaged over the rows measured)")  # fmt: skip

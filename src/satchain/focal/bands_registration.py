@@ -11,7 +11,8 @@ pixels added back, so an offset of many pixels (the Earth's rotation over the ar
 ``ankarasat3-pms``) is measured as a subpixel one.
 
 **Predicted** (band pixels): ``static_px`` (its ``registration_offset_px`` less the reference's) + the Earth's
-rotation over the delay (``earth_rotation``) + each sinusoidal oscillation's offset ``A sin(2 pi f t_c + phi)``
+rotation over the delay (``earth_rotation``) + the line-rate error's (``line_rate``) + each sinusoidal
+oscillation's offset ``A sin(2 pi f t_c + phi)``
 (``oscillations``) averaged over the reference rows the region uses, ``t_c = row x line time`` of the reference
 (tests/engine/test_bands.py::test_oscillation_misregisters_bands_by_their_delay). Jitter PSDs and line-of-sight
 logs over the delay are not predicted (the budget's ``not_predicted``): the checks are then n/a, the
@@ -112,13 +113,14 @@ def predicted_offset_px(entry: Mapping[str, Any], ref_rows: np.ndarray, ref_time
     """The predicted offset of a band from the reference (band px, ``{"alt", "act"}``) over the reference rows
     ``ref_rows`` (each seen at its TDI window's centre ``t_c = (row + stages / 2) x line time``, ``ref_time =
     (line time s, TDI stages)`` of the reference: the budget's oscillation phase), with its parts (``static``,
-    ``earth_rotation``, ``oscillations``). ``weights`` (per axis, one
+    ``earth_rotation``, ``line_rate``, ``oscillations``). ``weights`` (per axis, one
     per reference row): the oscillations' offset averaged with them (what a least-squares registration of a
     region whose offset varies by row gives: its rows weighted by their gradient energy), else uniformly."""
     reg = entry["registration"]
     static = {d: float(reg["static_px"][d]) for d in AXES}
-    earth = reg.get("earth_rotation")
+    earth, rate = reg.get("earth_rotation"), reg.get("line_rate")
     earth_px = {d: 0.0 if earth is None else float(earth[f"{d}_px"]) for d in AXES}
+    rate_px = {d: 0.0 if rate is None else float(rate[f"{d}_px"]) for d in AXES}
     osc = {d: 0.0 for d in AXES}
     t_c = (np.asarray(ref_rows, dtype=float) + ref_time[1] / 2.0) * float(ref_time[0])
     for o in reg.get("oscillations") or ():
@@ -128,8 +130,9 @@ def predicted_offset_px(entry: Mapping[str, Any], ref_rows: np.ndarray, ref_time
         phase = 2.0 * math.pi * float(o["frequency_hz"]) * t_c + math.radians(float(o["phase_deg"]))
         w = None if weights is None or not np.sum(weights[d]) > 0 else weights[d]
         osc[d] += float(np.average(float(o["amplitude_px"]) * np.sin(phase), weights=w))
-    total = {d: static[d] + earth_px[d] + osc[d] for d in AXES}
-    return {**total, "parts": {"static": static, "earth_rotation": earth_px, "oscillations": osc}}
+    total = {d: static[d] + earth_px[d] + rate_px[d] + osc[d] for d in AXES}
+    parts = {"static": static, "earth_rotation": earth_px, "line_rate": rate_px, "oscillations": osc}
+    return {**total, "parts": parts}
 
 
 def _span(n_band: int, n_ref: int, scale: int, k: int) -> tuple[int, int]:

@@ -162,8 +162,10 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
     ``offset_alt / pitch`` lines later; registered by that nominal delay (and its ``offset_act_mm`` / pitch
     columns), its static offset from the PAN band is the injected ``registration_offset_px`` (the part that
     ``oscillations`` gives what each ``[[motion.oscillation]]`` adds (:func:`_oscillation_offsets`),
-    ``earth_rotation`` what the Earth's rotation adds (:func:`_earth_offset`); jitter PSDs and line-of-sight logs
-    over the delay are not predicted here yet.
+    ``earth_rotation`` what the Earth's rotation adds (:func:`_earth_offset`), ``line_rate`` what
+    ``motion.line_rate_error`` adds (:func:`_line_rate_offset`: the ground crosses the arrays' distance in ``1 / (1 +
+    e)`` of the nominal lines, so a band ``L`` lines behind shows ``L (1 / (1 + e) - 1)`` lines; 0.2 MS px for blue at
+    ``e`` = 1e-3); jitter PSDs and line-of-sight logs over the delay are not predicted here yet.
 
     Examples
     --------
@@ -178,8 +180,9 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
     pan = _pan_index(system)
     ref = system.for_band(pan)
     speed_m_per_s = system.detector.pitch_y_m / system.line_time_s  # the image on the focal plane
-    pb = SystemOTF(ref).pushbroom if system.orbit.earth_rotation else None
-    earth = (pb.geometry() or {}).get("earth_rotation") if pb is not None else None
+    pb = SystemOTF(ref).pushbroom if system.orbit.earth_rotation or system.motion.line_rate_error else None
+    geometry = (pb.geometry() or {}) if pb is not None else {}
+    earth = geometry.get("earth_rotation")
     out = []
     for i, band in enumerate(system.bands):
         s = system.for_band(i)
@@ -222,6 +225,7 @@ def band_budgets(system: ImagingSystem) -> list[dict[str, Any]]:
                 "oscillation_form": "amplitude_px sin(2 pi frequency_hz t_c + phase_deg), t_c: the reference row's "
                 "TDI window centre (s)",
                 "earth_rotation": None if earth is None else _earth_offset(earth, ref, s, offset_m),
+                "line_rate": _line_rate_offset(system, geometry, earth, ref, s, offset_m),
                 "not_predicted": "jitter PSDs and line-of-sight logs over delay_s",
             },
         }
@@ -275,14 +279,30 @@ def _earth_offset(earth: Mapping[str, Any], ref: ImagingSystem, band: ImagingSys
     }
 
 
+def _line_rate_offset(system: ImagingSystem, geometry: Mapping[str, Any], earth: Mapping[str, Any] | None,
+                      ref: ImagingSystem, band: ImagingSystem, offset_m: float) -> dict | None:  # fmt: skip
+    """What ``motion.line_rate_error`` adds to the band's offset: :func:`_earth_offset` of the whole drift (the
+    pushbroom geometry's ``alt_scale``, the Earth's and the line rate's, and its shear) less that of the Earth's
+    alone, so that ``static + earth_rotation + line_rate`` is the band's offset exactly. None without it."""
+    e = system.motion.line_rate_error
+    if not e:
+        return None
+    drift = {"alt_scale": geometry["alt_scale"], "shear_act_px_per_line": geometry["shear_act_px_per_line"]}
+    total = _earth_offset(drift, ref, band, offset_m)
+    alone = _earth_offset(earth, ref, band, offset_m) if earth is not None else {"alt_px": 0.0, "act_px": 0.0}
+    return {"line_rate_error": float(e), "delay_s": total["delay_s"], "alt_px": total["alt_px"] - alone["alt_px"],
+            "act_px": total["act_px"] - alone["act_px"] + 0.0}  # fmt: skip (+ 0.0: no -0.0 without a shear)
+
+
 @dataclass(frozen=True)
 class BandBudget:
     """One band's budget (:func:`band_budgets`), typed: ``name``, ``center_wavelength_m``, ``gsd_m``,
     ``nyquist_act_cy_per_mm`` / ``nyquist_alt_cy_per_mm``, ``mtf_at_nyquist_act`` / ``_alt`` (at its own Nyquist),
     ``signal_e``, ``snr`` (its scene's mean signal), ``niirs`` (the PAN band's; None for the others),
     ``delay_s`` (when it sees the ground after the PAN band), ``registration_alt_px`` / ``_act_px`` (its predicted
-    static offset from the PAN band, in its own pixels) and ``earth_rotation_alt_px`` / ``_act_px`` (what the
-    Earth's rotation adds over the delay; None without it)."""
+    static offset from the PAN band, in its own pixels), ``earth_rotation_alt_px`` / ``_act_px`` (what the
+    Earth's rotation adds over the delay; None without it) and ``line_rate_alt_px`` / ``_act_px`` (what
+    ``motion.line_rate_error`` adds; None without it)."""
 
     name: str
     center_wavelength_m: float
@@ -299,11 +319,13 @@ class BandBudget:
     registration_act_px: float
     earth_rotation_alt_px: float | None = None
     earth_rotation_act_px: float | None = None
+    line_rate_alt_px: float | None = None
+    line_rate_act_px: float | None = None
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> BandBudget:
         reg = d["registration"]
-        earth = reg.get("earth_rotation")
+        earth, rate = reg.get("earth_rotation"), reg.get("line_rate")
         return cls(
             name=str(d["name"]),
             center_wavelength_m=float(d["center_wavelength_m"]),
@@ -320,6 +342,8 @@ class BandBudget:
             registration_act_px=float(reg["static_px"]["act"]),
             earth_rotation_alt_px=None if earth is None else float(earth["alt_px"]),
             earth_rotation_act_px=None if earth is None else float(earth["act_px"]),
+            line_rate_alt_px=None if rate is None else float(rate["alt_px"]),
+            line_rate_act_px=None if rate is None else float(rate["act_px"]),
         )
 
 
