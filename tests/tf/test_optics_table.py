@@ -2,7 +2,7 @@
 
 A pupil without a pupil FFT (clear or centrally obscured circle, optional ``wfe_rms_waves``) has an OTF that
 depends on ``|f|`` only; a call on at least RADIAL_TABLE_MIN_POINTS frequencies interpolates it on a table of
-RADIAL_TABLE_INTERVALS steps up to the highest cutoff. The reference here is the closed form written out per
+radial_table_intervals steps up to the highest cutoff. The reference here is the closed form written out per
 wavelength from satchain.tf.annular's public functions (O'Neill 1956 and Shannon's ATF), with the weights
 normalised here; or the same DiffractionOTF evaluated in chunks below the threshold (its exact path).
 """
@@ -18,9 +18,9 @@ from satchain.config.system import Optics, load_preset
 from satchain.errors import InputError
 from satchain.tf.annular import annular_mtf, optical_cutoff_cy_per_mm, shannon_atf
 from satchain.tf.budget import SystemOTF
-from satchain.tf.optics import RADIAL_TABLE_INTERVALS, RADIAL_TABLE_MIN_POINTS, DiffractionOTF
+from satchain.tf.optics import RADIAL_TABLE_MIN_POINTS, DiffractionOTF, radial_table_intervals
 
-M, N = RADIAL_TABLE_MIN_POINTS, RADIAL_TABLE_INTERVALS
+M = RADIAL_TABLE_MIN_POINTS
 # each example costs ~0.3 s: no shrinking (a failure prints its example as drawn)
 FAST = settings(max_examples=10, deadline=None, phases=(Phase.explicit, Phase.reuse, Phase.generate))
 
@@ -64,7 +64,7 @@ def _boundary_freqs(optics, *, half_steps=4, per_step=256) -> np.ndarray:
     """Radii densely packed (``per_step`` a table step, ``half_steps`` steps either side) around each wavelength's
     cutoff and its O'Neill region boundaries ``v = eps``, ``(1 -/+ eps) / 2``: where the closed form has kinks."""
     cuts = _cutoffs(optics)
-    step = max(cuts) / N
+    step = max(cuts) / radial_table_intervals(cuts)  # the table's own step
     eps = optics.obscuration_ratio
     offsets = step * np.linspace(-half_steps, half_steps, 2 * half_steps * per_step + 1)
     pts = [c * v0 + offsets for c in cuts for v0 in (1.0, eps, (1.0 - eps) / 2.0, (1.0 + eps) / 2.0) if v0 > 0]
@@ -255,7 +255,7 @@ def test_system_otf_table_matches_exact_chunks(preset, band):
     otf = SystemOTF(system, radial_table=True)
     fx, fy = _engine_grid(otf.cutoff_cy_per_mm)  # as the engine's band spectra: fx >= 0, fy = -f..f
     got = otf(fx[None, :], fy[:, None], exclude=("detector",))
-    exact = _chunked(lambda x, y: otf(x, y, exclude=("detector",)), fx, fy, 256)
+    exact = _chunked(lambda x, y: otf(x, y, exclude=("detector",)), fx, fy, max(1, (M - 1) // fx.size))
     err = float(np.max(np.abs(got - exact)))
     assert 0.0 < err <= 1e-7, f"{preset} band {band}: max |table - exact| = {err:.3e}"
     # its diffraction component alone against the closed form written out here

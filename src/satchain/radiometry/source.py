@@ -17,6 +17,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 from importlib import resources
 
@@ -117,14 +118,24 @@ def solar_spectrum(name: str = "astm_g173_etr", wavelength_m=None) -> tuple[np.n
     1347.9
     """
     check_choice("illumination.solar_spectrum", name, SOLAR_SPECTRA)
-    ref = resources.files("satchain") / "data" / "astm_g173_etr.csv"
-    with ref.open("r") as fh:
-        table = np.loadtxt(fh, delimiter=",", comments="#")
-    lam_tab, e_tab = table[:, 0] * 1e-9, table[:, 1] * 1e9  # nm -> m; per nm -> per m
-    lam = lam_tab if wavelength_m is None else as_float_array("wavelength_m", wavelength_m)
+    lam_tab, e_tab = _astm_g173()
+    lam = lam_tab.copy() if wavelength_m is None else as_float_array("wavelength_m", wavelength_m)
     if name == "planck_5778k":
         return lam, planck_solar_irradiance(lam)
     return lam, np.interp(lam, lam_tab, e_tab, left=0.0, right=0.0)
+
+
+@functools.lru_cache(maxsize=1)
+def _astm_g173() -> tuple[np.ndarray, np.ndarray]:
+    """The ASTM G173-03 extraterrestrial table (m; W m^-2 m^-1), read once per process (read-only arrays: a
+    radiometric budget asks for it several times, each band of a banded run again)."""
+    ref = resources.files("satchain") / "data" / "astm_g173_etr.csv"
+    with ref.open("r") as fh:
+        table = np.loadtxt(fh, delimiter=",", comments="#")
+    lam, e = table[:, 0] * 1e-9, table[:, 1] * 1e9  # nm -> m; per nm -> per m
+    lam.flags.writeable = False
+    e.flags.writeable = False
+    return lam, e
 
 
 def planck_spectral_radiance(wavelength_m, temperature_k: float):

@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
@@ -54,9 +55,23 @@ __all__ = [
 
 
 #: :class:`DiffractionOTF` evaluates the closed form on its radial table for calls on at least this many points.
-RADIAL_TABLE_MIN_POINTS = 1 << 19
-#: Steps of :class:`DiffractionOTF`'s radial table between 0 and the highest cutoff.
-RADIAL_TABLE_INTERVALS = 1 << 19
+RADIAL_TABLE_MIN_POINTS = 1 << 16
+#: Steps of :class:`DiffractionOTF`'s radial table per lowest cutoff: between 0 and the highest cutoff it has this
+#: times ``highest / lowest cutoff``, rounded up (:func:`radial_table_intervals`), so that every wavelength's step in
+#: ``v`` is at most ``1 / RADIAL_TABLE_STEPS``.
+RADIAL_TABLE_STEPS = 1 << 17
+
+
+def radial_table_intervals(cutoffs) -> int:
+    """The steps of :class:`DiffractionOTF`'s radial table for wavelengths of these cutoffs (cy/mm).
+
+    Examples
+    --------
+    >>> radial_table_intervals([200.0]) == RADIAL_TABLE_STEPS, radial_table_intervals([100.0, 250.0]) / 2**17
+    (True, 2.5)
+    """
+    c = [float(x) for x in cutoffs]
+    return math.ceil(RADIAL_TABLE_STEPS * max(c) / min(c) - 1e-6)
 
 
 class DiffractionOTF:
@@ -70,13 +85,13 @@ class DiffractionOTF:
     every value is the closed form itself): the closed form depends on ``|f|`` alone, so a call on at least
     :data:`RADIAL_TABLE_MIN_POINTS` distinct radii
     (the engine's whole spectra; an outer grid's ``-fy`` and ``+fy`` rows count once) interpolates the
-    polychromatic sum linearly on a table of :data:`RADIAL_TABLE_INTERVALS` equal steps of ``|f|`` up to the
+    polychromatic sum linearly on a table of :func:`radial_table_intervals` equal steps of ``|f|`` up to the
     highest cutoff, made once per instance from a table of the one-wavelength closed form
     (:data:`MONO_TABLE_INTERVALS` steps of ``v``, once per obscuration): one lookup per frequency instead of the
-    closed form per wavelength. For wavelengths within a factor 2.5 of each other (400-1000 nm) it is within 2e-8
-    of the closed form for obscurations up to 0.5 and 1e-6 up to 0.95 (linear interpolation of the ``(1 - v)^(3/2)``
-    and ``sqrt`` behaviours at ``v`` = 1, ``eps`` and ``(1 -+ eps) / 2``, whose steps in ``v`` grow with that
-    factor: tests/tf/test_optics_table.py), and exactly 0 at and beyond the highest cutoff. A wavelength whose
+    closed form per wavelength. Every wavelength's step in ``v`` is at most ``1 / RADIAL_TABLE_STEPS``, so it is
+    within 2e-8 of the closed form for obscurations up to 0.5 and 1e-6 up to 0.95 (linear interpolation of the
+    ``(1 - v)^(3/2)`` and ``sqrt`` behaviours at ``v`` = 1, ``eps`` and ``(1 -+ eps) / 2``:
+    tests/tf/test_optics_table.py), and exactly 0 at and beyond the highest cutoff. A wavelength whose
     scaled wavefront error exceeds Shannon's 0.18 waves (its ATF clipped to 0, a kink) keeps the closed form.
 
     Wavefront errors (``zernike_rms_waves``, ``wfe_rms_waves``) are optical path differences expressed in
@@ -157,10 +172,11 @@ class DiffractionOTF:
             if any(w > SHANNON_W0_WAVES for w in self.wfe_rms_waves):
                 return None
             nodes = [(w, lam) for w, lam in zip(self.weights, self.wavelengths_m, strict=True) if w != 0]
-            top = max((optical_cutoff_cy_per_mm(lam, self.f_number) for _, lam in nodes), default=0.0)
-            if top <= 0.0:
+            cuts = [optical_cutoff_cy_per_mm(lam, self.f_number) for _, lam in nodes]
+            if not cuts:
                 return None
-            f = np.linspace(0.0, top, RADIAL_TABLE_INTERVALS + 1)
+            top, n = max(cuts), radial_table_intervals(cuts)
+            f = np.linspace(0.0, top, n + 1)
             table = np.zeros(f.size + 1)  # the extra 0: beyond the cutoff
             mono = _mono_table(self.obscuration_ratio)
             for w, lam in nodes:
@@ -173,7 +189,7 @@ class DiffractionOTF:
                 table[:-1] += w * term
             self._table = (top, table)
         top, table = self._table
-        n = RADIAL_TABLE_INTERVALS
+        n = table.size - 2
         with np.errstate(over="ignore", invalid="ignore"):
             x = fr * (n / top)
         if not np.isfinite(x).all():
